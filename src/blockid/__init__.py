@@ -1,0 +1,1 @@
+"""blockid: identification of block-oriented nonlinear models."""

@@ -1,0 +1,44 @@
+"""Exceptions raised by blockid.
+
+Every error the user can cause derives from :class:`BlockidError`. Its message names
+the problem and the fix (file, column, row, parameter); the command-line interface
+prints it as a single line and exits non-zero, without a traceback.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "BlockidError",
+    "DataError",
+    "OrderError",
+    "ModelFileError",
+    "EstimationError",
+    "ParameterError",
+]
+
+
+class BlockidError(ValueError):
+    """Base class of every error blockid raises for bad input or a failed estimate."""
+
+
+class DataError(BlockidError):
+    """An input/output record is missing, malformed or does not fit the request."""
+
+
+class OrderError(BlockidError):
+    """Model orders or delays are invalid or too large for the data."""
+
+
+class ParameterError(BlockidError):
+    """An estimator or model option has an invalid value."""
+
+
+class ModelFileError(BlockidError):
+    """A model file is damaged, of an unknown format or of an unsupported version."""
+
+
+class EstimationError(BlockidError):
+    """An estimator failed: it diverged, produced non-finite values or an unstable model.
+
+    Raised instead of returning a model that should not be trusted.
+    """
