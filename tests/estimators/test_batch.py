@@ -1,0 +1,38 @@
+import numpy as np
+import pytest
+
+from blockid import errors
+from blockid.estimators import BatchLeastSquares
+
+
+def test_matches_lstsq_and_covariance(rng):
+    Phi = rng.standard_normal((300, 4)) * [1, 100, 1e-3, 1]
+    y = Phi @ [1.0, 0.02, 300.0, -1.0] + 0.01 * rng.standard_normal(300)
+    est = BatchLeastSquares().fit(Phi, y)
+    np.testing.assert_allclose(est.coef_, np.linalg.lstsq(Phi, y, rcond=None)[0], rtol=1e-10)
+    np.testing.assert_allclose(est.covariance_, np.linalg.inv(Phi.T @ Phi), rtol=1e-8)
+    resid = y - Phi @ est.coef_
+    np.testing.assert_allclose(est.noise_variance_[0], resid @ resid / 296, rtol=1e-8)
+
+
+def test_chunks_equal_one_fit_and_weights(rng):
+    Phi = rng.standard_normal((500, 3))
+    Y = Phi @ rng.standard_normal((3, 2)) + 0.1 * rng.standard_normal((500, 2))
+    w = rng.uniform(0.1, 2.0, 500)
+    whole = BatchLeastSquares().fit(Phi, Y, sample_weight=w)
+    chunked = BatchLeastSquares()
+    for s in range(0, 500, 2):  # chunks smaller than the number of columns
+        chunked.partial_fit(Phi[s : s + 2], Y[s : s + 2], sample_weight=w[s : s + 2])
+    np.testing.assert_allclose(chunked.coef_, whole.coef_, rtol=1e-10)
+    W = np.sqrt(w)[:, None]
+    exact = np.linalg.lstsq(W * Phi, W * Y, rcond=None)[0].T
+    np.testing.assert_allclose(whole.coef_, exact, rtol=1e-10)
+
+
+def test_rank_deficiency_is_reported(rng):
+    Phi = rng.standard_normal((100, 3))
+    Phi[:, 2] = 2 * Phi[:, 0] - Phi[:, 1]
+    with pytest.raises(
+        errors.EstimationError, match=r"rank deficient: regressor column\(s\) \[2\]"
+    ):
+        BatchLeastSquares().fit(Phi, Phi[:, 0])

@@ -1,0 +1,80 @@
+"""Compiled RLS kernels against their slow NumPy twins (tests/reference.py)."""
+
+import numpy as np
+import pytest
+import reference
+
+from blockid._kernels import rls as k
+
+
+def _data(rng, N=400, n=5, m=1):
+    Phi = rng.standard_normal((N, n))
+    Y = Phi @ rng.standard_normal((n, m)) + 0.1 * rng.standard_normal((N, m))
+    return Phi, Y
+
+
+@pytest.mark.parametrize("lam_value", [1.0, 0.97])
+@pytest.mark.parametrize("m", [1, 3])
+def test_rls_kernel_matches_reference(rng, lam_value, m):
+    Phi, Y = _data(rng, m=m)
+    lam = np.full(len(Phi), lam_value)
+    theta, P = np.zeros((5, m)), 1e4 * np.eye(5)
+    E = np.empty_like(Y)
+    assert k.rls_run(theta, P, Phi, Y, lam, 5e4, E) == k.OK
+    theta_ref, P_ref = reference.rls(Phi, Y, lam, 1e4, trace_max=5e4)
+    np.testing.assert_allclose(theta, theta_ref, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(P, P_ref, rtol=1e-7, atol=1e-12)
+
+
+def test_rls_kernel_applies_trace_bound_like_reference(rng):
+    Phi, Y = _data(rng, N=300)
+    Phi[100:250] = 0.0  # no excitation: P grows by 1/lambda per sample until bounded
+    lam = np.full(len(Phi), 0.9)
+    theta, P = np.zeros((5, 1)), 10.0 * np.eye(5)
+    E = np.empty_like(Y)
+    assert k.rls_run(theta, P, Phi, Y, lam, 50.0, E) == k.OK
+    theta_ref, P_ref = reference.rls(Phi, Y, lam, 10.0, trace_max=50.0)
+    np.testing.assert_allclose(theta, theta_ref, rtol=1e-8)
+    np.testing.assert_allclose(P, P_ref, rtol=1e-7)
+
+
+def test_aw_rls_kernel_matches_reference(rng):
+    Phi, Y = _data(rng)
+    theta, P = np.full((5, 1), 0.01), 1e5 * np.eye(5)
+    E, W = np.empty_like(Y), np.empty(len(Phi))
+    assert k.aw_rls_run(theta, P, Phi, Y, 1.0, 0.1, W, E) == k.OK
+    theta_ref, P_ref, w_ref = reference.aw_rls(Phi, Y, 1.0, 0.1, 1e5)
+    np.testing.assert_allclose(theta, theta_ref, rtol=1e-8)
+    np.testing.assert_allclose(P, P_ref, rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(W, w_ref, rtol=1e-6)
+
+
+def test_hierarchical_kernel_matches_reference(rng):
+    Phi, Y = _data(rng, n=6, m=2)
+    lam = np.full(len(Phi), 0.99)
+    theta, P = np.zeros((6, 2)), 1e4 * np.eye(6)
+    E = np.empty_like(Y)
+    bounds = np.array([0, 2, 6], dtype=np.int64)
+    assert k.hierarchical_rls_run(theta, P, Phi, Y, bounds, lam, 1e12, E) == k.OK
+    theta_ref, (P1, P2) = reference.hierarchical_rls(Phi, Y, [[0, 1], [2, 3, 4, 5]], lam, 1e4)
+    np.testing.assert_allclose(theta, theta_ref, rtol=1e-8)
+    np.testing.assert_allclose(P[:2, :2], P1, rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(P[2:, 2:], P2, rtol=1e-7, atol=1e-12)
+    assert np.all(P[:2, 2:] == 0.0)  # groups never couple
+
+
+def test_kernel_reports_non_finite_step(rng):
+    Phi, Y = _data(rng, N=50)
+    Phi[20, 0] = 1e300  # s overflows to inf at sample 20
+    theta, P, E = np.zeros((5, 1)), 1e4 * np.eye(5), np.empty_like(Y)
+    assert k.rls_run(theta, P, Phi, Y, np.ones(50), 1e9, E) == 20
+
+
+def test_covariance_stays_exactly_symmetric_over_a_long_run(rng):
+    n, N = 8, 300_000
+    Phi = rng.standard_normal((N, n)) * np.logspace(-2, 2, n)
+    Y = Phi @ rng.standard_normal((n, 1)) + rng.standard_normal((N, 1))
+    theta, P, E = np.zeros((n, 1)), 1e8 * np.eye(n), np.empty_like(Y)
+    assert k.rls_run(theta, P, Phi, Y, np.full(N, 0.99), 8e8, E) == k.OK
+    assert np.array_equal(P, P.T)
+    assert np.all(np.linalg.eigvalsh(P) > 0)

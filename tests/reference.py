@@ -1,0 +1,68 @@
+"""Slow, obviously-correct twins of the compiled kernels (the stumpy ``naive.py`` idea).
+
+Written in the textbook form of SPEC.md with plain NumPy, one sample at a time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def rls(Phi, Y, lam, mu, theta0=0.0, trace_max=np.inf):
+    """Textbook RLS (A2) with the trace bound of blockid applied when lambda < 1."""
+    N, n = Phi.shape
+    Y = Y.reshape(N, -1)
+    theta = np.full((n, Y.shape[1]), theta0, dtype=float)
+    P = mu * np.eye(n)
+    for t in range(N):
+        phi = Phi[t][:, None]
+        K = P @ phi / (lam[t] + (phi.T @ P @ phi).item())
+        e = Y[t] - (phi.T @ theta)[0]
+        theta = theta + K @ e[None, :]
+        P = (P - K @ phi.T @ P) / lam[t]
+        if lam[t] < 1.0 and np.trace(P) > trace_max:
+            P *= trace_max / np.trace(P)
+    return theta, P
+
+
+def aw_rls(Phi, Y, eps1, eps2, mu, theta0=0.01):
+    """Adaptive-weighted RLS (A8), returning the weights lambda(t) too."""
+    N, n = Phi.shape
+    Y = Y.reshape(N, -1)
+    theta = np.full((n, Y.shape[1]), theta0, dtype=float)
+    P = mu * np.eye(n)
+    weights = np.empty(N)
+    for t in range(N):
+        phi = Phi[t][:, None]
+        s = (phi.T @ P @ phi).item()
+        weights[t] = eps1 * s + eps2
+        e = Y[t] - (phi.T @ theta)[0]
+        theta = theta + P @ phi @ e[None, :] / (weights[t] + s)
+        P = P - P @ phi @ phi.T @ P / (weights[t] + s)
+    return theta, P, weights
+
+
+def hierarchical_rls(Phi, Y, groups, lam, mu, theta0=0.0):
+    """H-RLS (A10) for any grouping of the columns (lists of indices)."""
+    N, n = Phi.shape
+    Y = Y.reshape(N, -1)
+    theta = np.full((n, Y.shape[1]), theta0, dtype=float)
+    Ps = [mu * np.eye(len(g)) for g in groups]
+    for t in range(N):
+        e = Y[t] - Phi[t] @ theta
+        for gi, g in enumerate(groups):
+            phi = Phi[t, g][:, None]
+            P = Ps[gi]
+            denom = lam[t] + (phi.T @ P @ phi).item()
+            theta[g] = theta[g] + (P @ phi / denom) @ e[None, :]
+            Ps[gi] = (P - P @ phi @ phi.T @ P / denom) / lam[t]
+    return theta, Ps
+
+
+def weighted_least_squares(Phi, Y, weights, prior_weight=0.0, theta0=0.0):
+    """argmin sum_t w_t |y_t - Phi_t theta|^2 + prior_weight |theta - theta0|^2, exactly."""
+    n = Phi.shape[1]
+    Y = Y.reshape(Phi.shape[0], -1)
+    A = Phi.T @ (weights[:, None] * Phi) + prior_weight * np.eye(n)
+    b = Phi.T @ (weights[:, None] * Y) + prior_weight * theta0
+    return np.linalg.solve(A, b)
