@@ -1,0 +1,309 @@
+"""Piecewise-linear static nonlinearities: dead zone, saturation, piecewise-linear map.
+
+These are the hard nonlinearities of actuators and valves (paper B's proportional
+valve has a dead band and saturates). Each is a :class:`~blockid.blocks.base.StaticBlock`
+that evaluates element-wise on arrays of any shape.
+
+The module also holds the small helpers every static block in :mod:`blockid.blocks`
+shares: parameter checking that raises :class:`~blockid.errors.ParameterError`, input
+conversion, and the :meth:`plot` hand-off to :func:`blockid.plotting.blocks.plot_block`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from blockid.blocks.base import StaticBlock
+from blockid.errors import DataError, ParameterError
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+__all__ = ["DeadZone", "Saturation", "PiecewiseLinear"]
+
+
+# --------------------------------------------------------------------------- helpers
+def _float_scalar(name: str, value: Any, *, positive: bool = False) -> float:
+    """Check that ``value`` is one finite real number (``> 0`` if ``positive``)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not np.isfinite(x):
+        raise ParameterError(f"{name} must be finite, got {x}")
+    if positive and x <= 0:
+        raise ParameterError(f"{name} must be > 0, got {x}")
+    return x
+
+
+def _float_vector(name: str, values: Any, *, min_length: int = 1) -> np.ndarray:
+    """Check ``values`` is a 1-D sequence of finite reals; return a read-only copy."""
+    try:
+        arr = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a list of real numbers, got {values!r}") from None
+    if arr.ndim != 1:
+        raise ParameterError(f"{name} must be a flat list of numbers, got shape {arr.shape}")
+    if arr.size < min_length:
+        raise ParameterError(f"{name} needs at least {min_length} value(s), got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{name} must contain finite numbers only, got {arr.tolist()}")
+    arr.setflags(write=False)
+    return arr
+
+
+def _as_input(u: Any, name: str = "u") -> np.ndarray:
+    """Convert the block input to a float array (any shape)."""
+    try:
+        return np.asarray(u, dtype=float)
+    except (TypeError, ValueError):
+        raise DataError(f"block input {name} must be numeric, got {type(u).__name__}") from None
+
+
+def _check_range(name: str, u_range: Any, *, allow_infinite: bool = False) -> tuple[float, float]:
+    """Check an input range ``(low, high)`` with ``low < high``; return it as floats."""
+    try:
+        low, high = (float(x) for x in u_range)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"{name} must be a pair of numbers (low, high), got {u_range!r}"
+        ) from None
+    if np.isnan(low) or np.isnan(high) or not (allow_infinite or np.isfinite([low, high]).all()):
+        raise ParameterError(f"{name} must hold finite numbers, got ({low}, {high})")
+    if low >= high:
+        raise ParameterError(f"{name} must have low < high, got ({low}, {high})")
+    return low, high
+
+
+def _check_theta(theta: Any, size: int, what: str) -> np.ndarray:
+    """Check a parameter vector handed to ``with_vector``."""
+    arr = _float_vector("theta", theta)
+    if arr.size != size:
+        raise ParameterError(f"theta must have {size} entries ({what}), got {arr.size}")
+    return arr
+
+
+class _PlottableStaticBlock(StaticBlock):
+    """A static block with a default plotting range and a :meth:`plot` hand-off."""
+
+    def default_u_range(self) -> tuple[float, float]:
+        """Input range that shows the shape of the curve (used when plotting)."""
+        return (-1.0, 1.0)
+
+    def plot(
+        self,
+        ax: Axes | None = None,
+        u_range: tuple[float, float] | None = None,
+        truth: StaticBlock | None = None,
+        **kwargs: Any,
+    ) -> Axes:
+        """Draw the input-output curve ``w = N(u)``.
+
+        See :func:`blockid.plotting.blocks.plot_block` for the arguments.
+        """
+        from blockid.plotting.blocks import plot_block
+
+        return plot_block(self, ax=ax, u_range=u_range, truth=truth, **kwargs)
+
+
+# --------------------------------------------------------------------------- blocks
+class DeadZone(_PlottableStaticBlock):
+    r"""Dead zone: no output on ``[lower, upper]``, linear outside.
+
+    .. math::
+
+        w = \begin{cases}
+            m_L\,(u - u_L) & u < u_L \\
+            0              & u_L \le u \le u_R \\
+            m_R\,(u - u_R) & u > u_R
+        \end{cases}
+
+    Parameters
+    ----------
+    lower, upper : float
+        Edges :math:`u_L \le u_R` of the dead band.
+    slope_left, slope_right : float, default 1.0
+        Slopes :math:`m_L, m_R > 0` outside the band.
+
+    Examples
+    --------
+    >>> DeadZone(-0.5, 1.0, slope_right=2.0)([-1.0, 0.0, 2.0]).tolist()
+    [-0.5, 0.0, 2.0]
+    """
+
+    kind = "dead-zone"
+
+    def __init__(
+        self, lower: float, upper: float, slope_left: float = 1.0, slope_right: float = 1.0
+    ) -> None:
+        self.lower = _float_scalar("lower", lower)
+        self.upper = _float_scalar("upper", upper)
+        if self.lower > self.upper:
+            raise ParameterError(
+                f"dead zone needs lower <= upper, got lower={self.lower}, upper={self.upper}; "
+                "swap them"
+            )
+        self.slope_left = _float_scalar("slope_left", slope_left, positive=True)
+        self.slope_right = _float_scalar("slope_right", slope_right, positive=True)
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        return {
+            "lower": self.lower,
+            "upper": self.upper,
+            "slope_left": self.slope_left,
+            "slope_right": self.slope_right,
+        }
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        u = _as_input(u)
+        # lower <= upper, so at most one of the two terms is non-zero.
+        return self.slope_left * np.minimum(u - self.lower, 0.0) + self.slope_right * np.maximum(
+            u - self.upper, 0.0
+        )
+
+    def default_u_range(self) -> tuple[float, float]:
+        width = self.upper - self.lower
+        margin = width if width > 0 else max(abs(self.lower), abs(self.upper), 1.0)
+        return (self.lower - margin, self.upper + margin)
+
+
+class Saturation(_PlottableStaticBlock):
+    r"""Saturation: a linear gain clipped to ``[lower, upper]``.
+
+    .. math::
+
+        w = \min\bigl(\max(m\,u,\ w_{\min}),\ w_{\max}\bigr)
+
+    Parameters
+    ----------
+    lower, upper : float
+        Output limits :math:`w_{\min} < w_{\max}`.
+    slope : float, default 1.0
+        Gain :math:`m > 0` of the linear part.
+
+    Examples
+    --------
+    >>> Saturation(-1.0, 2.0, slope=2.0)([-3.0, 0.25, 3.0]).tolist()
+    [-1.0, 0.5, 2.0]
+    """
+
+    kind = "saturation"
+
+    def __init__(self, lower: float, upper: float, slope: float = 1.0) -> None:
+        self.lower = _float_scalar("lower", lower)
+        self.upper = _float_scalar("upper", upper)
+        if self.lower >= self.upper:
+            raise ParameterError(
+                f"saturation needs lower < upper, got lower={self.lower}, upper={self.upper}"
+            )
+        self.slope = _float_scalar("slope", slope, positive=True)
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        return {"lower": self.lower, "upper": self.upper, "slope": self.slope}
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        return np.clip(self.slope * _as_input(u), self.lower, self.upper)
+
+    def default_u_range(self) -> tuple[float, float]:
+        knee_lo, knee_hi = self.lower / self.slope, self.upper / self.slope
+        margin = 0.5 * (knee_hi - knee_lo)
+        return (knee_lo - margin, knee_hi + margin)
+
+
+class PiecewiseLinear(_PlottableStaticBlock):
+    r"""Piecewise-linear map through given points, extrapolated linearly beyond them.
+
+    With breakpoints :math:`\beta_0 < \dots < \beta_{n-1}` and values :math:`v_j`,
+
+    .. math::
+
+        w = \sum_{j=0}^{n-1} v_j\,\Lambda_j(u)
+
+    where :math:`\Lambda_j` are the hat functions (1 at :math:`\beta_j`, 0 at the
+    other breakpoints, linear in between); the first and last segments continue
+    beyond the end breakpoints. The output is linear in the values, so
+    ``regressors(u) @ to_vector() == self(u)``.
+
+    Parameters
+    ----------
+    breakpoints : sequence of float
+        At least two strictly increasing input values.
+    values : sequence of float
+        Output at each breakpoint (same length).
+
+    Examples
+    --------
+    >>> pwl = PiecewiseLinear([0.0, 1.0, 3.0], [0.0, 2.0, 3.0])
+    >>> pwl([-1.0, 0.5, 2.0, 5.0]).tolist()
+    [-2.0, 1.0, 2.5, 4.0]
+    """
+
+    kind = "piecewise-linear"
+    linear_in_parameters = True
+
+    def __init__(self, breakpoints: Sequence[float], values: Sequence[float]) -> None:
+        self.breakpoints = _float_vector("breakpoints", breakpoints, min_length=2)
+        if np.any(np.diff(self.breakpoints) <= 0):
+            raise ParameterError(
+                "breakpoints must be strictly increasing, got "
+                f"{self.breakpoints.tolist()}; sort them and drop duplicates"
+            )
+        self.values = _float_vector("values", values, min_length=2)
+        if self.values.size != self.breakpoints.size:
+            raise ParameterError(
+                f"values must have one entry per breakpoint ({self.breakpoints.size}), "
+                f"got {self.values.size}"
+            )
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        return {"breakpoints": self.breakpoints.tolist(), "values": self.values.tolist()}
+
+    def _locate(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Segment index ``j`` (0..n-2) and position ``t`` of ``u`` in ``[β_j, β_j+1]``.
+
+        ``t`` is outside ``[0, 1]`` on the extrapolated end segments.
+        """
+        bp = self.breakpoints
+        j = np.clip(np.searchsorted(bp, u, side="right") - 1, 0, bp.size - 2)
+        t = (u - bp[j]) / (bp[j + 1] - bp[j])
+        return j, t
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        u = _as_input(u)
+        j, t = self._locate(u)
+        v = self.values
+        return v[j] + t * (v[j + 1] - v[j])
+
+    def regressors(self, u: np.ndarray) -> np.ndarray:
+        r"""Hat-function basis, shape ``(N, n)`` for ``N = u.size`` (``u`` is flattened).
+
+        Row ``k`` holds :math:`\Lambda_j(u_k)`: ``1 - t`` and ``t`` in the columns of
+        the two breakpoints around ``u_k``, zero elsewhere.
+        """
+        u = _as_input(u).ravel()
+        j, t = self._locate(u)
+        phi = np.zeros((u.size, self.breakpoints.size))
+        rows = np.arange(u.size)
+        phi[rows, j] = 1.0 - t
+        phi[rows, j + 1] = t
+        return phi
+
+    def to_vector(self) -> np.ndarray:
+        """Parameter vector: the values at the breakpoints (a copy)."""
+        return self.values.copy()
+
+    def with_vector(self, theta: np.ndarray) -> PiecewiseLinear:
+        """New block with the same breakpoints and values ``theta``."""
+        values = _check_theta(theta, self.breakpoints.size, "one value per breakpoint")
+        return PiecewiseLinear(self.breakpoints, values)
+
+    def default_u_range(self) -> tuple[float, float]:
+        lo, hi = float(self.breakpoints[0]), float(self.breakpoints[-1])
+        margin = 0.1 * (hi - lo)
+        return (lo - margin, hi + margin)

@@ -1,0 +1,175 @@
+"""Tests of blockid.blocks.static: DeadZone, Saturation, PiecewiseLinear."""
+
+import json
+
+import numpy as np
+import pytest
+
+from blockid.blocks.base import BLOCK_TYPES, block_from_dict
+from blockid.blocks.static import DeadZone, PiecewiseLinear, Saturation
+from blockid.errors import ParameterError
+
+
+def dead_zone_reference(lower, upper, m_left, m_right, u):
+    out = []
+    for uk in u:
+        if uk < lower:
+            out.append(m_left * (uk - lower))
+        elif uk > upper:
+            out.append(m_right * (uk - upper))
+        else:
+            out.append(0.0)
+    return np.array(out)
+
+
+# ------------------------------------------------------------------------ DeadZone
+def test_dead_zone_values():
+    dz = DeadZone(-1.0, 2.0, slope_left=0.5, slope_right=3.0)
+    u = np.array([-3.0, -1.0, 0.0, 2.0, 2.5])
+    assert dz(u).tolist() == [-1.0, 0.0, 0.0, 0.0, 1.5]
+    rng = np.random.default_rng(10)
+    u = rng.uniform(-4, 5, size=200)
+    np.testing.assert_allclose(dz(u), dead_zone_reference(-1.0, 2.0, 0.5, 3.0, u))
+
+
+def test_dead_zone_default_slopes_shape_and_zero_width():
+    dz = DeadZone(-0.5, 0.5)
+    u = np.array([[-1.5, 0.2], [0.5, 4.0]])
+    np.testing.assert_array_equal(dz(u), [[-1.0, 0.0], [0.0, 3.5]])
+    kink = DeadZone(1.0, 1.0, slope_left=2.0)  # width 0: two slopes meeting at (1, 0)
+    assert kink([0.0, 1.0, 3.0]).tolist() == [-2.0, 0.0, 2.0]
+
+
+def test_dead_zone_bad_parameters():
+    with pytest.raises(ParameterError, match=r"lower <= upper.*lower=2.0, upper=1.0; swap"):
+        DeadZone(2.0, 1.0)
+    with pytest.raises(ParameterError, match="slope_left must be > 0, got -1.0"):
+        DeadZone(0.0, 1.0, slope_left=-1.0)
+    with pytest.raises(ParameterError, match="slope_right must be > 0, got 0.0"):
+        DeadZone(0.0, 1.0, slope_right=0.0)
+    with pytest.raises(ParameterError, match="upper must be finite"):
+        DeadZone(0.0, np.inf)
+    with pytest.raises(ParameterError, match="lower must be a real number, got 'a'"):
+        DeadZone("a", 1.0)
+
+
+# ---------------------------------------------------------------------- Saturation
+def test_saturation_values():
+    sat = Saturation(-1.0, 2.0)
+    assert sat([-5.0, -1.0, 0.5, 2.0, 7.0]).tolist() == [-1.0, -1.0, 0.5, 2.0, 2.0]
+    steep = Saturation(-1.0, 2.0, slope=4.0)
+    assert steep([-1.0, -0.25, 0.1, 0.5, 1.0]).tolist() == [-1.0, -1.0, 0.4, 2.0, 2.0]
+    assert steep(np.zeros((3, 2))).shape == (3, 2)
+
+
+def test_saturation_bad_parameters():
+    with pytest.raises(ParameterError, match="lower < upper, got lower=1.0, upper=1.0"):
+        Saturation(1.0, 1.0)
+    with pytest.raises(ParameterError, match="slope must be > 0"):
+        Saturation(-1.0, 1.0, slope=-2.0)
+
+
+# ----------------------------------------------------------------- PiecewiseLinear
+def test_piecewise_linear_interpolates_and_extrapolates():
+    pwl = PiecewiseLinear([0.0, 1.0, 3.0], [0.0, 2.0, 3.0])
+    # inside: as np.interp
+    u_in = np.linspace(0.0, 3.0, 31)
+    np.testing.assert_allclose(pwl(u_in), np.interp(u_in, [0.0, 1.0, 3.0], [0.0, 2.0, 3.0]))
+    # outside: first segment has slope 2, last slope 0.5
+    assert pwl([-1.0, -0.5, 5.0, 7.0]).tolist() == [-2.0, -1.0, 4.0, 5.0]
+    # exactly at the breakpoints
+    assert pwl([0.0, 1.0, 3.0]).tolist() == [0.0, 2.0, 3.0]
+    assert pwl(np.ones((2, 2, 2))).shape == (2, 2, 2)
+
+
+def test_piecewise_linear_regressors_are_hat_functions():
+    pwl = PiecewiseLinear([0.0, 1.0, 3.0], [0.0, 2.0, 3.0])
+    # at the breakpoints the basis is the identity
+    np.testing.assert_allclose(pwl.regressors([0.0, 1.0, 3.0]), np.eye(3), atol=1e-15)
+    assert pwl.regressors([0.5, 2.5, -1.0, 4.0]).tolist() == [
+        [0.5, 0.5, 0.0],
+        [0.0, 0.25, 0.75],
+        [2.0, -1.0, 0.0],  # extrapolated left: t = -1
+        [0.0, -0.5, 1.5],  # extrapolated right: t = 1.5
+    ]
+    rng = np.random.default_rng(11)
+    pwl = PiecewiseLinear(np.sort(rng.uniform(-2, 2, 7)), rng.normal(size=7))
+    u = rng.uniform(-3, 3, size=(10, 10))
+    phi = pwl.regressors(u)
+    assert phi.shape == (100, 7)
+    np.testing.assert_allclose(phi.sum(axis=1), 1.0)  # partition of unity
+    np.testing.assert_allclose(phi @ pwl.to_vector(), pwl(u).ravel(), rtol=1e-12, atol=1e-12)
+
+
+def test_piecewise_linear_with_vector():
+    pwl = PiecewiseLinear([0.0, 1.0], [0.0, 1.0])
+    other = pwl.with_vector(np.array([1.0, -1.0]))
+    assert other.parameters == {"breakpoints": [0.0, 1.0], "values": [1.0, -1.0]}
+    assert pwl.parameters["values"] == [0.0, 1.0]
+    with pytest.raises(ParameterError, match=r"theta must have 2 entries"):
+        pwl.with_vector([1.0])
+
+
+@pytest.mark.parametrize(
+    ("breakpoints", "values", "message"),
+    [
+        ([0.0, 1.0, 1.0], [0.0, 1.0, 2.0], "breakpoints must be strictly increasing"),
+        ([1.0, 0.0], [0.0, 1.0], "breakpoints must be strictly increasing"),
+        ([0.0], [0.0], "breakpoints needs at least 2 value"),
+        ([0.0, 1.0], [0.0, 1.0, 2.0], r"values must have one entry per breakpoint \(2\), got 3"),
+        ([0.0, np.nan], [0.0, 1.0], "breakpoints must contain finite numbers"),
+    ],
+)
+def test_piecewise_linear_bad_parameters(breakpoints, values, message):
+    with pytest.raises(ParameterError, match=message):
+        PiecewiseLinear(breakpoints, values)
+
+
+def test_parameters_are_read_only():
+    pwl = PiecewiseLinear([0.0, 1.0], [0.0, 1.0])
+    with pytest.raises(ValueError, match="read-only"):
+        pwl.values[0] = 5.0
+
+
+# ------------------------------------------------------------------ serialisation
+@pytest.mark.parametrize(
+    "block",
+    [
+        DeadZone(-0.2, 0.3, slope_left=0.8, slope_right=1.1),
+        Saturation(-1.0, 1.5, slope=2.0),
+        PiecewiseLinear([-1.0, 0.0, 2.0], [0.5, 0.0, 1.0]),
+    ],
+    ids=repr,
+)
+def test_dict_and_json_round_trip(block):
+    data = block.to_dict()
+    assert BLOCK_TYPES[data["kind"]] is type(block)
+    again = block_from_dict(json.loads(json.dumps(data)))
+    assert type(again) is type(block)
+    assert again.parameters == block.parameters
+    u = np.linspace(-3, 3, 13)
+    np.testing.assert_array_equal(again(u), block(u))
+
+
+def test_kinds_and_flags():
+    assert (DeadZone.kind, Saturation.kind, PiecewiseLinear.kind) == (
+        "dead-zone",
+        "saturation",
+        "piecewise-linear",
+    )
+    assert PiecewiseLinear.linear_in_parameters
+    assert not DeadZone.linear_in_parameters and not Saturation.linear_in_parameters
+
+
+@pytest.mark.parametrize(
+    ("block", "expected"),
+    [
+        (DeadZone(-1.0, 2.0), (-4.0, 5.0)),
+        (DeadZone(1.0, 1.0), (0.0, 2.0)),
+        (Saturation(-1.0, 2.0, slope=2.0), (-1.25, 1.75)),
+        (PiecewiseLinear([0.0, 10.0], [0.0, 1.0]), (-1.0, 11.0)),
+    ],
+    ids=repr,
+)
+def test_default_u_range_shows_the_kinks(block, expected):
+    assert block.default_u_range() == pytest.approx(expected)
