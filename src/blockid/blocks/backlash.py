@@ -1,0 +1,195 @@
+"""Backlash: the hysteretic input block of paper A's choke-finger subsystem (S2).
+
+.. math::
+
+    x(t) = \\begin{cases}
+        m_L\\,(u(t) + c_L)  & u(t) < z_L(t) \\\\
+        x(t-1)              & z_L(t) \\le u(t) \\le z_R(t) \\\\
+        m_R\\,(u(t) - c_R)  & u(t) > z_R(t)
+    \\end{cases}
+    \\qquad z_L(t) = \\frac{x(t-1)}{m_L} - c_L,\\quad z_R(t) = \\frac{x(t-1)}{m_R} + c_R
+
+(SPEC.md (A3)). With the switching function :math:`h(s) = 1` for :math:`s \\le 0`
+and 0 otherwise, :math:`f_1(t) = h(u(t) - z_L(t))` (driving left) and
+:math:`f_2(t) = h(z_R(t) - u(t))` (driving right), the three branches are one equation
+
+.. math::
+
+    x(t) = m_L u f_1 + m_L c_L f_1 + m_R u f_2 - m_R c_R f_2 + x(t-1)(1 - f_1)(1 - f_2)
+
+(SPEC.md (A4)), which is what the identification algorithms (A6)–(A8) work with.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from blockid._kernels.backlash import backlash_run
+from blockid.blocks.base import DynamicBlock
+from blockid.errors import DataError, ParameterError
+
+__all__ = ["Backlash"]
+
+
+class Backlash(DynamicBlock):
+    """Backlash (play) with slopes ``m_left``, ``m_right`` and dead-band half-widths.
+
+    Parameters
+    ----------
+    m_left, m_right : float
+        Slopes of the left (driving down) and right (driving up) branches, ``> 0``.
+    c_left, c_right : float
+        Dead-band half-widths, ``>= 0``, in input units: the left branch is the line
+        ``x = m_left (u + c_left)``, the right branch ``x = m_right (u - c_right)``.
+
+    Notes
+    -----
+    The model equations are (A3) and, in switching form, (A4) of SPEC.md (see the
+    module docstring). For ``m_left == m_right`` the output does not move after a
+    reversal of the input until the input has travelled ``c_left + c_right``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> b = Backlash(m_left=1.0, c_left=0.5, m_right=1.0, c_right=0.5)
+    >>> b.simulate(np.array([0.0, 2.0, 1.5, 1.0, 0.5]))
+    array([0. , 1.5, 1.5, 1.5, 1. ])
+    >>> f1, f2 = b.switching(np.array([0.0, 2.0, 1.5, 1.0, 0.5]))
+    >>> f1, f2
+    (array([0., 0., 0., 1., 1.]), array([0., 1., 0., 0., 0.]))
+    """
+
+    kind: ClassVar[str] = "backlash"
+
+    def __init__(self, m_left: float, c_left: float, m_right: float, c_right: float) -> None:
+        self.m_left = _check_parameter("m_left", m_left, positive=True)
+        self.c_left = _check_parameter("c_left", c_left, positive=False)
+        self.m_right = _check_parameter("m_right", m_right, positive=True)
+        self.c_right = _check_parameter("c_right", c_right, positive=False)
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """``{"m_left", "c_left", "m_right", "c_right"}`` as floats (SPEC Conventions)."""
+        return {
+            "m_left": self.m_left,
+            "c_left": self.c_left,
+            "m_right": self.m_right,
+            "c_right": self.c_right,
+        }
+
+    def to_vector(self) -> np.ndarray:
+        """``[m_left, c_left, m_right, c_right]`` as a float array."""
+        return np.array([self.m_left, self.c_left, self.m_right, self.c_right])
+
+    def to_theta(self) -> np.ndarray:
+        """Backlash part of the key-term-separated parameter vector of (A6).
+
+        Returns ``[m_left, m_left*c_left, m_right, m_right*c_right]``.
+        """
+        return np.array(
+            [self.m_left, self.m_left * self.c_left, self.m_right, self.m_right * self.c_right]
+        )
+
+    @classmethod
+    def from_theta(cls, theta: np.ndarray) -> Backlash:
+        """Read the backlash back from ``θ[:4]`` of (A6).
+
+        ``m_left = θ1, c_left = θ2/θ1, m_right = θ3, c_right = θ4/θ3``.
+
+        Examples
+        --------
+        >>> Backlash.from_theta([0.5, 0.4, 0.5, 0.425])
+        Backlash(m_left=0.5, c_left=0.8, m_right=0.5, c_right=0.85)
+        """
+        theta = np.asarray(theta, dtype=float).ravel()
+        if theta.size != 4:
+            raise ParameterError(
+                f"theta must hold 4 values [m_left, m_left*c_left, m_right, m_right*c_right], "
+                f"got {theta.size}"
+            )
+        m_left = _check_parameter("theta[0] (m_left)", theta[0], positive=True)
+        m_right = _check_parameter("theta[2] (m_right)", theta[2], positive=True)
+        return cls(
+            m_left=m_left,
+            c_left=float(theta[1]) / m_left,
+            m_right=m_right,
+            c_right=float(theta[3]) / m_right,
+        )
+
+    def check_branches(self, u_min: float, u_max: float) -> None:
+        """Check that the two branch lines do not cross for inputs in ``[u_min, u_max]``.
+
+        The left line ``m_left (u + c_left)`` must not fall below the right line
+        ``m_right (u - c_right)`` anywhere in the range; otherwise the dead band of
+        (A3) is empty and the block is not a backlash there. With equal slopes the
+        lines are parallel and the check always passes.
+
+        Raises
+        ------
+        ParameterError
+            If the range is invalid or the lines cross inside it.
+        """
+        lo = _check_parameter("u_min", u_min, positive=None)
+        hi = _check_parameter("u_max", u_max, positive=None)
+        if lo > hi:
+            raise ParameterError(f"u_min ({lo}) must not exceed u_max ({hi}); swap them")
+        # gap(u) = mL (u + cL) - mR (u - cR) is linear in u: check both ends.
+        for u in (lo, hi):
+            gap = self.m_left * (u + self.c_left) - self.m_right * (u - self.c_right)
+            if gap < 0.0:
+                cross = -(self.m_left * self.c_left + self.m_right * self.c_right) / (
+                    self.m_left - self.m_right
+                )
+                raise ParameterError(
+                    f"the backlash branches cross at u = {cross:.6g}, inside the input range "
+                    f"[{lo:.6g}, {hi:.6g}]: the left line m_left*(u + c_left) falls below the "
+                    f"right line m_right*(u - c_right) there; restrict the input range or use "
+                    f"slopes m_left, m_right that are closer together"
+                )
+
+    def simulate(self, u: np.ndarray, x0: float = 0.0) -> np.ndarray:
+        """Output ``x`` of (A3) for the input sequence ``u``, starting from ``x(-1) = x0``."""
+        return self._run(u, x0)[0]
+
+    def switching(self, u: np.ndarray, x0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Switching sequences ``f1`` (driving left) and ``f2`` (driving right) of (A4).
+
+        Returned as float arrays of 0.0/1.0, for the trajectory that :meth:`simulate`
+        produces from the same ``u`` and ``x0``.
+        """
+        _, f1, f2 = self._run(u, x0)
+        return f1, f2
+
+    def plot(self, ax: Any = None, u: np.ndarray | None = None, truth: Backlash | None = None):
+        """Draw the hysteresis loop; see :func:`blockid.plotting.backlash.plot_backlash`."""
+        from blockid.plotting.backlash import plot_backlash
+
+        return plot_backlash(self, ax=ax, u=u, truth=truth)
+
+    def _run(self, u: np.ndarray, x0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        arr = np.asarray(u, dtype=float)
+        if arr.ndim != 1:
+            raise DataError(f"u must be a one-dimensional sequence, got shape {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+            raise DataError(f"u contains a non-finite value at index {bad}; remove or fill it")
+        x_start = _check_parameter("x0", x0, positive=None)
+        return backlash_run(np.ascontiguousarray(arr), self.to_vector(), x_start)
+
+
+def _check_parameter(name: str, value: Any, positive: bool | None) -> float:
+    """Return ``value`` as a finite float; ``positive`` True: > 0, False: >= 0, None: any."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise ParameterError(f"{name} must be finite, got {number}")
+    if positive is True and number <= 0.0:
+        raise ParameterError(f"{name} must be > 0 (a backlash slope), got {number}")
+    if positive is False and number < 0.0:
+        raise ParameterError(f"{name} must be >= 0 (a dead-band half-width), got {number}")
+    return number
