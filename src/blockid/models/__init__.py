@@ -1,0 +1,15 @@
+"""Model structures: linear ARX and the block-oriented models."""
+
+from blockid.models.arx import ARX
+from blockid.models.base import MODEL_TYPES, Model, model_from_dict
+from blockid.models.serialization import load_model, model_document, save_model
+
+__all__ = [
+    "ARX",
+    "MODEL_TYPES",
+    "Model",
+    "load_model",
+    "model_document",
+    "model_from_dict",
+    "save_model",
+]

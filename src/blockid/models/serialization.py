@@ -1,0 +1,83 @@
+"""Model files: JSON with a format name and a version.
+
+.. code-block:: json
+
+    {"format": "blockid-model", "version": 1,
+     "model": {"structure": "arx", "inputs": [...], "outputs": [...], ...},
+     "estimation": {"method": "rls", ...}}
+
+Floats are written with Python's shortest round-trip representation, so a saved and
+reloaded model gives bit-identical predictions.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from blockid.errors import ModelFileError
+from blockid.models.base import Model, model_from_dict
+
+__all__ = ["FORMAT", "VERSION", "model_document", "model_from_document", "save_model", "load_model"]
+
+FORMAT = "blockid-model"
+VERSION = 1
+
+
+def model_document(model: Model, estimation: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The JSON document of a model file (also what ``blockid fit --json`` prints)."""
+    doc: dict[str, Any] = {"format": FORMAT, "version": VERSION, "model": model.to_dict()}
+    if estimation:
+        doc["estimation"] = estimation
+    return doc
+
+
+def model_from_document(doc: Any, source: str = "the model document") -> Model:
+    """Check format and version, then rebuild the model."""
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise ModelFileError(f'{source} is not a blockid model file (no "format": "{FORMAT}")')
+    version = doc.get("version")
+    if version != VERSION:
+        raise ModelFileError(
+            f"{source} has model-file version {version!r}; this blockid reads version {VERSION}. "
+            "Upgrade blockid or refit the model"
+        )
+    if "model" not in doc:
+        raise ModelFileError(f'{source} has no "model" entry; the file is damaged')
+    try:
+        return model_from_dict(doc["model"])
+    except ModelFileError as exc:
+        raise ModelFileError(f"{source}: {exc}") from None
+
+
+def save_model(
+    model: Model,
+    path: str | Path,
+    estimation: dict[str, Any] | None = None,
+    overwrite: bool = False,
+) -> Path:
+    """Write a model file atomically; an existing file is kept unless ``overwrite``."""
+    from blockid.data.io import write_text_atomic
+
+    text = json.dumps(model_document(model, estimation), indent=2, allow_nan=False)
+    path = Path(path)
+    write_text_atomic(text + "\n", path, overwrite=overwrite)
+    return path
+
+
+def load_model(path: str | Path) -> Model:
+    """Read a model file written by :func:`save_model`."""
+    path = Path(path)
+    if not path.is_file():
+        raise ModelFileError(f"model file {path} does not exist")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ModelFileError(
+            f"{path} is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg}); "
+            "the file is damaged: refit or restore it"
+        ) from None
+    except UnicodeDecodeError:
+        raise ModelFileError(f"{path} is not a text file; is it really a model file?") from None
+    return model_from_document(doc, source=str(path))
