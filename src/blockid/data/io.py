@@ -1,0 +1,482 @@
+"""Reading input/output records from files and writing tables and text atomically.
+
+Supported data files (chosen by suffix):
+
+- ``.csv``, ``.tsv``, ``.txt``: delimited text with a header line. The delimiter
+  (comma, tab, semicolon or bar) is sniffed from the first lines; a ``.txt``/``.tsv`` file
+  with none of them is read as whitespace-separated.
+- ``.parquet``: read with pyarrow.
+- ``.mat``: MATLAB v4/v5/v7 files (not v7.3). Each signal is a variable: a vector is one
+  experiment, an N x E matrix holds E experiments, one per column.
+
+Every error names the file; errors in a cell also name the column, the data row
+(1-based) and, for text files, the line of the file.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import os
+import re
+import secrets
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+import pandas as pd
+
+from blockid.data.dataset import (
+    Dataset,
+    _check_sampling_time,
+    _check_signal_names,
+    _concat,
+    _frame_to_dataset,
+    _unknown_name_message,
+    _Where,
+)
+from blockid.errors import DataError
+
+__all__ = [
+    "READ_SUFFIXES",
+    "WRITE_SUFFIXES",
+    "read_data",
+    "write_table",
+    "write_text_atomic",
+]
+
+#: File suffixes :func:`read_data` understands.
+READ_SUFFIXES = (".csv", ".tsv", ".txt", ".parquet", ".mat")
+#: File suffixes :func:`write_table` can write.
+WRITE_SUFFIXES = (".csv", ".tsv", ".parquet")
+
+_TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
+_WHITESPACE = r"\s+"
+_SNIFF_BYTES = 64 * 1024
+#: Delimiters tried, most likely first, for each text suffix.
+_DELIMITERS = {".csv": ",;\t|", ".tsv": "\t,;|", ".txt": "\t,;|"}
+
+PathLike = str | os.PathLike
+
+
+# ---------------------------------------------------------------------- reading
+def read_data(
+    paths: PathLike | Sequence[PathLike],
+    inputs: Sequence[str],
+    outputs: Sequence[str],
+    sampling_time: float | None = None,
+    time_column: str | None = None,
+    experiment_column: str | None = None,
+) -> Dataset:
+    """Read input/output data from one or more files.
+
+    Parameters
+    ----------
+    paths : path or sequence of paths
+        Data files (``.csv``, ``.tsv``, ``.txt``, ``.parquet``, ``.mat``). Each file gives
+        one or more experiments.
+    inputs, outputs : sequence of str
+        Column (or .mat variable) names of the input and output signals.
+    sampling_time : float, optional
+        Sampling period; checked against ``time_column`` if both are given.
+    time_column : str, optional
+        Column of sample times, from which the sampling time is inferred (median step;
+        steps must stay within 1 % of it).
+    experiment_column : str, optional
+        Column that labels the experiment of each row (rows of one experiment contiguous).
+
+    Returns
+    -------
+    Dataset
+        Experiments are named after the file stem (``run1`` for ``data/run1.csv``), the
+        experiment-column value (one file) or ``stem/value`` (several files), and
+        ``stem column j`` for column j (1-based) of a .mat matrix. All files must share
+        one sampling time.
+
+    Raises
+    ------
+    DataError
+        For a missing, empty, unreadable or malformed file; the message names the file,
+        and for a bad cell the column, data row, file line and value.
+    """
+    path_list = [paths] if isinstance(paths, str | os.PathLike) else list(paths)
+    if not path_list:
+        raise DataError("no data file given; name at least one .csv, .parquet or .mat file")
+    inputs, outputs = _check_signal_names(inputs, outputs)
+    sampling_time = _check_sampling_time(sampling_time)
+    shown = [str(p) for p in path_list]
+    for text in shown:
+        _check_suffix(Path(text))
+    resolved = [os.path.realpath(p) for p in path_list]
+    for i, real in enumerate(resolved):
+        if real in resolved[:i]:
+            raise DataError(f"{shown[i]} is listed twice; give each data file once")
+    stems = [Path(p).stem for p in shown]
+    names = [
+        stem if stems.count(stem) == 1 else text for stem, text in zip(stems, shown, strict=True)
+    ]
+    several = len(path_list) > 1
+    options = dict(
+        inputs=inputs,
+        outputs=outputs,
+        sampling_time=sampling_time,
+        time_column=time_column,
+        experiment_column=experiment_column,
+    )
+    datasets = [
+        _read_one(Path(text), text, name, several, **options)
+        for text, name in zip(shown, names, strict=True)
+    ]
+    if not several:
+        return datasets[0]
+    return _concat(datasets, source=", ".join(shown))
+
+
+def _check_suffix(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix not in READ_SUFFIXES:
+        raise DataError(
+            f"{path}: unknown data file type {suffix or '(no suffix)'!r}; "
+            f"supported: {', '.join(READ_SUFFIXES)}"
+        )
+    return suffix
+
+
+def _check_file(path: Path, shown: str) -> None:
+    """Existence, type and size checks that every reader starts with."""
+    if not path.exists():
+        folder = path.parent
+        if not folder.is_dir():
+            raise DataError(f"{shown} does not exist (no folder {folder})")
+        siblings = sorted(p.name for p in folder.iterdir() if p.is_file())
+        near = difflib.get_close_matches(path.name, siblings, n=3, cutoff=0.6)
+        hint = f" (did you mean {' or '.join(repr(n) for n in near)}?)" if near else ""
+        raise DataError(f"{shown} does not exist{hint}")
+    if path.is_dir():
+        raise DataError(f"{shown} is a folder, not a data file")
+    if path.stat().st_size == 0:
+        raise DataError(f"{shown} is empty")
+
+
+def _read_one(path: Path, shown: str, name: str, several: bool, **options: Any) -> Dataset:
+    suffix = _check_suffix(path)
+    _check_file(path, shown)
+    try:
+        if suffix == ".mat":
+            return _read_mat(path, shown, name, several, **options)
+        if suffix == ".parquet":
+            frame, where, empty = _read_parquet(path, shown, options)
+        else:
+            frame, where, empty = _read_text(path, shown, suffix, options)
+    except PermissionError:
+        raise DataError(f"{shown} cannot be read: permission denied") from None
+    return _frame_to_dataset(
+        frame,
+        source=shown,
+        name=name,
+        split_prefix=name if several else None,
+        where=where,
+        empty_message=empty,
+        **options,
+    )
+
+
+def _needed_columns(options: Mapping[str, Any]) -> list[str]:
+    extra = [options[k] for k in ("time_column", "experiment_column") if options[k] is not None]
+    return list(options["inputs"]) + list(options["outputs"]) + extra
+
+
+def _check_columns(available: Sequence[str], needed: Sequence[str], where: _Where) -> None:
+    """Raise for the first needed column that is missing, with suggestions."""
+    # Blank header cells (e.g. from trailing delimiters) only clutter the list.
+    shown = [a for a in available if not re.fullmatch(r"Unnamed: \d+", a)]
+    for wanted in needed:
+        if wanted not in available:
+            message = _unknown_name_message(where.prefix, where.label, wanted, shown)
+            if available and all(_looks_numeric(a) for a in available):
+                message += " (the first line is read as the header; add a line of column names)"
+            raise DataError(message)
+
+
+def _looks_numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+# .csv / .tsv / .txt ----------------------------------------------------------------
+def _sniff_delimiter(sample: str, suffix: str, truncated: bool) -> str:
+    """The delimiter present on each of the first lines (same count first), else a default."""
+    lines = [line for line in sample.splitlines() if line.strip()]
+    if truncated and len(lines) > 1:
+        lines = lines[:-1]  # the last line may be cut short
+    lines = lines[:50]
+    counts = {d: [line.count(d) for line in lines] for d in _DELIMITERS[suffix]}
+    for delimiter, found in counts.items():
+        if found and found[0] > 0 and all(c == found[0] for c in found):
+            return delimiter
+    for delimiter, found in counts.items():  # quoted fields may hide extra delimiters
+        if found and all(c > 0 for c in found):
+            return delimiter
+    return "," if suffix == ".csv" else _WHITESPACE
+
+
+def _csv_options(delimiter: str) -> dict[str, Any]:
+    options: dict[str, Any] = {
+        "sep": delimiter,
+        "encoding": "utf-8-sig",
+        "encoding_errors": "replace",
+        "engine": "c",
+    }
+    if delimiter != _WHITESPACE:
+        options["skipinitialspace"] = True
+    return options
+
+
+def _text_locator(path: Path, delimiter: str) -> Callable[[Sequence[int]], dict]:
+    """Map 0-based data rows to ``(line number, {column: raw text})`` by re-reading the file.
+
+    Mirrors how pandas counts rows: blank lines are skipped and the first non-blank record
+    is the header. Used only to word an error message.
+    """
+
+    def locate(rows: Sequence[int]) -> dict[int, tuple[int, dict[str, str]]]:
+        wanted, last = set(rows), max(rows)
+        found: dict[int, tuple[int, dict[str, str]]] = {}
+        with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
+            if delimiter == _WHITESPACE:
+                records = ((n, line.split()) for n, line in enumerate(handle, start=1))
+            else:
+                reader = csv.reader(handle, delimiter=delimiter, skipinitialspace=True)
+                records = ((reader.line_num, fields) for fields in reader)
+            header: list[str] | None = None
+            row = -1
+            for line, fields in records:
+                if not fields or (len(fields) == 1 and not fields[0].strip()):
+                    continue
+                if header is None:
+                    header = [f.strip() for f in fields]
+                    continue
+                row += 1
+                if row in wanted:
+                    found[row] = (line, dict(zip(header, fields, strict=False)))
+                if row >= last:
+                    break
+        return found
+
+    return locate
+
+
+def _read_text(
+    path: Path, shown: str, suffix: str, options: Mapping[str, Any]
+) -> tuple[pd.DataFrame, _Where, str]:
+    with open(path, "rb") as handle:
+        head = handle.read(_SNIFF_BYTES)
+    sample = head.decode("utf-8-sig", errors="replace")
+    if not sample.strip():
+        raise DataError(f"{shown} is empty (only blank lines)")
+    delimiter = _sniff_delimiter(sample, suffix, truncated=len(head) == _SNIFF_BYTES)
+    csv_options = _csv_options(delimiter)
+    where = _Where(shown, locate=_text_locator(path, delimiter))
+    try:
+        header = pd.read_csv(path, nrows=0, **csv_options).columns
+        original = {str(c).strip(): c for c in header}
+        _check_columns(list(original), _needed_columns(options), where)
+        wanted = [original[c] for c in _needed_columns(options)]
+        frame = pd.read_csv(path, usecols=wanted, **csv_options)
+    except pd.errors.EmptyDataError:
+        raise DataError(f"{shown} is empty (no header line)") from None
+    except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
+        if isinstance(exc, DataError):
+            raise
+        raise DataError(f"{shown} could not be parsed as delimited text: {exc}") from None
+    frame.columns = [str(c).strip() for c in frame.columns]
+    return frame, where, f"{shown} has a header but no data rows"
+
+
+# .parquet ----------------------------------------------------------------------------
+def _read_parquet(
+    path: Path, shown: str, options: Mapping[str, Any]
+) -> tuple[pd.DataFrame, _Where, str]:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    where = _Where(shown)
+    try:
+        schema = pq.read_schema(path)
+    except (pa.ArrowException, OSError) as exc:
+        raise DataError(f"{shown} is not a readable Parquet file ({exc})") from None
+    available = [n for n in schema.names if not n.startswith("__index_level_")]
+    needed = _needed_columns(options)
+    _check_columns(available, needed, where)
+    try:
+        frame = pq.read_table(path, columns=needed).to_pandas()
+    except (pa.ArrowException, OSError) as exc:
+        raise DataError(f"{shown} could not be read as Parquet ({exc})") from None
+    return frame, where, f"{shown} has columns but no data rows"
+
+
+# .mat ---------------------------------------------------------------------------------
+def _read_mat(path: Path, shown: str, name: str, several: bool, **options: Any) -> Dataset:
+    from scipy.io import loadmat, whosmat
+    from scipy.io.matlab import MatReadError, matfile_version
+
+    try:
+        major, _ = matfile_version(str(path))
+    except (MatReadError, ValueError, OSError) as exc:
+        raise DataError(f"{shown} is not a MATLAB .mat file ({exc})") from None
+    if major == 2:
+        raise DataError(
+            f"{shown} is a MATLAB v7.3 (HDF5) file, which blockid cannot read; re-save it "
+            "in MATLAB with save(filename, ..., '-v7') or export the signals to CSV"
+        )
+    where = _Where(shown, label="variable", row_label="sample")
+    try:
+        listing = {entry[0]: entry for entry in whosmat(str(path))}
+        needed = _needed_columns(options)
+        _check_columns(list(listing), needed, where)
+        contents = loadmat(str(path), variable_names=needed)
+    except (MatReadError, ValueError, TypeError, OSError) as exc:
+        if isinstance(exc, DataError):
+            raise
+        raise DataError(f"{shown} could not be read as a MATLAB file ({exc})") from None
+
+    arrays = {v: _mat_matrix(contents[v], v, listing[v][2], shown) for v in needed}
+    n_rows, n_cols = max((a.shape for a in arrays.values()), key=lambda s: s[1])
+    for variable, array in arrays.items():
+        broadcast = variable == options["time_column"] and array.shape == (n_rows, 1)
+        if array.shape != (n_rows, n_cols) and not broadcast:
+            shapes = ", ".join(
+                f"'{v}' is {' x '.join(map(str, contents[v].shape))}" for v in needed
+            )
+            raise DataError(
+                f"{shown}: variables have different shapes ({shapes}); every signal needs "
+                "one value per sample: a vector for one experiment, or an N x E matrix "
+                "with one experiment per column"
+            )
+    datasets = []
+    for j in range(n_cols):
+        label = name if n_cols == 1 else f"{name} column {j + 1}"
+        frame = pd.DataFrame({v: a[:, min(j, a.shape[1] - 1)] for v, a in arrays.items()})
+        column_source = shown if n_cols == 1 else f"{shown} (column {j + 1})"
+        column_where = _Where(column_source, label="variable", row_label="sample")
+        datasets.append(
+            _frame_to_dataset(
+                frame,
+                source=column_source,
+                name=label,
+                split_prefix=label if several or n_cols > 1 else None,
+                where=column_where,
+                **options,
+            )
+        )
+    return datasets[0] if n_cols == 1 else _concat(datasets, source=shown)
+
+
+def _mat_matrix(value: Any, variable: str, matlab_class: str, shown: str) -> np.ndarray:
+    """A .mat variable as a float (N, E) array; vectors of either orientation give E = 1."""
+    if not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
+        kind = (
+            "complex"
+            if getattr(value, "dtype", None) is not None and value.dtype.kind == "c"
+            else matlab_class
+        )
+        raise DataError(
+            f"{shown}: variable '{variable}' is a {kind} array, not a real numeric vector or matrix"
+        )
+    if value.ndim > 2:
+        raise DataError(
+            f"{shown}: variable '{variable}' has {value.ndim} dimensions; use a vector "
+            "(one experiment) or an N x E matrix (one experiment per column)"
+        )
+    if value.size == 0:
+        raise DataError(f"{shown}: variable '{variable}' is empty")
+    if value.ndim == 1 or 1 in value.shape:
+        return value.reshape(-1, 1).astype(np.float64)
+    return value.astype(np.float64)
+
+
+# ---------------------------------------------------------------------- writing
+def write_table(frame: pd.DataFrame, path: PathLike, overwrite: bool = False) -> Path:
+    """Write a DataFrame to ``.csv``, ``.tsv`` or ``.parquet`` atomically.
+
+    The table is written to a temporary file in the same folder, flushed to disk and
+    then renamed over ``path``, so ``path`` holds either the old or the complete new
+    content, never a partial file. The index is not written.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The table.
+    path : path
+        Target file; the suffix picks the format.
+    overwrite : bool
+        Replace an existing file (the CLI's ``--force``).
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    DataError
+        If the suffix is unknown, the file exists and ``overwrite`` is false, the folder
+        does not exist or the file cannot be written.
+    """
+    target = Path(path)
+    suffix = target.suffix.lower()
+    if suffix not in WRITE_SUFFIXES:
+        raise DataError(
+            f"cannot write {target}: unknown table type {suffix or '(no suffix)'!r}; "
+            f"use one of {', '.join(WRITE_SUFFIXES)}"
+        )
+
+    def write(handle: IO[bytes]) -> None:
+        if suffix == ".parquet":
+            frame.to_parquet(handle, index=False)
+        else:
+            frame.to_csv(handle, index=False, sep="\t" if suffix == ".tsv" else ",")
+
+    return _atomic_write(target, overwrite, write)
+
+
+def write_text_atomic(text: str, path: PathLike, overwrite: bool = False) -> Path:
+    """Write UTF-8 text (e.g. a JSON model file) atomically; see :func:`write_table`.
+
+    Raises
+    ------
+    DataError
+        If the file exists and ``overwrite`` is false, or it cannot be written.
+    """
+    data = text.encode("utf-8")
+    return _atomic_write(Path(path), overwrite, lambda handle: handle.write(data))
+
+
+def _atomic_write(target: Path, overwrite: bool, write: Callable[[IO[bytes]], Any]) -> Path:
+    """Write through a temporary sibling file, fsync it, then ``os.replace`` it over target."""
+    if target.is_dir():
+        raise DataError(f"cannot write {target}: it is a folder")
+    if target.exists() and not overwrite:
+        raise DataError(f"{target} already exists; pass --force (overwrite=True) to replace it")
+    folder = target.parent
+    if not folder.is_dir():
+        raise DataError(f"cannot write {target}: folder {folder} does not exist")
+    temporary = folder / f".{target.name}.{secrets.token_hex(6)}.tmp"
+    try:
+        with open(temporary, "xb") as handle:
+            write(handle)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(temporary, target)
+    except OSError as exc:
+        raise DataError(f"could not write {target}: {exc.strerror or exc}") from exc
+    finally:
+        try:
+            temporary.unlink(missing_ok=True)
+        except OSError:
+            pass
+    return target
