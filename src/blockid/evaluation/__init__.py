@@ -1,4 +1,4 @@
-"""Validation of identified models: error metrics."""
+"""Validation of identified models: error metrics, simulation and prediction on data."""
 
 from blockid.evaluation.metrics import (
     METRICS,
@@ -9,8 +9,12 @@ from blockid.evaluation.metrics import (
     mse,
     rmse,
 )
+from blockid.evaluation.validate import MODES, ModelOutput, evaluate
 
 __all__ = [
+    "MODES",
+    "ModelOutput",
+    "evaluate",
     "METRICS",
     "fit_percent",
     "max_absolute_error",

@@ -1,0 +1,260 @@
+"""Fit ARX models with any of the regressor-level estimators.
+
+Each output of a multi-output ARX model has its own regressor (its own orders), so
+outputs are fitted one after another. Rows never straddle two experiments: each
+experiment contributes the samples after its first ``max_lag`` ones. The recursive
+estimators see the experiments one after another, in order.
+
+Before a recursive estimator runs, every regressor column is divided by its RMS over
+the estimation data. This changes nothing in exact arithmetic except the effective
+``P(0)`` (which becomes scale-aware), so that "large initial covariance" means large
+relative to the data: RLS with forgetting 1 then reproduces batch least squares to
+about 1e-8 whatever the units of the signals.
+
+The fitted model is checked before it is returned: finite parameters, a stable
+``A(z)`` (unless ``allow_unstable``), and, for the recursive methods, convergence: the
+one-step mean squared error on the estimation data may not exceed ``max_mse_ratio``
+times that of the exact least-squares solution (the smallest any parameter value can
+reach). A recursion that has not converged (H-RLS without forgetting on correlated
+regressors stalls this way, see docs/convergence.md) is reported, not returned.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from blockid.data.dataset import Dataset
+from blockid.errors import EstimationError, ParameterError
+from blockid.estimators import (
+    AdaptiveWeightedRLS,
+    BatchLeastSquares,
+    HierarchicalRLS,
+    RecursiveLeastSquares,
+)
+from blockid.evaluation.metrics import metrics_by_output
+from blockid.models.arx import ARX
+
+__all__ = ["ARX_METHODS", "FitResult", "fit_arx", "make_estimator"]
+
+#: Method names accepted by :func:`fit_arx` (and ``blockid fit --method``).
+ARX_METHODS = ("batch", "rls", "aw-rls", "hierarchical-rls")
+
+
+@dataclass
+class FitResult:
+    """A fitted model with what it took to get it.
+
+    Attributes
+    ----------
+    model : Model
+    method : str
+    settings : dict
+        Estimator settings, as stored in the model file's ``"estimation"`` entry.
+    estimation_metrics : dict
+        One-step-ahead metrics on the estimation data, keyed by metric then output.
+    history : dict
+        Optional per-output arrays (e.g. parameter trajectories of recursive methods).
+    """
+
+    model: Any
+    method: str
+    settings: dict[str, Any]
+    estimation_metrics: dict[str, dict[str, float]]
+    n_samples: int
+    history: dict[str, Any] = field(default_factory=dict)
+
+    def estimation_record(self) -> dict[str, Any]:
+        """The ``"estimation"`` entry of the model file."""
+        return {
+            "method": self.method,
+            "settings": self.settings,
+            "n_samples": self.n_samples,
+            "one_step_on_estimation_data": self.estimation_metrics,
+        }
+
+
+def make_estimator(
+    method: str,
+    *,
+    forgetting: float | str = 1.0,
+    initial_covariance: float | None = None,
+    eps1: float = 1.0,
+    eps2: float = 0.1,
+    groups: Any = 2,
+) -> Any:
+    """Build the regressor-level estimator a method name stands for."""
+    if method == "batch":
+        return BatchLeastSquares()
+    if method == "rls":
+        return RecursiveLeastSquares(
+            forgetting=forgetting, initial_covariance=initial_covariance or 1e8
+        )
+    if method == "aw-rls":
+        return AdaptiveWeightedRLS(
+            eps1=eps1, eps2=eps2, initial_covariance=initial_covariance or 1e5
+        )
+    if method == "hierarchical-rls":
+        return HierarchicalRLS(
+            groups=groups, forgetting=forgetting, initial_covariance=initial_covariance or 1e8
+        )
+    raise ParameterError(
+        f"unknown method {method!r} for ARX; choose one of {', '.join(ARX_METHODS)}"
+    )
+
+
+def _check_converged(
+    Phi: np.ndarray, target: np.ndarray, theta: np.ndarray, method: str, name: str, ratio: float
+) -> None:
+    """Raise when a recursive estimate is far from the least-squares optimum."""
+    best = BatchLeastSquares().fit(Phi, target).coef_
+    mse_best = float(np.mean((target - Phi @ best) ** 2))
+    mse = float(np.mean((target - Phi @ theta) ** 2))
+    floor = 1e-12 * float(np.var(target)) + 1e-300
+    if mse > ratio * mse_best + floor:
+        raise EstimationError(
+            f"output {name!r}: {method} did not converge: its one-step MSE on the estimation "
+            f"data, {mse:.4g}, is {mse / max(mse_best, floor):.3g} times the least-squares "
+            f"optimum {mse_best:.4g}. Use more data or more passes, a forgetting factor "
+            "below 1 (H-RLS needs one, see docs/convergence.md), or method batch/rls; for a "
+            "plant that really varies in time, switch this check off"
+        )
+
+
+def fit_arx(
+    data: Dataset,
+    na: Any = 1,
+    nb: Any = 1,
+    nk: Any = 1,
+    *,
+    method: str = "batch",
+    forgetting: float | str = 1.0,
+    initial_covariance: float | None = None,
+    eps1: float = 1.0,
+    eps2: float = 0.1,
+    center: bool = False,
+    allow_unstable: bool = False,
+    passes: int = 1,
+    max_mse_ratio: float | None = 2.0,
+) -> FitResult:
+    """Identify an ARX model from a :class:`~blockid.data.Dataset`.
+
+    Parameters
+    ----------
+    data : Dataset
+        Estimation data (already restricted to the estimation range).
+    na, nb, nk : int or matrix
+        Orders in the MATLAB convention (see :class:`~blockid.models.ARX`).
+    method : {"batch", "rls", "aw-rls", "hierarchical-rls"}
+    forgetting : float or str
+        Forgetting factor or schedule (``"0.98:200,1"``) of the RLS methods.
+    initial_covariance : float, optional
+        ``P(0)`` relative to the RMS-scaled regressors (defaults 1e8; 1e5 for AW-RLS).
+    eps1, eps2 : float
+        AW-RLS weights (A8).
+    center : bool
+        Fit around the operating point: subtract the mean of every signal over the
+        estimation data and keep it in the model as offsets.
+    allow_unstable : bool
+        Return a model whose ``A(z)`` has poles on or outside the unit circle instead
+        of raising :class:`~blockid.errors.EstimationError`.
+    passes : int
+        Passes of a recursive method over the data (state carried over; forgetting
+        schedules count samples across passes).
+    max_mse_ratio : float or None
+        Convergence check of the recursive methods (None to skip, e.g. for a plant that
+        really varies in time): raise when the one-step MSE on the estimation data is
+        more than this multiple of the least-squares optimum.
+    """
+    if method not in ARX_METHODS:
+        raise ParameterError(
+            f"unknown method {method!r} for ARX; choose one of {', '.join(ARX_METHODS)}"
+        )
+    if int(passes) != passes or passes < 1:
+        raise ParameterError(f"passes={passes!r} must be a whole number >= 1")
+    u_off = y_off = None
+    if center:
+        u_off = np.mean(np.vstack([e.u for e in data.experiments]), axis=0)
+        y_off = np.mean(np.vstack([e.y for e in data.experiments]), axis=0)
+    model = ARX(
+        data.inputs,
+        data.outputs,
+        na,
+        nb,
+        nk,
+        sampling_time=data.sampling_time,
+        input_offset=u_off,
+        output_offset=y_off,
+    )
+    n_par_max = max(model.n_parameters(i) for i in range(len(model.outputs)))
+    data.check_orders(model.max_lag, n_par_max, what="ARX orders")
+    settings: dict[str, Any] = {
+        "na": model.na.tolist(),
+        "nb": model.nb.tolist(),
+        "nk": model.nk.tolist(),
+        "center": center,
+    }
+    if method != "batch":
+        settings["passes"] = int(passes)
+    if method in ("rls", "hierarchical-rls"):
+        settings["forgetting"] = str(forgetting)
+    if method == "aw-rls":
+        settings.update(eps1=eps1, eps2=eps2)
+    if initial_covariance is not None:
+        settings["initial_covariance"] = initial_covariance
+
+    for i, name in enumerate(model.outputs):
+        if model.n_parameters(i) == 0:
+            continue
+        blocks = [model.regressors(e.u, e.y, i) for e in data.experiments]
+        Phi = np.vstack([b[0] for b in blocks])
+        target = np.concatenate([b[1] for b in blocks])
+        est = make_estimator(
+            method,
+            forgetting=forgetting,
+            initial_covariance=initial_covariance,
+            eps1=eps1,
+            eps2=eps2,
+            groups=model.hierarchical_groups(i),
+        )
+        if method == "batch":
+            theta = est.fit(Phi, target).coef_
+        else:
+            scale = np.sqrt(np.mean(Phi**2, axis=0))
+            scale[scale == 0] = 1.0
+            try:
+                for _ in range(int(passes)):
+                    start = 0
+                    for rows, _ in blocks:  # one experiment after another
+                        stop = start + rows.shape[0]
+                        est.partial_fit(Phi[start:stop] / scale, target[start:stop])
+                        start = stop
+            except EstimationError as exc:
+                raise EstimationError(f"output {name!r}: {exc}") from None
+            theta = est.coef_ / scale
+            if max_mse_ratio is not None:
+                _check_converged(Phi, target, theta, method, name, max_mse_ratio)
+        if not np.all(np.isfinite(theta)):
+            raise EstimationError(f"output {name!r}: the {method} estimate is not finite")
+        model.set_parameter_vector(i, theta)
+
+    if not allow_unstable and not model.is_stable():
+        rho = float(np.max(np.abs(model.poles())))
+        raise EstimationError(
+            f"the identified ARX model is unstable (largest pole magnitude {rho:.4g} >= 1): "
+            "its free-run simulation would diverge. Check the orders and delays, use more or "
+            "better-exciting data, or pass --allow-unstable if you only need one-step prediction"
+        )
+    y_hat = [model.predict(e.u, e.y) for e in data.experiments]
+    y_all = np.vstack([e.y[model.max_lag :] for e in data.experiments])
+    yh_all = np.vstack([yh[model.max_lag :] for yh in y_hat])
+    metrics = metrics_by_output(y_all, yh_all, model.outputs)
+    return FitResult(
+        model=model,
+        method=method,
+        settings=settings,
+        estimation_metrics=metrics,
+        n_samples=int(sum(e.n_samples for e in data.experiments)),
+    )

@@ -1,0 +1,195 @@
+"""The command line, driven as a user would (typer's CliRunner)."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from blockid.cli.main import app
+from blockid.models import ARX, load_model
+
+runner = CliRunner()
+
+
+@pytest.fixture
+def tito_csv(tmp_path, rng):
+    plant = ARX(
+        ["u1", "u2"],
+        ["y1", "y2"],
+        na=2,
+        nb=2,
+        nk=1,
+        a={
+            "y1": {"y1": [-1.2, 0.4], "y2": [0.1, 0.0]},
+            "y2": {"y1": [0.05, 0.02], "y2": [-0.9, 0.2]},
+        },
+        b={
+            "y1": {"u1": [0.5, 0.2], "u2": [0.1, -0.05]},
+            "y2": {"u1": [0.0, 0.03], "u2": [0.4, 0.1]},
+        },
+    )
+    u = rng.standard_normal((1200, 2))
+    y = plant.simulate(u) + 0.001 * rng.standard_normal((1200, 2))
+    path = tmp_path / "tito.csv"
+    pd.DataFrame(
+        {"t": np.arange(1200) * 0.05, "u1": u[:, 0], "u2": u[:, 1], "y1": y[:, 0], "y2": y[:, 1]}
+    ).to_csv(path, index=False)
+    return path
+
+
+FIT = ["fit", "-u", "u1", "-u", "u2", "-y", "y1", "-y", "y2", "--na", "2", "--nb", "2", "--nk", "1"]
+
+
+def test_fit_json_equals_model_file_and_rls_equals_batch(tito_csv, tmp_path):
+    out = tmp_path / "m.json"
+    r = runner.invoke(
+        app,
+        [
+            *FIT[:1],
+            str(tito_csv),
+            *FIT[1:],
+            "--method",
+            "rls",
+            "--forgetting",
+            "1",
+            "--estimation",
+            "0:1000",
+            "-o",
+            str(out),
+            "--json",
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc == json.loads(out.read_text())
+    assert doc["format"] == "blockid-model" and doc["version"] == 1
+    assert doc["model"]["parameters"]["y1"]["a"]["y1"] == pytest.approx([-1.2, 0.4], abs=1e-3)
+    rb = runner.invoke(
+        app,
+        [
+            *FIT[:1],
+            str(tito_csv),
+            *FIT[1:],
+            "--method",
+            "batch",
+            "--estimation",
+            "0:1000",
+            "--json",
+        ],
+    )
+    batch = json.loads(rb.stdout)["model"]["parameters"]
+    for y in ("y1", "y2"):  # relative to the parameter vector's size: |d theta| / |theta|
+        flat = lambda p: np.concatenate([*p[y]["a"].values(), *p[y]["b"].values()])  # noqa: E731
+        theta_rls, theta_ls = flat(doc["model"]["parameters"]), flat(batch)
+        assert np.linalg.norm(theta_rls - theta_ls) <= 1e-8 * np.linalg.norm(theta_ls)
+
+
+def test_simulate_and_predict_write_outputs_and_metrics(tito_csv, tmp_path):
+    model = tmp_path / "m.json"
+    runner.invoke(
+        app, [*FIT[:1], str(tito_csv), *FIT[1:], "--estimation", "0:1000", "-o", str(model)]
+    )
+    sim_csv = tmp_path / "sim.csv"
+    r = runner.invoke(
+        app,
+        [
+            "simulate",
+            str(model),
+            str(tito_csv),
+            "--range",
+            "1000:1200",
+            "-o",
+            str(sim_csv),
+            "--json",
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["mode"] == "simulation" and doc["n_samples"] == 200
+    assert set(doc["metrics"]) == {"mse", "rmse", "mae", "max_abs_error", "fit_percent"}
+    assert doc["metrics"]["fit_percent"]["y1"] > 95
+    frame = pd.read_csv(sim_csv)
+    assert {"y1_sim", "y2_sim"} <= set(frame.columns) and len(frame) == 200
+    # the written simulation equals the library's, from the reloaded model
+    m = load_model(model)
+    data = pd.read_csv(tito_csv).iloc[1000:1200]
+    expected = m.simulate(data[["u1", "u2"]].to_numpy(), data[["y1", "y2"]].to_numpy()[:2])
+    np.testing.assert_allclose(frame[["y1_sim", "y2_sim"]].to_numpy(), expected, rtol=1e-12)
+    r = runner.invoke(app, ["predict", str(model), str(tito_csv), "--json"])
+    pred = json.loads(r.stdout)
+    assert pred["mode"] == "one-step"
+    assert pred["metrics"]["rmse"]["y1"] < doc["metrics"]["rmse"]["y1"] * 1.5
+
+
+def test_existing_output_is_not_overwritten_without_force(tito_csv, tmp_path):
+    out = tmp_path / "m.json"
+    out.write_text("precious")
+    r = runner.invoke(app, [*FIT[:1], str(tito_csv), *FIT[1:], "-o", str(out)])
+    assert r.exit_code == 2 and "exists; pass --force" in r.stderr
+    assert out.read_text() == "precious"
+
+
+def test_failed_run_leaves_existing_file_untouched(tito_csv, tmp_path):
+    out = tmp_path / "m.json"
+    out.write_text("precious")
+    r = runner.invoke(
+        app,
+        [
+            *FIT[:1],
+            str(tito_csv),
+            *FIT[1:],
+            "--method",
+            "hierarchical-rls",
+            "-o",
+            str(out),
+            "--force",
+        ],
+    )
+    assert r.exit_code == 2 and "did not converge" in r.stderr
+    assert out.read_text() == "precious"
+
+
+@pytest.mark.parametrize(
+    ("content", "args", "expected"),
+    [
+        ("u1,u2,y1,y2\n", [], "header but no data rows"),
+        ("", [], "is empty"),
+        ("u1,u2,y1,y2\n1,2,3,4\n1,abc,3,4\n", [], "column 'u2'"),
+        ("u1,u2,y1,y2\n1,2,3,4\n1,,3,4\n", [], "column 'u2'"),
+        ("u1,u2,y1,yy\n1,2,3,4\n", [], "'y2'"),
+        ("u1,u2,y1,y2\n" + "1,2,3,4\n" * 50, ["--estimation", "0:100"], "--estimation 0:100"),
+        ("u1,u2,y1,y2\n" + "1,2,3,4\n" * 10, ["--na", "20"], "na="),
+    ],
+)
+def test_malformed_input_gives_one_line_and_exit_2(tmp_path, content, args, expected):
+    path = tmp_path / "bad.csv"
+    path.write_text(content)
+    r = runner.invoke(app, [*FIT[:1], str(path), *FIT[1:], *args, "--json"])
+    assert r.exit_code == 2
+    assert "Traceback" not in r.output
+    message = r.stderr.strip()
+    assert message.startswith("error:") and len(message.splitlines()) == 1
+    if expected != "na=":
+        assert expected in message
+    else:
+        assert "lower the orders" in message
+    assert r.stdout == ""
+
+
+def test_damaged_model_file(tmp_path, tito_csv):
+    bad = tmp_path / "m.json"
+    bad.write_text('{"format": "blockid-model", "version": 99, "model": {}}')
+    r = runner.invoke(app, ["simulate", str(bad), str(tito_csv)])
+    assert r.exit_code == 2 and "version 99" in r.stderr
+    bad.write_text('{"format": "blockid-model", "vers')
+    r = runner.invoke(app, ["simulate", str(bad), str(tito_csv)])
+    assert r.exit_code == 2 and "not valid JSON (line 1" in r.stderr
+
+
+def test_bad_order_text(tito_csv):
+    r = runner.invoke(
+        app, [*FIT[:1], str(tito_csv), *FIT[1:3], "-y", "y1", "--na", "two", "--json"]
+    )
+    assert r.exit_code == 2 and "--na 'two'" in r.stderr

@@ -1,0 +1,111 @@
+import numpy as np
+import pytest
+
+from blockid import errors
+from blockid.data import Dataset
+from blockid.fitting import fit_arx
+from blockid.models import ARX
+
+
+def tito_plant():
+    return ARX(
+        ["v1", "v2"],
+        ["y1", "y2"],
+        na=2,
+        nb=2,
+        nk=1,
+        a={
+            "y1": {"y1": [-1.2, 0.4], "y2": [0.1, 0.0]},
+            "y2": {"y1": [0.05, 0.02], "y2": [-0.9, 0.2]},
+        },
+        b={
+            "y1": {"v1": [0.5, 0.2], "v2": [0.1, -0.05]},
+            "y2": {"v1": [0.0, 0.03], "v2": [0.4, 0.1]},
+        },
+    )
+
+
+def tito_data(rng, N, noise=0.0, offsets=(0.0, 0.0)):
+    plant = tito_plant()
+    u = rng.standard_normal((N, 2))
+    y = plant.simulate(u) + noise * rng.standard_normal((N, 2)) + np.asarray(offsets)
+    return plant, Dataset.from_arrays(u, y, inputs=["v1", "v2"], outputs=["y1", "y2"])
+
+
+def params(model):
+    return np.concatenate([model.parameter_vector(i) for i in range(len(model.outputs))])
+
+
+@pytest.mark.parametrize("method", ["batch", "rls", "aw-rls"])
+def test_noise_free_tito_recovers_truth(rng, method):
+    plant, data = tito_data(rng, 3000)
+    model = fit_arx(data, 2, 2, 1, method=method).model
+    np.testing.assert_allclose(params(model), params(plant), atol=1e-6)
+
+
+def test_hierarchical_rls_converges_to_full_rls_on_noise_free_tito(rng):
+    _, data = tito_data(rng, 20000)
+    full = fit_arx(data, 2, 2, 1, method="rls").model
+    hier = fit_arx(data, 2, 2, 1, method="hierarchical-rls", forgetting=0.95).model
+    np.testing.assert_allclose(params(hier), params(full), atol=1e-9)
+
+
+def test_rls_with_forgetting_one_equals_batch_whatever_the_units(rng):
+    """Column scaling makes the default P(0) 'large' for tiny and huge signals alike."""
+    _, data = tito_data(rng, 2000, noise=0.05)
+    for scale in (1e-4, 1.0, 1e4):
+        scaled = Dataset.from_arrays(
+            np.vstack([e.u for e in data.experiments]) * scale,
+            np.vstack([e.y for e in data.experiments]) * scale,
+            inputs=data.inputs,
+            outputs=data.outputs,
+        )
+        batch = params(fit_arx(scaled, 2, 2, 1, method="batch").model)
+        rls = params(fit_arx(scaled, 2, 2, 1, method="rls", forgetting=1).model)
+        np.testing.assert_allclose(rls, batch, rtol=1e-8, atol=1e-12)
+
+
+def test_hierarchical_without_forgetting_is_reported_not_returned(rng):
+    _, data = tito_data(rng, 1500, noise=0.01)
+    with pytest.raises(errors.EstimationError, match="did not converge.*least-squares optimum"):
+        fit_arx(data, 2, 2, 1, method="hierarchical-rls")
+
+
+def test_center_fits_around_the_operating_point(rng):
+    plant, data = tito_data(rng, 3000, offsets=(110.0, 0.578))
+    model = fit_arx(data, 2, 2, 1, method="rls", center=True).model
+    # an ARX without offsets cannot absorb the constant; with them it recovers the truth
+    np.testing.assert_allclose(params(model), params(plant), atol=1e-3)
+    assert abs(model.output_offset[0] - 110.0) < 0.5
+
+
+def test_multiple_experiments_do_not_straddle(rng):
+    plant, d1 = tito_data(rng, 800)
+    _, d2 = tito_data(rng, 800, offsets=(5.0, -5.0))  # a jump between the records
+    both = Dataset(
+        d1.inputs,
+        d1.outputs,
+        None,
+        [
+            d1.experiments[0],
+            type(d1.experiments[0])(
+                "second", d2.experiments[0].u, d2.experiments[0].y - [5.0, -5.0]
+            ),
+        ],
+    )
+    np.testing.assert_allclose(params(fit_arx(both, 2, 2, 1).model), params(plant), atol=1e-8)
+
+
+def test_unstable_result_is_reported(rng):
+    u = rng.standard_normal(500)
+    y = np.cumsum(np.cumsum(u))  # double integrator: poles at 1
+    data = Dataset.from_arrays(u, y)
+    with pytest.raises(errors.EstimationError, match="unstable"):
+        fit_arx(data, 2, 1, 1)
+    assert not fit_arx(data, 2, 1, 1, allow_unstable=True).model.is_stable(margin=-1e-6)
+
+
+def test_orders_too_large_for_the_data(rng):
+    data = Dataset.from_arrays(rng.standard_normal(30), rng.standard_normal(30))
+    with pytest.raises(errors.OrderError, match="needs at least 40 regression rows"):
+        fit_arx(data, 20, 20, 1)

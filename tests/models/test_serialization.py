@@ -1,0 +1,54 @@
+import json
+
+import numpy as np
+import pytest
+
+from blockid import errors
+from blockid.models import ARX, load_model, save_model
+
+
+def test_save_load_identical_predictions(tmp_path, rng):
+    model = ARX(
+        ["u"],
+        ["y"],
+        na=2,
+        nb=3,
+        nk=2,
+        sampling_time=0.05,
+        a={"y": {"y": rng.standard_normal(2) * 0.3}},
+        b={"y": {"u": rng.standard_normal(3)}},
+    )
+    path = save_model(model, tmp_path / "m.json", estimation={"method": "batch"})
+    again = load_model(path)
+    u = rng.standard_normal(500)
+    y = model.simulate(u)
+    assert np.array_equal(again.simulate(u), model.simulate(u))
+    assert np.array_equal(again.predict(u, y), model.predict(u, y))
+    assert again.sampling_time == 0.05
+    with pytest.raises(errors.BlockidError, match="exists"):
+        save_model(model, path)
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("not json", "not valid JSON"),
+        ('{"format": "other"}', "not a blockid model file"),
+        ('{"format": "blockid-model", "version": 2, "model": {}}', "version 2"),
+        ('{"format": "blockid-model", "version": 1}', 'no \\"model\\" entry'),
+        (
+            '{"format": "blockid-model", "version": 1, "model": {"structure": "nope"}}',
+            "unknown model structure 'nope'",
+        ),
+        (
+            '{"format": "blockid-model", "version": 1, "model": {"structure": "arx", "inputs": ["u"]}}',
+            "damaged or incomplete",
+        ),
+    ],
+)
+def test_damaged_files(tmp_path, text, match):
+    path = tmp_path / "m.json"
+    path.write_text(text)
+    with pytest.raises(errors.ModelFileError, match=match):
+        load_model(path)
+    json.loads('{"ok": 1}')
