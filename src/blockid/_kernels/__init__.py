@@ -1,0 +1,3 @@
+"""Compiled (numba) kernels: private, pure functions on arrays; NumPy is their only dependency."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""The blockid command line (typer)."""
+
+__all__: list[str] = []

@@ -1,0 +1,78 @@
+"""Import direction and isolation (STYLE.md: data flows one way)."""
+
+import ast
+import importlib
+import pkgutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import blockid
+
+SRC = Path(blockid.__file__).parent
+
+# Layer of each subpackage; a module may import only from its own or lower layers.
+LAYERS = {
+    "errors": 0,
+    "_kernels": 0,
+    "data": 1,
+    "blocks": 2,
+    "plants": 3,
+    "models": 3,
+    "estimators": 4,
+    "fitting": 5,
+    "evaluation": 5,
+    "plotting": 6,
+    "reporting": 7,
+    "cli": 8,
+}
+
+
+def _layer(module: str) -> int | None:
+    parts = module.split(".")
+    if parts[0] != "blockid" or len(parts) < 2:
+        return None
+    return LAYERS.get(parts[1])
+
+
+def _modules():
+    return sorted(m.name for m in pkgutil.walk_packages([str(SRC)], prefix="blockid."))
+
+
+@pytest.mark.parametrize("module", _modules())
+def test_imports_only_flow_downwards(module):
+    own = _layer(module)
+    if own is None:
+        return
+    path = Path(importlib.util.find_spec(module).origin)
+    tree = ast.parse(path.read_text())
+    top_level = {id(n) for n in tree.body}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            target = _layer(node.module)
+            if target is None or target <= own:
+                continue
+            # the one allowed upward step: .plot() methods hand off to blockid.plotting
+            # through an import inside the method (matplotlib stays lazy)
+            lazy_plot = id(node) not in top_level and node.module.startswith("blockid.plotting")
+            assert lazy_plot, f"{module} (layer {own}) imports {node.module} (layer {target})"
+
+
+def test_every_module_imports_in_isolation_without_matplotlib():
+    code = (
+        "import sys, importlib, pkgutil, blockid\n"
+        "for m in pkgutil.walk_packages(blockid.__path__, 'blockid.'):\n"
+        "    importlib.import_module(m.name)\n"
+        "assert 'matplotlib.pyplot' not in sys.modules, 'matplotlib imported eagerly'\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_every_module_declares_all():
+    for module in _modules():
+        mod = importlib.import_module(module)
+        if module.endswith("__main__"):
+            continue
+        assert hasattr(mod, "__all__"), f"{module} has no __all__"
