@@ -579,8 +579,13 @@ class _Where:
         """The cell's text in the file, if known."""
         found = self._located([row])
         if row in found:
-            return found[row][1].get(column)
+            return found[row][1].get(column, "")
         return None
+
+
+def _num(value: float) -> str:
+    """A number for a message: ``0.05``, not ``np.float64(0.05)`` or 0.05000000000000071."""
+    return f"{float(value):.10g}"
 
 
 def _decimal_comma_hint(text: str) -> str:
@@ -620,7 +625,8 @@ def _numeric_column(df: pd.DataFrame, column: Any, name: str, where: _Where) -> 
         row = int(np.argmin(finite))
         raw = where.raw(row, name)
         if np.isinf(values[row]):
-            problem = f"is infinite ({raw if raw is not None else values[row]!r})"
+            shown = repr(raw) if raw is not None else _num(values[row])
+            problem = f"is infinite ({shown})"
         elif raw is not None and not raw.strip():
             problem = "is empty"
         else:
@@ -662,7 +668,7 @@ def _sampling_step(t: np.ndarray, rows: np.ndarray, name: str, where: _Where) ->
         i = int(backwards[0])
         raise DataError(
             f"{where.prefix}time {where.label} '{name}' does not increase at "
-            f"{where.rows(int(rows[i]), int(rows[i + 1]))}: {t[i + 1]!r} follows {t[i]!r}; "
+            f"{where.rows(int(rows[i]), int(rows[i + 1]))}: {_num(t[i + 1])} follows {_num(t[i])}; "
             "sort the rows by time, or mark separate records with an experiment column"
         )
     step = float(np.median(steps))
@@ -671,8 +677,8 @@ def _sampling_step(t: np.ndarray, rows: np.ndarray, name: str, where: _Where) ->
         i = int(jitter[0])
         raise DataError(
             f"{where.prefix}time {where.label} '{name}' is not uniformly sampled: the step "
-            f"between {where.rows(int(rows[i]), int(rows[i + 1]))} is {steps[i]!r} but the "
-            f"median step is {step!r} (more than 1 % apart); blockid needs a constant "
+            f"between {where.rows(int(rows[i]), int(rows[i + 1]))} is {_num(steps[i])} but the "
+            f"median step is {_num(step)} (more than 1 % apart); blockid needs a constant "
             "sampling time: resample the record, or split it into experiments at the gap"
         )
     return step
@@ -686,8 +692,8 @@ def _agreeing_sampling_time(steps: Sequence[tuple[str, float]], what: str) -> fl
     lo, hi = int(np.argmin(values)), int(np.argmax(values))
     if values[hi] > values[lo] * (1.0 + _TIME_TOLERANCE):
         raise DataError(
-            f"{what}: {steps[lo][0]} has sampling time {values[lo]!r} but {steps[hi][0]} has "
-            f"{values[hi]!r}; all experiments must share one sampling time"
+            f"{what}: {steps[lo][0]} has sampling time {_num(values[lo])} but {steps[hi][0]} has "
+            f"{_num(values[hi])}; all experiments must share one sampling time"
         )
     return float(np.median(values))
 
@@ -814,8 +820,8 @@ def _frame_to_dataset(
             worst = max(steps, key=lambda s: abs(s[1] - dt))
             if abs(worst[1] - dt) > _TIME_TOLERANCE * dt:
                 raise DataError(
-                    f"{where.prefix}sampling_time {dt!r} disagrees with time {where.label} "
-                    f"'{time_column}', whose step is {worst[1]!r} in {worst[0]}; give one "
+                    f"{where.prefix}sampling_time {_num(dt)} disagrees with time {where.label} "
+                    f"'{time_column}', whose step is {_num(worst[1])} in {worst[0]}; give one "
                     "of the two, or correct the sampling time"
                 )
         else:

@@ -20,7 +20,8 @@ import difflib
 import os
 import re
 import secrets
-from collections.abc import Callable, Mapping, Sequence
+import warnings
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
 
@@ -29,6 +30,7 @@ import pandas as pd
 
 from blockid.data.dataset import (
     Dataset,
+    Locator,
     _check_sampling_time,
     _check_signal_names,
     _concat,
@@ -236,31 +238,32 @@ def _csv_options(delimiter: str) -> dict[str, Any]:
     return options
 
 
-def _text_locator(path: Path, delimiter: str) -> Callable[[Sequence[int]], dict]:
+def _records(lines: Iterable[str], delimiter: str) -> Iterator[tuple[int, list[str]]]:
+    """``(line number, fields)`` of the non-blank records, counted the way pandas does."""
+    if delimiter == _WHITESPACE:
+        records = ((n, line.split()) for n, line in enumerate(lines, start=1))
+    else:
+        reader = csv.reader(lines, delimiter=delimiter, skipinitialspace=True)
+        records = ((reader.line_num, fields) for fields in reader)
+    for line, fields in records:
+        if fields and not (len(fields) == 1 and not fields[0].strip()):
+            yield line, fields
+
+
+def _text_locator(path: Path, delimiter: str) -> Locator:
     """Map 0-based data rows to ``(line number, {column: raw text})`` by re-reading the file.
 
-    Mirrors how pandas counts rows: blank lines are skipped and the first non-blank record
-    is the header. Used only to word an error message.
+    The first non-blank record is the header, as for pandas. Used only to word an error
+    message, so the file is read again only when something is wrong.
     """
 
     def locate(rows: Sequence[int]) -> dict[int, tuple[int, dict[str, str]]]:
         wanted, last = set(rows), max(rows)
         found: dict[int, tuple[int, dict[str, str]]] = {}
         with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
-            if delimiter == _WHITESPACE:
-                records = ((n, line.split()) for n, line in enumerate(handle, start=1))
-            else:
-                reader = csv.reader(handle, delimiter=delimiter, skipinitialspace=True)
-                records = ((reader.line_num, fields) for fields in reader)
-            header: list[str] | None = None
-            row = -1
-            for line, fields in records:
-                if not fields or (len(fields) == 1 and not fields[0].strip()):
-                    continue
-                if header is None:
-                    header = [f.strip() for f in fields]
-                    continue
-                row += 1
+            records = _records(handle, delimiter)
+            header = [name.strip() for name in next(records, (0, []))[1]]
+            for row, (line, fields) in enumerate(records):
                 if row in wanted:
                     found[row] = (line, dict(zip(header, fields, strict=False)))
                 if row >= last:
@@ -268,6 +271,23 @@ def _text_locator(path: Path, delimiter: str) -> Callable[[Sequence[int]], dict]
         return found
 
     return locate
+
+
+def _check_extra_fields(sample: str, delimiter: str, shown: str) -> None:
+    """Raise if the first rows carry values beyond the header's last column.
+
+    pandas drops such fields (with a warning); empty ones come from trailing delimiters
+    and are harmless, but values there mean the header lacks names.
+    """
+    records = _records(sample.splitlines()[:1000], delimiter)
+    header = next(records, (0, []))[1]
+    for line, fields in records:
+        extra = [f for f in fields[len(header) :] if f.strip()]
+        if extra:
+            raise DataError(
+                f"{shown}: line {line} has {len(fields)} fields but the header names only "
+                f"{len(header)} columns; add names for the extra columns or remove them"
+            )
 
 
 def _read_text(
@@ -279,21 +299,26 @@ def _read_text(
     if not sample.strip():
         raise DataError(f"{shown} is empty (only blank lines)")
     delimiter = _sniff_delimiter(sample, suffix, truncated=len(head) == _SNIFF_BYTES)
-    csv_options = _csv_options(delimiter)
     where = _Where(shown, locate=_text_locator(path, delimiter))
     try:
-        header = pd.read_csv(path, nrows=0, **csv_options).columns
-        original = {str(c).strip(): c for c in header}
-        _check_columns(list(original), _needed_columns(options), where)
-        wanted = [original[c] for c in _needed_columns(options)]
-        frame = pd.read_csv(path, usecols=wanted, **csv_options)
+        # All columns are parsed (no usecols), so that pandas reports rows with more
+        # fields than the header; index_col=False stops it from silently turning the
+        # first column into the index when every row has one field too many.
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", pd.errors.ParserWarning)
+            frame = pd.read_csv(path, index_col=False, **_csv_options(delimiter))
     except pd.errors.EmptyDataError:
         raise DataError(f"{shown} is empty (no header line)") from None
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
-        if isinstance(exc, DataError):
-            raise
-        raise DataError(f"{shown} could not be parsed as delimited text: {exc}") from None
+        reason = str(exc).replace("Error tokenizing data. C error: ", "").strip()
+        raise DataError(
+            f"{shown} could not be parsed as delimited text: {reason}; every row needs one "
+            "field per header column"
+        ) from None
+    if any(issubclass(w.category, pd.errors.ParserWarning) for w in caught):
+        _check_extra_fields(sample, delimiter, shown)
     frame.columns = [str(c).strip() for c in frame.columns]
+    _check_columns(list(frame.columns), _needed_columns(options), where)
     return frame, where, f"{shown} has a header but no data rows"
 
 
