@@ -222,6 +222,13 @@ def test_time_column_iso_datetimes_give_seconds():
     assert data.sampling_time == pytest.approx(0.05)
 
 
+def test_time_column_datetime_gap_is_reported():
+    stamps = list(pd.date_range("2024-05-01", periods=6, freq="1s").strftime("%Y-%m-%d %H:%M:%S"))
+    stamps[2] = None
+    with pytest.raises(DataError, match=r"column 't', data row 3 has a missing value"):
+        Dataset.from_frame(frame(t=stamps), ["u1"], ["y1"], time_column="t")
+
+
 def test_time_column_non_numeric_text_is_reported():
     df = frame(t=["0", "1", "two", "3", "4", "5"])
     with pytest.raises(DataError, match=r"column 't', data row 3: 'two' is not a number"):

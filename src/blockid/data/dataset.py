@@ -552,18 +552,20 @@ class _Where:
         self.label = label
         self.row_label = row_label
         self.locate = locate
+        self._found: dict[int, tuple[int, Mapping[str, str]]] = {}  # rows located so far
 
     @property
     def prefix(self) -> str:
         return f"{self.source}: " if self.source else ""
 
     def _located(self, rows: Sequence[int]) -> Mapping[int, tuple[int, Mapping[str, str]]]:
-        if self.locate is None:
-            return {}
-        try:
-            return self.locate(rows)
-        except (OSError, ValueError):  # the message is still right without the line
-            return {}
+        missing = [r for r in rows if r not in self._found]
+        if self.locate is not None and missing:
+            try:
+                self._found.update(self.locate(missing))
+            except (OSError, ValueError):  # the message is still right without the line
+                pass
+        return self._found
 
     def rows(self, *rows: int) -> str:
         """``data row 5 (line 6)`` or ``data rows 5 and 6 (lines 6 and 7)``."""
@@ -623,20 +625,24 @@ def _numeric_column(df: pd.DataFrame, column: Any, name: str, where: _Where) -> 
     finite = np.isfinite(values)
     if not finite.all():
         row = int(np.argmin(finite))
-        raw = where.raw(row, name)
-        if np.isinf(values[row]):
-            shown = repr(raw) if raw is not None else _num(values[row])
-            problem = f"is infinite ({shown})"
-        elif raw is not None and not raw.strip():
-            problem = "is empty"
-        else:
-            problem = f"has a missing value ({raw if raw is not None else 'NaN'!r})"
-        raise DataError(
-            f"{where.prefix}{where.label} '{name}', {where.rows(row)} {problem}; every "
-            "sample needs a value: remove that row or fill the gap (e.g. by interpolation), "
-            "or split the record into experiments at the gap"
-        )
+        _raise_missing(where, name, row, infinite=float(values[row]))
     return values
+
+
+def _raise_missing(where: _Where, name: str, row: int, infinite: float = np.nan) -> None:
+    """Raise for an empty, NaN (or, if ``infinite`` is +-inf, infinite) cell."""
+    raw = where.raw(row, name)
+    if np.isinf(infinite):
+        problem = f"is infinite ({repr(raw) if raw is not None else _num(infinite)})"
+    elif raw is not None and not raw.strip():
+        problem = "is empty"
+    else:
+        problem = f"has a missing value ({raw if raw is not None else 'NaN'!r})"
+    raise DataError(
+        f"{where.prefix}{where.label} '{name}', {where.rows(row)} {problem}; every "
+        "sample needs a value: remove that row or fill the gap (e.g. by interpolation), "
+        "or split the record into experiments at the gap"
+    )
 
 
 def _time_values(df: pd.DataFrame, column: Any, name: str, where: _Where) -> np.ndarray:
@@ -653,9 +659,12 @@ def _time_values(df: pd.DataFrame, column: Any, name: str, where: _Where) -> np.
                     stamps = pd.to_datetime(series, format="ISO8601")
                 except (ValueError, TypeError):
                     stamps = None  # _numeric_column reports the first bad cell
-    if stamps is not None and not stamps.isna().any():
-        return (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=np.float64)
-    return _numeric_column(df, column, name, where)
+    if stamps is None:
+        return _numeric_column(df, column, name, where)
+    gaps = stamps.isna().to_numpy()
+    if gaps.any():
+        _raise_missing(where, name, int(np.argmax(gaps)))
+    return (stamps - stamps.iloc[0]).dt.total_seconds().to_numpy(dtype=np.float64)
 
 
 def _sampling_step(t: np.ndarray, rows: np.ndarray, name: str, where: _Where) -> float | None:
@@ -769,11 +778,11 @@ def _frame_to_dataset(
         if column is not None and column in ins + outs:
             kind = "an input" if column in ins else "an output"
             raise DataError(
-                f"{option} '{column}' is also listed as {kind}; a {where.label} is either a "
-                "signal, the time or the experiment label"
+                f"{where.prefix}{option} '{column}' is also listed as {kind}; a {where.label} "
+                "is either a signal, the time or the experiment label"
             )
     if time_column is not None and time_column == experiment_column:
-        raise DataError(f"time_column and experiment_column are both '{time_column}'")
+        raise DataError(f"{where.prefix}time_column and experiment_column are both '{time_column}'")
 
     by_name = {str(c): c for c in df.columns}
     available = [str(c) for c in df.columns]
