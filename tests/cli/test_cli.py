@@ -80,9 +80,12 @@ def test_fit_json_equals_model_file_and_rls_equals_batch(tito_csv, tmp_path):
         ],
     )
     batch = json.loads(rb.stdout)["model"]["parameters"]
+
+    def flat(p, y):
+        return np.concatenate([*p[y]["a"].values(), *p[y]["b"].values()])
+
     for y in ("y1", "y2"):  # relative to the parameter vector's size: |d theta| / |theta|
-        flat = lambda p: np.concatenate([*p[y]["a"].values(), *p[y]["b"].values()])  # noqa: E731
-        theta_rls, theta_ls = flat(doc["model"]["parameters"]), flat(batch)
+        theta_rls, theta_ls = flat(doc["model"]["parameters"], y), flat(batch, y)
         assert np.linalg.norm(theta_rls - theta_ls) <= 1e-8 * np.linalg.norm(theta_ls)
 
 

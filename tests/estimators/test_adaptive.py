@@ -1,7 +1,8 @@
 import numpy as np
-import reference
 
 from blockid.estimators import AdaptiveWeightedRLS
+
+import reference
 
 
 def test_aw_rls_is_weighted_least_squares_with_its_weights(rng):

@@ -1,9 +1,10 @@
 import numpy as np
 import pytest
-import reference
 
 from blockid import errors
 from blockid.estimators import HierarchicalRLS, RecursiveLeastSquares
+
+import reference
 
 
 def test_matches_reference_with_arbitrary_groups(rng):

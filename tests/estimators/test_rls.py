@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
-import reference
 
 from blockid import errors
 from blockid.estimators import BatchLeastSquares, ForgettingSchedule, RecursiveLeastSquares
+
+import reference
 
 
 def _problem(rng, N=1500, n=6, noise=0.1, m=1):

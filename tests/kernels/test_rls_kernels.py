@@ -2,79 +2,93 @@
 
 import numpy as np
 import pytest
-import reference
 
 from blockid._kernels import rls as k
 
+import reference
 
-def _data(rng, N=400, n=5, m=1):
+
+def _data(rng, N=400, n=5):
     Phi = rng.standard_normal((N, n))
-    Y = Phi @ rng.standard_normal((n, m)) + 0.1 * rng.standard_normal((N, m))
-    return Phi, Y
+    y = Phi @ rng.standard_normal(n) + 0.1 * rng.standard_normal(N)
+    return Phi, y
 
 
 @pytest.mark.parametrize("lam_value", [1.0, 0.97])
-@pytest.mark.parametrize("m", [1, 3])
-def test_rls_kernel_matches_reference(rng, lam_value, m):
-    Phi, Y = _data(rng, m=m)
+def test_rls_kernel_matches_reference(rng, lam_value):
+    Phi, y = _data(rng)
     lam = np.full(len(Phi), lam_value)
-    theta, P = np.zeros((5, m)), 1e4 * np.eye(5)
-    E = np.empty_like(Y)
-    assert k.rls_run(theta, P, Phi, Y, lam, 5e4, E) == k.OK
-    theta_ref, P_ref = reference.rls(Phi, Y, lam, 1e4, trace_max=5e4)
-    np.testing.assert_allclose(theta, theta_ref, rtol=1e-9, atol=1e-12)
+    theta, P, E = np.zeros(5), 1e4 * np.eye(5), np.empty(len(y))
+    assert k.rls_run(theta, P, Phi, y, lam, 5e4, E) == k.OK
+    theta_ref, P_ref = reference.rls(Phi, y, lam, 1e4, trace_max=5e4)
+    np.testing.assert_allclose(theta, theta_ref[:, 0], rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(P, P_ref, rtol=1e-7, atol=1e-12)
 
 
 def test_rls_kernel_applies_trace_bound_like_reference(rng):
-    Phi, Y = _data(rng, N=300)
+    Phi, y = _data(rng, N=300)
     Phi[100:250] = 0.0  # no excitation: P grows by 1/lambda per sample until bounded
     lam = np.full(len(Phi), 0.9)
-    theta, P = np.zeros((5, 1)), 10.0 * np.eye(5)
-    E = np.empty_like(Y)
-    assert k.rls_run(theta, P, Phi, Y, lam, 50.0, E) == k.OK
-    theta_ref, P_ref = reference.rls(Phi, Y, lam, 10.0, trace_max=50.0)
-    np.testing.assert_allclose(theta, theta_ref, rtol=1e-8)
+    theta, P, E = np.zeros(5), 10.0 * np.eye(5), np.empty(len(y))
+    assert k.rls_run(theta, P, Phi, y, lam, 50.0, E) == k.OK
+    theta_ref, P_ref = reference.rls(Phi, y, lam, 10.0, trace_max=50.0)
+    np.testing.assert_allclose(theta, theta_ref[:, 0], rtol=1e-8)
     np.testing.assert_allclose(P, P_ref, rtol=1e-7)
+    assert np.trace(P) <= 50.0 * (1 + 1e-12)
 
 
 def test_aw_rls_kernel_matches_reference(rng):
-    Phi, Y = _data(rng)
-    theta, P = np.full((5, 1), 0.01), 1e5 * np.eye(5)
-    E, W = np.empty_like(Y), np.empty(len(Phi))
-    assert k.aw_rls_run(theta, P, Phi, Y, 1.0, 0.1, W, E) == k.OK
-    theta_ref, P_ref, w_ref = reference.aw_rls(Phi, Y, 1.0, 0.1, 1e5)
-    np.testing.assert_allclose(theta, theta_ref, rtol=1e-8)
+    Phi, y = _data(rng)
+    theta, P = np.full(5, 0.01), 1e5 * np.eye(5)
+    E, W = np.empty(len(y)), np.empty(len(y))
+    assert k.aw_rls_run(theta, P, Phi, y, 1.0, 0.1, W, E) == k.OK
+    theta_ref, P_ref, w_ref = reference.aw_rls(Phi, y, 1.0, 0.1, 1e5)
+    np.testing.assert_allclose(theta, theta_ref[:, 0], rtol=1e-8)
     np.testing.assert_allclose(P, P_ref, rtol=1e-6, atol=1e-12)
     np.testing.assert_allclose(W, w_ref, rtol=1e-6)
 
 
 def test_hierarchical_kernel_matches_reference(rng):
-    Phi, Y = _data(rng, n=6, m=2)
+    Phi, y = _data(rng, n=6)
     lam = np.full(len(Phi), 0.99)
-    theta, P = np.zeros((6, 2)), 1e4 * np.eye(6)
-    E = np.empty_like(Y)
+    theta, P, E = np.zeros(6), 1e4 * np.eye(6), np.empty(len(y))
     bounds = np.array([0, 2, 6], dtype=np.int64)
-    assert k.hierarchical_rls_run(theta, P, Phi, Y, bounds, lam, 1e12, E) == k.OK
-    theta_ref, (P1, P2) = reference.hierarchical_rls(Phi, Y, [[0, 1], [2, 3, 4, 5]], lam, 1e4)
-    np.testing.assert_allclose(theta, theta_ref, rtol=1e-8)
+    assert k.hierarchical_rls_run(theta, P, Phi, y, bounds, lam, 1e12, E) == k.OK
+    theta_ref, (P1, P2) = reference.hierarchical_rls(Phi, y, [[0, 1], [2, 3, 4, 5]], lam, 1e4)
+    np.testing.assert_allclose(theta, theta_ref[:, 0], rtol=1e-8)
     np.testing.assert_allclose(P[:2, :2], P1, rtol=1e-7, atol=1e-12)
     np.testing.assert_allclose(P[2:, 2:], P2, rtol=1e-7, atol=1e-12)
     assert np.all(P[:2, 2:] == 0.0)  # groups never couple
 
 
 def test_kernel_reports_non_finite_step(rng):
-    Phi, Y = _data(rng, N=50)
+    Phi, y = _data(rng, N=50)
     Phi[20, 0] = 1e300  # s overflows to inf at sample 20
-    theta, P, E = np.zeros((5, 1)), 1e4 * np.eye(5), np.empty_like(Y)
-    assert k.rls_run(theta, P, Phi, Y, np.ones(50), 1e9, E) == 20
+    theta, P, E = np.zeros(5), 1e4 * np.eye(5), np.empty(50)
+    assert k.rls_run(theta, P, Phi, y, np.ones(50), 1e9, E) == 20
 
 
 def test_covariance_stays_exactly_symmetric_over_a_long_run(rng):
     n, N = 8, 300_000
     Phi = rng.standard_normal((N, n)) * np.logspace(-2, 2, n)
-    Y = Phi @ rng.standard_normal((n, 1)) + rng.standard_normal((N, 1))
-    theta, P, E = np.zeros((n, 1)), 1e8 * np.eye(n), np.empty_like(Y)
-    assert k.rls_run(theta, P, Phi, Y, np.full(N, 0.99), 8e8, E) == k.OK
+    y = Phi @ rng.standard_normal(n) + rng.standard_normal(N)
+    theta, P, E = np.zeros(n), 1e8 * np.eye(n), np.empty(N)
+    assert k.rls_run(theta, P, Phi, y, np.full(N, 0.99), 8e8, E) == k.OK
     assert np.array_equal(P, P.T)
     assert np.all(np.linalg.eigvalsh(P) > 0)
+
+
+def test_textbook_update_loses_symmetry_where_ours_does_not(rng):
+    """The reason for the symmetric form: the textbook update drifts."""
+    n, N = 6, 20_000
+    Phi = rng.standard_normal((N, n)) * np.logspace(-1, 1, n)
+    y = Phi @ rng.standard_normal(n)
+    P = 1e4 * np.eye(n)
+    for t in range(N):
+        phi = Phi[t]
+        K = P @ phi / (0.99 + phi @ P @ phi)
+        P = (P - np.outer(K, phi @ P)) / 0.99
+    assert np.abs(P - P.T).max() > 0.0
+    theta, Pk, E = np.zeros(n), 1e4 * np.eye(n), np.empty(N)
+    k.rls_run(theta, Pk, Phi, y, np.full(N, 0.99), np.inf, E)
+    assert np.array_equal(Pk, Pk.T)

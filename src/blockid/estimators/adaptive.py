@@ -84,10 +84,8 @@ class AdaptiveWeightedRLS(RecursiveEstimator):
 
     max_covariance_trace = None  # P never grows in AW-RLS
 
-    def _run(self, Phi: np.ndarray, Y: np.ndarray, E: np.ndarray, start: int) -> int:
+    def _kernel(self, theta, P, Phi, y, e, start) -> int:
         W = np.empty(Phi.shape[0])
-        status = _k.aw_rls_run(
-            self._theta, self.covariance_, Phi, Y, float(self.eps1), float(self.eps2), W, E
-        )
-        self.weights_ = W
+        status = _k.aw_rls_run(theta, P, Phi, y, float(self.eps1), float(self.eps2), W, e)
+        self.weights_ = W  # the same for every target: it depends on P and phi only
         return status

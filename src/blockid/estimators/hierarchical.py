@@ -116,21 +116,18 @@ class HierarchicalRLS(RecursiveEstimator):
         self._theta = self._theta[self._perm]
 
     def _run(self, Phi: np.ndarray, Y: np.ndarray, E: np.ndarray, start: int) -> int:
-        lam = ForgettingSchedule.parse(self.forgetting).factors(start, Phi.shape[0])
-        P = np.ascontiguousarray(self.covariance_[np.ix_(self._perm, self._perm)])
-        theta = self._theta
-        status = _k.hierarchical_rls_run(
-            theta,
-            P,
-            np.ascontiguousarray(Phi[:, self._perm]),
-            Y,
-            self._bounds,
-            lam,
-            self._trace_max(Phi.shape[1]),
-            E,
-        )
-        self.covariance_ = P[np.ix_(self._inv, self._inv)]
+        # the kernel wants the groups contiguous: work in the permuted column order
+        P_orig = self.covariance_
+        self.covariance_ = np.ascontiguousarray(P_orig[np.ix_(self._perm, self._perm)])
+        status = super()._run(np.ascontiguousarray(Phi[:, self._perm]), Y, E, start)
+        self.covariance_ = self.covariance_[np.ix_(self._inv, self._inv)]
         return status
+
+    def _kernel(self, theta, P, Phi, y, e, start) -> int:
+        lam = ForgettingSchedule.parse(self.forgetting).factors(start, Phi.shape[0])
+        return _k.hierarchical_rls_run(
+            theta, P, Phi, y, self._bounds, lam, self._trace_max(Phi.shape[1]), e
+        )
 
     def _set_coef(self, theta: np.ndarray, one_d: bool) -> None:
         super()._set_coef(theta[self._inv], one_d)

@@ -33,8 +33,10 @@ __all__ = ["RecursiveEstimator", "RecursiveLeastSquares"]
 class RecursiveEstimator(RegressionEstimator):
     """Common state handling of the recursive estimators.
 
-    Subclasses implement ``_run(Phi, Y, E, start) -> status`` on the state arrays
-    ``self._theta`` (n, m) and ``self.covariance_`` (n, n).
+    Subclasses implement ``_kernel(theta, P, Phi, y, e, start) -> status`` for one
+    target; :meth:`_run` applies it to every target. ``P`` evolves independently of the
+    targets, so every target starts from the same ``P`` and the one kept is identical
+    for all of them.
     """
 
     _parameter_constraints: ClassVar[dict[str, Interval]] = {
@@ -102,6 +104,23 @@ class RecursiveEstimator(RegressionEstimator):
         self._set_coef(self._theta, one_d)
         return self
 
+    def _run(self, Phi: np.ndarray, Y: np.ndarray, E: np.ndarray, start: int) -> int:
+        P0 = self.covariance_
+        status = _k.OK
+        for k in range(Y.shape[1]):
+            P = P0.copy() if k < Y.shape[1] - 1 else P0
+            theta = np.ascontiguousarray(self._theta[:, k])
+            e = np.empty(Y.shape[0])
+            st = self._kernel(theta, P, Phi, np.ascontiguousarray(Y[:, k]), e, start)
+            self._theta[:, k] = theta
+            E[:, k] = e
+            if st != _k.OK:
+                status = st if status == _k.OK else min(status, st)
+            if k == 0:
+                P_kept = P
+        self.covariance_ = P_kept
+        return status
+
 
 class RecursiveLeastSquares(RecursiveEstimator):
     """Recursive least squares (A2) with constant or scheduled forgetting.
@@ -153,8 +172,6 @@ class RecursiveLeastSquares(RecursiveEstimator):
         self.initial_parameters = initial_parameters
         self.max_covariance_trace = max_covariance_trace
 
-    def _run(self, Phi: np.ndarray, Y: np.ndarray, E: np.ndarray, start: int) -> int:
+    def _kernel(self, theta, P, Phi, y, e, start) -> int:
         lam = ForgettingSchedule.parse(self.forgetting).factors(start, Phi.shape[0])
-        return _k.rls_run(
-            self._theta, self.covariance_, Phi, Y, lam, self._trace_max(Phi.shape[1]), E
-        )
+        return _k.rls_run(theta, P, Phi, y, lam, self._trace_max(Phi.shape[1]), e)
