@@ -2,9 +2,23 @@
 
 from blockid.models.arx import ARX
 from blockid.models.base import MODEL_TYPES, Model, model_from_dict
+from blockid.models.block import (
+    BLOCK_STRUCTURES,
+    BacklashModel,
+    BlockModel,
+    Hammerstein,
+    HammersteinWiener,
+    Wiener,
+)
 from blockid.models.serialization import load_model, model_document, save_model
 
 __all__ = [
+    "BLOCK_STRUCTURES",
+    "BacklashModel",
+    "BlockModel",
+    "Hammerstein",
+    "HammersteinWiener",
+    "Wiener",
     "ARX",
     "MODEL_TYPES",
     "Model",

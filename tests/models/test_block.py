@@ -1,0 +1,103 @@
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+
+from blockid import errors
+from blockid.blocks import Backlash, DeadZone, Polynomial, TwoSegmentPolynomial
+from blockid.models import (
+    BacklashModel,
+    Hammerstein,
+    HammersteinWiener,
+    Wiener,
+    load_model,
+    save_model,
+)
+
+N1 = TwoSegmentPolynomial([0.05, 1.0, 0.3, -0.1], [-0.05, -0.4, 0.2, 0.05])
+N2 = Polynomial([1.0, 0.2, 0.1], constant=False)
+A = [-1.2, 0.5, -0.1]
+B = [1.0, 0.4, 0.2]
+
+
+def hw(**kw):
+    return HammersteinWiener(
+        "u", "y", input_block=N1, output_block=N2, na=3, nb=3, nk=2, a=A, b=B, **kw
+    )
+
+
+def test_hw_simulation_is_the_cascade(rng):
+    u = rng.uniform(-1.5, 1.5, 400)
+    x = lfilter(np.r_[0, 0, B], np.r_[1, A], N1(u))
+    np.testing.assert_allclose(hw().simulate(u)[:, 0], N2(x), atol=1e-12)
+
+
+def test_one_step_prediction_is_exact_on_noise_free_data(rng):
+    u = rng.uniform(-1.5, 1.5, 400)
+    for model in (
+        hw(),
+        Hammerstein("u", "y", input_block=N1, na=3, nb=3, nk=2, a=A, b=B),
+        Wiener("u", "y", output_block=N2, na=3, nb=3, nk=2, a=A, b=[0.5, 0.4, 0.2]),
+        BacklashModel(
+            "u", "y", input_block=Backlash(0.9, 0.3, 0.8, 0.35), na=2, nb=1, nk=1, a=[-1.0, 0.17]
+        ),
+    ):
+        y = model.simulate(u)
+        np.testing.assert_allclose(model.predict(u, y), y, atol=1e-9)
+
+
+def test_simulate_with_measured_initial_conditions_continues_the_record(rng):
+    model = hw(output_offset=2.0, input_offset=0.5)
+    u = rng.uniform(-1, 2, 300)
+    y = model.simulate(u)
+    # restart at sample 100 from the measured outputs there: the continuation matches
+    # after the linear block's memory of w has passed (nk + nb - 1 samples)
+    again = model.simulate(u[100:], y[100 : 100 + model.max_lag])
+    np.testing.assert_allclose(again[20:, 0], y[120:, 0], atol=1e-6)
+
+
+def test_free_parameter_vector_round_trip():
+    model = hw()
+    theta = model.free_parameters()
+    assert theta.size == 8 + 3 + 2 + 2  # f,p | a | b1,b2 | q2,q3
+    again = model.with_free_parameters(theta * 1.1)
+    np.testing.assert_allclose(again.free_parameters(), theta * 1.1)
+    assert again.b[0] == 1.0 and again.output_block.coefficients[0] == 1.0
+
+
+def test_spec_parameter_names_and_file_round_trip(tmp_path, rng):
+    bl = BacklashModel(
+        "u2", "v2", input_block=Backlash(0.9, 0.8, 0.9, 0.85), na=2, nb=1, nk=1, a=[-1.0, 0.17]
+    )
+    assert set(bl.parameters) == {"m_left", "c_left", "m_right", "c_right", "a", "b"}
+    assert set(hw().parameters) == {"f", "p", "a", "b", "q"}
+    u = rng.uniform(0, 10, 300)
+    for model in (
+        hw(sampling_time=0.05),
+        bl,
+        Hammerstein("u", "y", input_block=DeadZone(-0.2, 0.3), na=1, a=[-0.5]),
+    ):
+        path = save_model(model, tmp_path / f"{model.structure}.json")
+        again = load_model(path)
+        assert type(again) is type(model)
+        assert np.array_equal(again.simulate(u), model.simulate(u))
+        y = model.simulate(u)
+        if model.output_block is None or model.output_block.is_monotone(y.min(), y.max()):
+            assert np.array_equal(again.predict(u, y), model.predict(u, y))
+
+
+def test_normalisation_and_structure_errors():
+    with pytest.raises(errors.OrderError, match="b_0 is fixed to 1"):
+        Hammerstein("u", "y", input_block=N1, nb=2, b=[2.0, 1.0])
+    with pytest.raises(errors.OrderError, match="q_1 is fixed to 1"):
+        Wiener("u", "y", output_block=Polynomial([2.0, 1.0], constant=False))
+    with pytest.raises(errors.OrderError, match="one input"):
+        Hammerstein(["u1", "u2"], "y", input_block=N1)
+    with pytest.raises(errors.OrderError, match="without constant"):
+        Wiener("u", "y", output_block=Polynomial([0.0, 1.0]))
+
+
+def test_non_invertible_output_block_refuses_one_step_prediction(rng):
+    model = Wiener("u", "y", output_block=Polynomial([1.0, -2.0], constant=False), na=1, a=[-0.5])
+    u = rng.uniform(-2, 2, 100)
+    with pytest.raises(errors.EstimationError, match="cannot be inverted"):
+        model.predict(u, model.simulate(u))
