@@ -1,5 +1,15 @@
 """Identification: from data and a model structure to a checked, fitted model."""
 
-from blockid.fitting.arx import ARX_METHODS, FitResult, fit_arx, make_estimator
+from blockid.fitting.arx import ARX_METHODS, fit_arx, make_estimator
+from blockid.fitting.checks import check_model, linear_baseline, simulation_mse
+from blockid.fitting.result import FitResult
 
-__all__ = ["ARX_METHODS", "FitResult", "fit_arx", "make_estimator"]
+__all__ = [
+    "ARX_METHODS",
+    "FitResult",
+    "check_model",
+    "fit_arx",
+    "linear_baseline",
+    "make_estimator",
+    "simulation_mse",
+]

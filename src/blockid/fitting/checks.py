@@ -1,0 +1,107 @@
+"""Checks every identified model passes before it is returned to the user.
+
+The papers' recursive algorithms can diverge or converge to wrong answers on ordinary
+data; blockid reports that instead of handing out a bad model. A model is accepted when
+
+* all parameters are finite,
+* its linear block is stable (poles strictly inside the unit circle),
+* its free-run simulation on the estimation data is finite and does not explode, and
+* that simulation is not much worse than a plain linear ARX of the same orders fitted
+  by least squares (``max_mse_ratio`` times its MSE; a block-oriented model contains
+  the linear one, so a much worse fit means the estimator failed).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from blockid.data.dataset import Dataset
+from blockid.errors import EstimationError
+from blockid.estimators import BatchLeastSquares
+from blockid.evaluation.metrics import metrics_by_output
+from blockid.models.arx import ARX
+
+__all__ = ["simulation_mse", "linear_baseline", "check_model"]
+
+
+def simulation_mse(model: Any, data: Dataset) -> float:
+    """Free-run MSE over all experiments (first ``max_lag`` samples of each skipped)."""
+    errs = []
+    for e in data.experiments:
+        y_sim = model.simulate(e.u, e.y[: model.max_lag])
+        errs.append((e.y[model.max_lag :] - y_sim[model.max_lag :]).ravel())
+    err = np.concatenate(errs)
+    return float(np.mean(err**2)) if np.all(np.isfinite(err)) else float("inf")
+
+
+def linear_baseline(data: Dataset, na: int, nb: int, nk: int) -> ARX | None:
+    """Least-squares ARX of the same orders with an operating-point offset (or None)."""
+    u_off = np.mean(np.vstack([e.u for e in data.experiments]), axis=0)
+    y_off = np.mean(np.vstack([e.y for e in data.experiments]), axis=0)
+    model = ARX(data.inputs, data.outputs, na, nb, nk, input_offset=u_off, output_offset=y_off)
+    try:
+        for i in range(len(model.outputs)):
+            rows = [model.regressors(e.u, e.y, i) for e in data.experiments]
+            Phi = np.vstack([r[0] for r in rows])
+            target = np.concatenate([r[1] for r in rows])
+            model.set_parameter_vector(i, BatchLeastSquares().fit(Phi, target).coef_)
+    except EstimationError:
+        return None
+    return model if model.is_stable() else None
+
+
+def check_model(
+    model: Any,
+    data: Dataset,
+    method: str,
+    *,
+    max_mse_ratio: float | None = 2.0,
+) -> dict[str, dict[str, float]]:
+    """Raise :class:`EstimationError` if ``model`` fails a check; else return its
+    free-run metrics on ``data``.
+
+    Parameters
+    ----------
+    model : Model
+        A block-oriented model (with ``free_parameters``, ``is_stable``, ``na`` ...).
+    data : Dataset
+        The estimation data.
+    method : str
+        Named in the error messages.
+    max_mse_ratio : float or None
+        Allowed free-run MSE relative to the linear baseline; None skips that check.
+    """
+    theta = model.free_parameters()
+    if not np.all(np.isfinite(theta)):
+        raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
+    if not model.is_stable():
+        rho = float(np.max(np.abs(model.linear.poles())))
+        raise EstimationError(
+            f"{method} returned an unstable linear block (largest pole magnitude {rho:.4g}); "
+            "its simulation would diverge, so no model is returned. See docs/convergence.md"
+        )
+    mse = simulation_mse(model, data)
+    y_all = np.vstack([e.y for e in data.experiments])
+    if not np.isfinite(mse) or mse > 1e6 * (float(np.var(y_all)) + 1e-300):
+        raise EstimationError(
+            f"{method} returned a model whose free-run simulation explodes on the estimation "
+            "data; no model is returned. See docs/convergence.md"
+        )
+    if max_mse_ratio is not None:
+        base = linear_baseline(data, model.na, model.nb, model.nk)
+        if base is not None:
+            base_mse = simulation_mse(base, data)
+            if mse > max_mse_ratio * base_mse:
+                raise EstimationError(
+                    f"{method} did not converge to a useful model: its free-run MSE on the "
+                    f"estimation data, {mse:.4g}, is {mse / base_mse:.3g} times that of a "
+                    f"linear ARX of the same orders ({base_mse:.4g}). Use the default method "
+                    "(simulation-error), add --refine, or see docs/convergence.md"
+                )
+    y = np.vstack([e.y[model.max_lag :] for e in data.experiments])
+    y_sim = np.vstack(
+        [model.simulate(e.u, e.y[: model.max_lag])[model.max_lag :] for e in data.experiments]
+    )
+    return metrics_by_output(y, y_sim, data.outputs)

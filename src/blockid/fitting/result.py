@@ -1,0 +1,41 @@
+"""The result of an identification: the model and what it took to get it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["FitResult"]
+
+
+@dataclass
+class FitResult:
+    """A fitted model with what it took to get it.
+
+    Attributes
+    ----------
+    model : Model
+    method : str
+    settings : dict
+        Estimator settings, as stored in the model file's ``"estimation"`` entry.
+    estimation_metrics : dict
+        One-step-ahead metrics on the estimation data, keyed by metric then output.
+    history : dict
+        Optional per-output arrays (e.g. parameter trajectories of recursive methods).
+    """
+
+    model: Any
+    method: str
+    settings: dict[str, Any]
+    estimation_metrics: dict[str, dict[str, float]]
+    n_samples: int
+    history: dict[str, Any] = field(default_factory=dict)
+
+    def estimation_record(self) -> dict[str, Any]:
+        """The ``"estimation"`` entry of the model file."""
+        return {
+            "method": self.method,
+            "settings": self.settings,
+            "n_samples": self.n_samples,
+            "one_step_on_estimation_data": self.estimation_metrics,
+        }
