@@ -2,9 +2,19 @@
 
 from blockid.fitting.arx import ARX_METHODS, fit_arx, make_estimator
 from blockid.fitting.checks import check_model, linear_baseline, simulation_mse
+from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, STRUCTURES, fit_model
+from blockid.fitting.network import SubsystemSpec, fit_network, parse_subsystem, subset
 from blockid.fitting.result import FitResult
 
 __all__ = [
+    "DEFAULT_METHOD",
+    "METHODS",
+    "STRUCTURES",
+    "SubsystemSpec",
+    "fit_model",
+    "fit_network",
+    "parse_subsystem",
+    "subset",
     "ARX_METHODS",
     "FitResult",
     "check_model",

@@ -19,7 +19,9 @@ class FitResult:
     settings : dict
         Estimator settings, as stored in the model file's ``"estimation"`` entry.
     estimation_metrics : dict
-        One-step-ahead metrics on the estimation data, keyed by metric then output.
+        Metrics on the estimation data, keyed by metric then output.
+    metrics_mode : {"one-step", "simulation"}
+        Whether ``estimation_metrics`` are of one-step prediction or free-run simulation.
     history : dict
         Optional per-output arrays (e.g. parameter trajectories of recursive methods).
     """
@@ -30,6 +32,7 @@ class FitResult:
     estimation_metrics: dict[str, dict[str, float]]
     n_samples: int
     history: dict[str, Any] = field(default_factory=dict)
+    metrics_mode: str = "one-step"
 
     def estimation_record(self) -> dict[str, Any]:
         """The ``"estimation"`` entry of the model file."""
@@ -37,5 +40,5 @@ class FitResult:
             "method": self.method,
             "settings": self.settings,
             "n_samples": self.n_samples,
-            "one_step_on_estimation_data": self.estimation_metrics,
+            f"{self.metrics_mode.replace('-', '_')}_on_estimation_data": self.estimation_metrics,
         }

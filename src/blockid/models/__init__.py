@@ -10,9 +10,11 @@ from blockid.models.block import (
     HammersteinWiener,
     Wiener,
 )
+from blockid.models.network import Network
 from blockid.models.serialization import load_model, model_document, save_model
 
 __all__ = [
+    "Network",
     "BLOCK_STRUCTURES",
     "BacklashModel",
     "BlockModel",

@@ -1,0 +1,121 @@
+"""One entry point from (structure, method, options) to a checked :class:`FitResult`.
+
+=====================  ==========================================  ==================
+structure              methods                                     default
+=====================  ==========================================  ==================
+arx                    batch, rls, aw-rls, hierarchical-rls        batch
+hammerstein            simulation-error, key-term-rls              simulation-error
+wiener                 simulation-error, key-term-rls              simulation-error
+hammerstein-wiener     simulation-error, key-term-rls              simulation-error
+backlash               simulation-error, aw-rls                    simulation-error
+=====================  ==========================================  ==================
+
+``refine=True`` follows any method of a block-oriented structure with the refinement on
+free-run simulation error, started from that method's estimate.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable
+from typing import Any
+
+from blockid.data.dataset import Dataset
+from blockid.errors import ParameterError
+from blockid.fitting.result import FitResult
+
+__all__ = ["STRUCTURES", "METHODS", "DEFAULT_METHOD", "fit_model"]
+
+METHODS: dict[str, tuple[str, ...]] = {
+    "arx": ("batch", "rls", "aw-rls", "hierarchical-rls"),
+    "hammerstein": ("simulation-error", "key-term-rls"),
+    "wiener": ("simulation-error", "key-term-rls"),
+    "hammerstein-wiener": ("simulation-error", "key-term-rls"),
+    "backlash": ("simulation-error", "aw-rls"),
+}
+STRUCTURES = tuple(METHODS)
+DEFAULT_METHOD = {s: m[0] for s, m in METHODS.items()}
+
+
+def _function(structure: str, method: str) -> Callable[..., FitResult]:
+    if structure == "arx":
+        from blockid.fitting.arx import fit_arx
+
+        return lambda data, **kw: fit_arx(data, method=method, **kw)
+    if method == "simulation-error":
+        from blockid.fitting.simulation_error import fit_simulation_error
+
+        return lambda data, **kw: fit_simulation_error(data, structure, **kw)
+    if method == "key-term-rls":
+        from blockid.fitting.key_term import fit_key_term_rls
+
+        return lambda data, **kw: fit_key_term_rls(data, structure, **kw)
+    from blockid.fitting.backlash import fit_backlash_aw_rls
+
+    return fit_backlash_aw_rls
+
+
+def _accepted(structure: str, method: str) -> set[str]:
+    if structure == "arx":
+        from blockid.fitting.arx import fit_arx as fn
+    elif method == "simulation-error":
+        from blockid.fitting.simulation_error import fit_simulation_error as fn
+    elif method == "key-term-rls":
+        from blockid.fitting.key_term import fit_key_term_rls as fn
+    else:
+        from blockid.fitting.backlash import fit_backlash_aw_rls as fn
+    params = inspect.signature(fn).parameters
+    return {n for n, p in params.items() if p.kind == p.KEYWORD_ONLY or n in ("na", "nb", "nk")}
+
+
+def fit_model(
+    data: Dataset,
+    structure: str,
+    *,
+    method: str | None = None,
+    refine: bool = False,
+    **options: Any,
+) -> FitResult:
+    """Identify a model of the given structure with the given method.
+
+    Parameters
+    ----------
+    data : Dataset
+        Estimation data.
+    structure : str
+        One of :data:`STRUCTURES`.
+    method : str, optional
+        One of ``METHODS[structure]``; the default is the converging one.
+    refine : bool
+        Refine the estimate on free-run simulation error afterwards (block-oriented
+        structures).
+    **options
+        Orders (``na``, ``nb``, ``nk``, ``r1``, ``r2``) and method settings; an option
+        the method does not use is an error, not silently ignored. ``None`` values are
+        dropped (the method's default applies).
+    """
+    if structure not in METHODS:
+        raise ParameterError(
+            f"unknown structure {structure!r}; choose one of {', '.join(STRUCTURES)}"
+        )
+    method = method or DEFAULT_METHOD[structure]
+    if method not in METHODS[structure]:
+        raise ParameterError(
+            f"method {method!r} does not apply to {structure}; choose one of "
+            f"{', '.join(METHODS[structure])}"
+        )
+    options = {k: v for k, v in options.items() if v is not None}
+    accepted = _accepted(structure, method)
+    unused = sorted(set(options) - accepted)
+    if unused:
+        shown = ", ".join("--" + u.replace("_", "-") for u in unused)
+        raise ParameterError(f"{shown} not used by {structure} with method {method}")
+    result = _function(structure, method)(data, **options)
+    if refine and structure != "arx" and method != "simulation-error":
+        from blockid.fitting.simulation_error import refine as refine_fit
+
+        refined = refine_fit(result.model, data)
+        refined.settings = {"started_from": result.method, **result.settings, **refined.settings}
+        refined.method = f"{result.method}+refine"
+        return refined
+    return result

@@ -1,0 +1,147 @@
+"""Networks of models connected by named signals (paper A's block-oriented network).
+
+Paper A models the wind tunnel as three subsystems::
+
+    u1 -> S1 (ARX)                  -> v1 --+
+    u2 -> S2 (backlash -> linear)   -> v2 --+--> S3 (two-input two-output ARX) -> y1, y2
+
+A :class:`Network` holds subsystems (any blockid models) in an order in which every
+subsystem's inputs are either external inputs of the network or outputs of earlier
+subsystems. Its inputs are the external inputs; its outputs are the outputs of all
+subsystems (internal signals such as v1, v2 included), so that measured internal
+signals can provide initial conditions and be scored too.
+
+Free-run simulation runs the subsystems in order, each fed with *simulated* upstream
+signals: the network output is computed from the external inputs alone. One-step
+prediction runs each subsystem on measured signals.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from blockid.errors import ModelFileError, OrderError
+from blockid.models.base import Model, model_from_dict
+
+__all__ = ["Network"]
+
+
+class Network(Model):
+    """Subsystems connected by signal names.
+
+    Parameters
+    ----------
+    subsystems : sequence of (name, Model)
+        In an order where each subsystem's inputs are external or produced earlier.
+    sampling_time : float, optional
+
+    Examples
+    --------
+    >>> from blockid.models import ARX
+    >>> s1 = ARX(["u1"], ["v1"], 1, 1, 1, a={"v1": {"v1": [-0.62]}}, b={"v1": {"u1": [0.39]}})
+    >>> s3 = ARX(["v1"], ["y1"], 1, 1, 1, a={"y1": {"y1": [-0.5]}}, b={"y1": {"v1": [1.0]}})
+    >>> net = Network([("S1", s1), ("S3", s3)])
+    >>> net.inputs, net.outputs
+    (('u1',), ('v1', 'y1'))
+    """
+
+    structure = "network"
+
+    def __init__(
+        self, subsystems: Sequence[tuple[str, Model]], sampling_time: float | None = None
+    ) -> None:
+        self.subsystems = [(str(name), model) for name, model in subsystems]
+        if not self.subsystems:
+            raise OrderError("a network needs at least one subsystem")
+        names = [n for n, _ in self.subsystems]
+        if len(set(names)) != len(names):
+            raise OrderError(f"subsystem names must be unique; got {names}")
+        produced: list[str] = []
+        external: list[str] = []
+        for name, model in self.subsystems:
+            for sig in model.inputs:
+                if sig not in produced and sig not in external:
+                    external.append(sig)
+            for sig in model.outputs:
+                if sig in produced or sig in external:
+                    raise OrderError(
+                        f"signal {sig!r} of subsystem {name!r} is produced twice or used before "
+                        "it is produced; list subsystems upstream first, each signal made once"
+                    )
+                produced.append(sig)
+        self.inputs = tuple(external)
+        self.outputs = tuple(produced)
+        self.sampling_time = sampling_time
+
+    def __getitem__(self, name: str) -> Model:
+        for n, model in self.subsystems:
+            if n == name:
+                return model
+        raise KeyError(name)
+
+    @property
+    def max_lag(self) -> int:
+        return max(model.max_lag for _, model in self.subsystems)
+
+    def _columns(self, model: Model, table: dict[str, np.ndarray], which: str) -> np.ndarray:
+        names = model.inputs if which == "inputs" else model.outputs
+        return np.column_stack([table[n] for n in names])
+
+    def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
+        """Free-run simulation of every subsystem from the external inputs alone.
+
+        ``y_initial`` (rows: first samples; columns: :attr:`outputs`) gives each
+        subsystem's initial outputs; without it every subsystem starts at rest.
+        """
+        u, _ = self._check_signals(u)
+        y0 = None
+        if y_initial is not None:
+            _, y0 = self._check_signals(u[: len(np.asarray(y_initial))], y_initial)
+        table = {name: u[:, j] for j, name in enumerate(self.inputs)}
+        for _, model in self.subsystems:
+            init = None
+            if y0 is not None:
+                cols = [self.outputs.index(n) for n in model.outputs]
+                init = y0[:, cols]
+            out = model.simulate(self._columns(model, table, "inputs"), init)
+            for j, name in enumerate(model.outputs):
+                table[name] = out[:, j]
+        return np.column_stack([table[n] for n in self.outputs])
+
+    def predict(self, u: Any, y: Any) -> np.ndarray:
+        """One-step-ahead prediction of each subsystem from measured signals."""
+        u, y = self._check_signals(u, y)
+        table = {name: u[:, j] for j, name in enumerate(self.inputs)}
+        table.update({name: y[:, j] for j, name in enumerate(self.outputs)})
+        out = []
+        for _, model in self.subsystems:
+            out.append(
+                model.predict(
+                    self._columns(model, table, "inputs"), self._columns(model, table, "outputs")
+                )
+            )
+        pred = np.column_stack(out)
+        order = [n for _, m in self.subsystems for n in m.outputs]
+        return pred[:, [order.index(n) for n in self.outputs]]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "structure": self.structure,
+            "inputs": list(self.inputs),
+            "outputs": list(self.outputs),
+            "sampling_time": self.sampling_time,
+            "subsystems": [{"name": n, "model": m.to_dict()} for n, m in self.subsystems],
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Network:
+        subs = data["subsystems"]
+        if not isinstance(subs, list):
+            raise ModelFileError("a network's 'subsystems' must be a list")
+        return cls(
+            [(s["name"], model_from_dict(s["model"])) for s in subs],
+            sampling_time=data.get("sampling_time"),
+        )

@@ -1,0 +1,78 @@
+import numpy as np
+import pytest
+
+from blockid import errors
+from blockid.blocks import Backlash
+from blockid.data import Dataset
+from blockid.fitting import parse_subsystem, subset
+from blockid.models import ARX, BacklashModel, Network, load_model, save_model
+
+
+def paper_a_network():
+    s1 = ARX(["u1"], ["v1"], 1, 1, 1, a={"v1": {"v1": [-0.62]}}, b={"v1": {"u1": [0.39]}})
+    s2 = BacklashModel(
+        "u2", "v2", input_block=Backlash(0.9, 0.8, 0.9, 0.85), na=2, nb=1, nk=1, a=[-1.0, 0.17]
+    )
+    s3 = ARX(
+        ["v1", "v2"],
+        ["y1", "y2"],
+        na=2,
+        nb=2,
+        nk=1,
+        a={
+            "y1": {"y1": [-1.2, 0.4], "y2": [0.1, 0.0]},
+            "y2": {"y1": [0.05, 0.02], "y2": [-0.9, 0.2]},
+        },
+        b={
+            "y1": {"v1": [0.05, 0.02], "v2": [0.01, -0.005]},
+            "y2": {"v1": [0.0, 0.003], "v2": [0.04, 0.01]},
+        },
+    )
+    return Network([("S1", s1), ("S2", s2), ("S3", s3)], sampling_time=0.05)
+
+
+def test_signals_and_free_run_equal_the_chained_subsystems(rng):
+    net = paper_a_network()
+    assert net.inputs == ("u1", "u2") and net.outputs == ("v1", "v2", "y1", "y2")
+    u = np.column_stack([rng.uniform(-5, 5, 300), rng.uniform(-5, 5, 300)])
+    out = net.simulate(u)
+    v1 = net["S1"].simulate(u[:, :1])
+    v2 = net["S2"].simulate(u[:, 1:])
+    y = net["S3"].simulate(np.column_stack([v1, v2]))
+    np.testing.assert_allclose(out, np.column_stack([v1, v2, y]), atol=1e-12)
+    # one-step prediction on noise-free data is exact
+    np.testing.assert_allclose(net.predict(u, out)[net.max_lag :], out[net.max_lag :], atol=1e-9)
+
+
+def test_network_file_round_trip(tmp_path, rng):
+    net = paper_a_network()
+    again = load_model(save_model(net, tmp_path / "net.json"))
+    u = rng.uniform(-5, 5, (200, 2))
+    assert np.array_equal(again.simulate(u), net.simulate(u))
+
+
+def test_wiring_errors():
+    s1 = ARX(["u"], ["v"], 1, 1, 1)
+    with pytest.raises(errors.OrderError, match="produced twice or used before"):
+        Network([("A", ARX(["v"], ["y"], 1, 1, 1)), ("B", s1), ("C", ARX(["u2"], ["v"], 1, 1, 1))])
+
+
+def test_parse_subsystem_and_subset(rng):
+    spec = parse_subsystem("S2: u2 -> v2 | backlash na=2 nb=1 nk=1 method=aw-rls eps1=1.5")
+    assert (spec.structure, spec.method, spec.options) == (
+        "backlash",
+        "aw-rls",
+        {"na": 2, "nb": 1, "nk": 1, "eps1": 1.5},
+    )
+    with pytest.raises(errors.ParameterError, match="expected 'NAME: IN"):
+        parse_subsystem("S1 u1 v1")
+    data = Dataset.from_arrays(
+        rng.standard_normal((10, 2)),
+        rng.standard_normal((10, 2)),
+        inputs=["u1", "u2"],
+        outputs=["v1", "y1"],
+    )
+    sub = subset(data, ["v1"], ["y1"])
+    np.testing.assert_array_equal(sub.experiments[0].u[:, 0], data.experiments[0].y[:, 0])
+    with pytest.raises(errors.DataError, match=r"\['nope'\] are not in the data"):
+        subset(data, ["nope"], ["y1"])
