@@ -25,6 +25,7 @@ LAYERS = {
     "fitting": 5,
     "evaluation": 5,
     "plotting": 6,
+    "workflows": 7,
     "reporting": 7,
     "cli": 8,
 }

@@ -33,7 +33,8 @@ app = typer.Typer(
 )
 
 DataPaths = Annotated[
-    list[Path], typer.Argument(help="Data file(s): .csv, .tsv, .txt, .parquet or .mat.")
+    list[Path],
+    typer.Argument(metavar="DATA...", help="Data file(s): .csv, .tsv, .txt, .parquet or .mat."),
 ]
 Inputs = Annotated[
     list[str], typer.Option("--input", "-u", help="Input column; repeat for several inputs.")
@@ -73,42 +74,114 @@ def _load(paths, inputs, outputs, ts, time_column, experiment_column, rng, what)
     return data
 
 
+Structure = Annotated[
+    str,
+    typer.Option(help="arx | hammerstein | wiener | hammerstein-wiener | backlash."),
+]
+Method = Annotated[
+    str | None,
+    typer.Option(
+        help="Estimator. arx: batch (default), rls, aw-rls, hierarchical-rls. "
+        "hammerstein/wiener/hammerstein-wiener: simulation-error (default), key-term-rls. "
+        "backlash: simulation-error (default), aw-rls."
+    ),
+]
+Na = Annotated[str, typer.Option(help="Output lags na: N, or for ARX a matrix 'N,N;N,N'.")]
+Nb = Annotated[str, typer.Option(help="Input coefficients nb (b_0..b_nb-1): N or matrix.")]
+Nk = Annotated[str, typer.Option(help="Input delay nk in samples: N or matrix.")]
+R1 = Annotated[int | None, typer.Option(help="Degree of the two-segment input polynomial.")]
+R2 = Annotated[int | None, typer.Option(help="Degree of the output polynomial.")]
+Refine = Annotated[
+    bool, typer.Option(help="Refine any method's estimate on free-run simulation error.")
+]
+Forgetting = Annotated[
+    str | None, typer.Option(help="Forgetting factor, or schedule such as 0.98:200,1.")
+]
+InitialCovariance = Annotated[
+    float | None, typer.Option(help="P(0) scale of the recursive methods.")
+]
+Passes = Annotated[int | None, typer.Option(help="Passes of a recursive method over the data.")]
+Eps1 = Annotated[float | None, typer.Option(help="AW-RLS weight eps1 (A8).")]
+Eps2 = Annotated[float | None, typer.Option(help="AW-RLS weight eps2 (A8).")]
+Center = Annotated[
+    bool, typer.Option(help="ARX: fit around the mean operating point (offsets kept).")
+]
+AllowUnstable = Annotated[
+    bool, typer.Option(help="ARX: keep a model with poles outside the unit circle.")
+]
+ConvergenceCheck = Annotated[
+    bool,
+    typer.Option(
+        help="ARX recursive methods: fail when the one-step MSE exceeds 2x the LS optimum."
+    ),
+]
+PlotDir = Annotated[Path | None, typer.Option("--plot", help="Write PNG figures to this folder.")]
+
+
+def _fit_options(
+    structure,
+    na,
+    nb,
+    nk,
+    r1,
+    r2,
+    forgetting,
+    initial_covariance,
+    passes,
+    eps1,
+    eps2,
+    center,
+    allow_unstable,
+    convergence_check,
+) -> dict:
+    opts = {
+        "na": parse_order(na, "na"),
+        "nb": parse_order(nb, "nb"),
+        "nk": parse_order(nk, "nk"),
+        "r1": r1,
+        "r2": r2,
+        "forgetting": forgetting,
+        "initial_covariance": initial_covariance,
+        "passes": passes,
+        "eps1": eps1,
+        "eps2": eps2,
+    }
+    if structure == "arx":
+        opts.update(
+            center=center or None,
+            allow_unstable=allow_unstable or None,
+            max_mse_ratio=None if not convergence_check else 2.0,
+        )
+    return opts
+
+
 @app.command()
 @cli_errors
 def fit(
     data_paths: DataPaths,
     inputs: Inputs,
     outputs: Outputs,
-    structure: Annotated[str, typer.Option(help="Model structure: arx.")] = "arx",
-    na: Annotated[str, typer.Option(help="Output lags: N or matrix 'N,N;N,N'.")] = "1",
-    nb: Annotated[str, typer.Option(help="Input coefficients per channel: N or matrix.")] = "1",
-    nk: Annotated[str, typer.Option(help="Input delay in samples: N or matrix.")] = "1",
-    method: Annotated[str, typer.Option(help="batch | rls | aw-rls | hierarchical-rls.")] = "batch",
-    forgetting: Annotated[
-        str, typer.Option(help="Forgetting factor, or schedule such as 0.98:200,1.")
-    ] = "1",
-    initial_covariance: Annotated[
-        float | None, typer.Option(help="P(0) scale of the recursive methods.")
-    ] = None,
-    eps1: Annotated[float, typer.Option(help="AW-RLS weight eps1 (A8).")] = 1.0,
-    eps2: Annotated[float, typer.Option(help="AW-RLS weight eps2 (A8).")] = 0.1,
-    center: Annotated[
-        bool, typer.Option(help="Fit around the mean operating point (offsets kept).")
-    ] = False,
-    allow_unstable: Annotated[
-        bool, typer.Option(help="Keep a model with poles outside the unit circle.")
-    ] = False,
-    passes: Annotated[int, typer.Option(help="Passes of a recursive method over the data.")] = 1,
-    convergence_check: Annotated[
-        bool,
-        typer.Option(
-            help="Fail when a recursive estimate's one-step MSE exceeds 2x the LS optimum."
-        ),
-    ] = True,
+    structure: Structure = "arx",
+    method: Method = None,
+    na: Na = "1",
+    nb: Nb = "1",
+    nk: Nk = "1",
+    r1: R1 = None,
+    r2: R2 = None,
+    refine: Refine = False,
+    forgetting: Forgetting = None,
+    initial_covariance: InitialCovariance = None,
+    passes: Passes = None,
+    eps1: Eps1 = None,
+    eps2: Eps2 = None,
+    center: Center = False,
+    allow_unstable: AllowUnstable = False,
+    convergence_check: ConvergenceCheck = True,
     estimation: Annotated[
         str | None, typer.Option(help="Estimation samples START:STOP (0-based, stop excluded).")
     ] = None,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Model file to write.")] = None,
+    plot: PlotDir = None,
     ts: SamplingTime = None,
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,
@@ -117,15 +190,13 @@ def fit(
 ) -> None:
     """Identify a model from data and save it as a JSON model file."""
     from blockid.errors import ParameterError
-    from blockid.fitting import fit_arx
+    from blockid.fitting import fit_model
     from blockid.models import model_document, save_model
 
     if out is None and not json_out:
         raise ParameterError("nothing to do: give -o MODEL.json to save the model, or --json")
     if out is not None and out.exists() and not force:
         raise ParameterError(f"{out} exists; pass --force to replace it")
-    if structure != "arx":
-        raise ParameterError(f"unknown structure {structure!r}; available: arx")
     data = _load(
         data_paths,
         inputs,
@@ -136,35 +207,44 @@ def fit(
         estimation,
         "--estimation",
     )
-    result = fit_arx(
-        data,
-        parse_order(na, "na"),
-        parse_order(nb, "nb"),
-        parse_order(nk, "nk"),
-        method=method,
-        forgetting=forgetting,
-        initial_covariance=initial_covariance,
-        eps1=eps1,
-        eps2=eps2,
-        center=center,
-        allow_unstable=allow_unstable,
-        passes=passes,
-        max_mse_ratio=2.0 if convergence_check else None,
+    options = _fit_options(
+        structure,
+        na,
+        nb,
+        nk,
+        r1,
+        r2,
+        forgetting,
+        initial_covariance,
+        passes,
+        eps1,
+        eps2,
+        center,
+        allow_unstable,
+        convergence_check,
     )
+    result = fit_model(data, structure, method=method, refine=refine, **options)
     record = result.estimation_record()
     if out is not None:
         save_model(result.model, out, record, overwrite=force)
+    if plot is not None:
+        from blockid.plotting.figures import fit_figures
+
+        fit_figures(result, data, plot)
     if json_out:
         print_json(model_document(result.model, record))
         return
     _print_model(result.model)
+    label = "one-step prediction" if result.metrics_mode == "one-step" else "free-run simulation"
     stdout.print(
         metrics_table(
-            "one-step prediction on the estimation data", [(method, result.estimation_metrics)]
+            f"{label} on the estimation data", [(result.method, result.estimation_metrics)]
         )
     )
     if out is not None:
         stdout.print(f"model written to {out}")
+    if plot is not None:
+        stdout.print(f"figures written to {plot}/")
 
 
 def _print_model(model) -> None:
@@ -174,9 +254,18 @@ def _print_model(model) -> None:
     table = Table(title=f"{model.structure} model", title_justify="left")
     table.add_column("parameter")
     table.add_column("value", justify="right")
-    for i in range(len(model.outputs)):
-        for name, value in zip(model.parameter_names(i), model.parameter_vector(i), strict=True):
-            table.add_row(escape(name), f"{value:.6g}")
+    if hasattr(model, "parameter_names"):  # ARX
+        for i in range(len(model.outputs)):
+            names, values = model.parameter_names(i), model.parameter_vector(i)
+            for name, value in zip(names, values, strict=True):
+                table.add_row(escape(name), f"{value:.6g}")
+    elif hasattr(model, "subsystems"):
+        for name, sub in model.subsystems:
+            table.add_row(escape(name), sub.structure)
+    else:
+        for name, value in model.parameters.items():
+            values = value if isinstance(value, list) else [value]
+            table.add_row(name, ", ".join(f"{v:.6g}" for v in values))
     stdout.print(table)
 
 
@@ -222,6 +311,83 @@ def _run_model(
     )
     if out is not None:
         stdout.print(f"model output written to {out}")
+
+
+@app.command()
+@cli_errors
+def compare(
+    data_paths: DataPaths,
+    inputs: Inputs,
+    outputs: Outputs,
+    estimation: Annotated[str, typer.Option(help="Estimation samples START:STOP.")],
+    validation: Annotated[str, typer.Option(help="Validation samples START:STOP.")],
+    structures: Annotated[
+        str, typer.Option(help="Comma-separated structures to identify and compare.")
+    ] = "arx,hammerstein,wiener,hammerstein-wiener",
+    method: Annotated[
+        str | None,
+        typer.Option(help="Method for the structures that offer it (others: their default)."),
+    ] = None,
+    na: Annotated[int, typer.Option(help="Output lags.")] = 1,
+    nb: Annotated[int, typer.Option(help="Input coefficients b_0..b_nb-1.")] = 1,
+    nk: Annotated[int, typer.Option(help="Input delay in samples.")] = 1,
+    r1: R1 = None,
+    r2: R2 = None,
+    refine: Refine = False,
+    forgetting: Forgetting = None,
+    passes: Passes = None,
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    experiment_column: ExperimentColumn = None,
+    json_out: Json = False,
+) -> None:
+    """Identify several structures and compare them on validation data.
+
+    Prints, for each model, MSE, RMSE, mean and maximum absolute error and fit % of
+    free-run simulation and of one-step prediction on the validation range.
+    """
+    from blockid.data import parse_range
+    from blockid.workflows import compare_structures
+
+    data = _load(data_paths, inputs, outputs, ts, time_column, experiment_column, None, "")
+    est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
+    val = data.select(*parse_range(validation, "--validation"), what="--validation")
+    options = {
+        "na": na,
+        "nb": nb,
+        "nk": nk,
+        "r1": r1,
+        "r2": r2,
+        "forgetting": forgetting,
+        "passes": passes,
+        "refine": refine or None,
+    }
+    result = compare_structures(
+        est,
+        val,
+        [s.strip() for s in structures.split(",") if s.strip()],
+        method=method,
+        options={k: v for k, v in options.items() if v is not None},
+    )
+    if json_out:
+        print_json(result.to_dict())
+        return
+    for mode, title in (("simulation", "free-run simulation"), ("one_step", "one-step prediction")):
+        rows = [
+            (f"{m.structure} ({m.method})", getattr(m, mode).metrics)
+            for m in result.models
+            if getattr(m, mode) is not None
+        ]
+        stdout.print(metrics_table(f"{title} on the validation range {validation}", rows))
+    for m in result.models:
+        if m.error:
+            stdout.print(f"[red]{m.structure} ({m.method}) failed:[/] {m.error}", soft_wrap=True)
+        elif m.one_step_error:
+            stdout.print(
+                f"{m.structure}: no one-step prediction: {m.one_step_error}",
+                soft_wrap=True,
+                markup=False,
+            )
 
 
 ModelPath = Annotated[Path, typer.Argument(help="Model file written by 'blockid fit'.")]

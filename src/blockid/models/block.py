@@ -123,6 +123,12 @@ class BlockModel(Model):
         self.sampling_time = sampling_time
         self.input_offset = float(input_offset)
         self.output_offset = float(output_offset)
+        for name, value in (("na", na), ("nb", nb), ("nk", nk)):
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
+                raise OrderError(
+                    f"{name}={value!r}: a block-oriented (single-input single-output) model "
+                    "takes one whole number >= 0 per order"
+                )
         if nb < 1:
             raise OrderError(f"nb={nb}: a block-oriented model needs nb >= 1")
         if b is None:

@@ -1,0 +1,148 @@
+"""Figures of identification results: measured vs model output, identified blocks
+against the truth, and parameter trajectories of the recursive methods.
+
+Every title states whether a curve is a free-run simulation or a one-step prediction
+and on which data. matplotlib is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["plot_model_output", "plot_blocks", "plot_parameter_history", "fit_figures"]
+
+_MODE_TITLE = {"simulation": "free-run simulation", "one-step": "one-step prediction"}
+
+
+def _figure(n_rows: int, width: float = 9.0, height: float = 2.6) -> tuple[Any, Any]:
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(n_rows, 1, figsize=(width, height * n_rows), squeeze=False)
+    return fig, axes[:, 0]
+
+
+def plot_model_output(
+    output: Any, *, experiment: int = 0, data_label: str = "data", max_samples: int = 4000
+) -> Any:
+    """Measured output against the model output of one experiment, one panel per output.
+
+    ``output`` is a :class:`blockid.evaluation.ModelOutput`. Returns the Figure.
+    """
+    exp = output.data.experiments[experiment]
+    y_hat = output.outputs[experiment]
+    n = min(exp.n_samples, max_samples)
+    ts = output.data.sampling_time
+    t = np.arange(n) * (ts or 1.0)
+    fig, axes = _figure(len(output.data.outputs))
+    for j, (ax, name) in enumerate(zip(axes, output.data.outputs, strict=True)):
+        ax.plot(t, exp.y[:n, j], color="0.2", lw=1.0, label="measured")
+        ax.plot(t, y_hat[:n, j], color="C1", lw=1.0, label=_MODE_TITLE[output.mode])
+        fit = output.metrics["fit_percent"][name]
+        rmse = output.metrics["rmse"][name]
+        ax.set_ylabel(name)
+        ax.set_title(
+            f"{_MODE_TITLE[output.mode]} on {data_label}: fit {fit:.1f} %, RMSE {rmse:.4g}",
+            fontsize=9,
+        )
+        ax.legend(fontsize=8, loc="upper right")
+    axes[-1].set_xlabel("time [s]" if ts else "sample")
+    fig.tight_layout()
+    return fig
+
+
+def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> Any:
+    """Identified nonlinear blocks of a block-oriented model, truth dashed if given.
+
+    ``u`` (the input data) sets the input range; the output block is drawn over the
+    range of the linear block's output when ``u`` is simulated.
+    """
+    from blockid.blocks.base import DynamicBlock
+
+    panels = [b for b in ("input_block", "output_block") if getattr(model, b, None) is not None]
+    fig, axes = _figure(max(len(panels), 1), width=5.0, height=3.6)
+    u_rel = None if u is None else np.asarray(u, float).ravel() - model.input_offset
+    for ax, which in zip(axes, panels, strict=False):
+        block = getattr(model, which)
+        ref = getattr(truth, which, None) if truth is not None else None
+        if isinstance(block, DynamicBlock):
+            block.plot(ax=ax, u=u_rel, truth=ref)
+        elif which == "input_block":
+            rng = None if u_rel is None else (float(u_rel.min()), float(u_rel.max()))
+            block.plot(ax=ax, u_range=rng, truth=ref)
+        else:
+            rng = None
+            if u is not None:
+                x = model.linear.simulate(model.internal(u)[:, None])[:, 0]
+                rng = (float(x.min()), float(x.max()))
+            block.plot(ax=ax, u_range=rng, truth=ref)
+        ax.set_title(f"{which.replace('_', ' ')}: {block.kind}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_parameter_history(
+    history: dict[str, Any], truth: dict[str, float] | None = None, max_panels: int = 12
+) -> Any:
+    """Parameter estimates of a recursive method over the samples (as in the papers).
+
+    ``history`` has ``"theta"`` (n_steps, n) and ``"names"`` (n); the true values, if
+    given by name, are drawn as dashed lines.
+    """
+    theta = np.asarray(history["theta"])
+    names = list(history["names"])[:max_panels]
+    cols = 3
+    rows = int(np.ceil(len(names) / cols))
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(rows, cols, figsize=(10, 2.2 * rows), squeeze=False)
+    step = history.get("step", 1)
+    k = np.arange(theta.shape[0]) * step
+    for i, name in enumerate(names):
+        ax = axes[i // cols, i % cols]
+        ax.plot(k, theta[:, i], lw=1.0)
+        if truth and name in truth:
+            ax.axhline(truth[name], color="k", ls="--", lw=0.8)
+        ax.set_title(name, fontsize=9)
+    for j in range(len(names), rows * cols):
+        axes[j // cols, j % cols].axis("off")
+    fig.supxlabel("sample (all passes)")
+    fig.tight_layout()
+    return fig
+
+
+def fit_figures(result: Any, data: Any, folder: str | Path, truth: Any = None) -> list[Path]:
+    """Write the figures of a fit to ``folder`` (created if needed); return their paths.
+
+    ``simulation.png``: free-run simulation on the estimation data; ``blocks.png``:
+    identified nonlinear blocks (block-oriented models); ``parameters.png``: parameter
+    trajectories (recursive methods that recorded them).
+    """
+    import matplotlib.pyplot as plt
+
+    from blockid.evaluation.validate import evaluate
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    fig = plot_model_output(
+        evaluate(result.model, data, "simulation"), data_label="the estimation data"
+    )
+    written.append(_save(fig, folder / "simulation.png"))
+    if (
+        getattr(result.model, "input_block", None) is not None
+        or getattr(result.model, "output_block", None) is not None
+    ):
+        u = np.concatenate([e.u[:, 0] for e in data.experiments])
+        written.append(_save(plot_blocks(result.model, truth, u), folder / "blocks.png"))
+    if result.history.get("theta") is not None:
+        written.append(_save(plot_parameter_history(result.history), folder / "parameters.png"))
+    plt.close("all")
+    return written
+
+
+def _save(fig: Any, path: Path) -> Path:
+    fig.savefig(path, dpi=110)
+    return path

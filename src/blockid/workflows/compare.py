@@ -1,0 +1,115 @@
+"""Identify several structures on the same data and score them on validation data."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from blockid.data.dataset import Dataset
+from blockid.errors import BlockidError, EstimationError
+from blockid.evaluation.validate import ModelOutput, evaluate
+from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, fit_model
+from blockid.fitting.result import FitResult
+
+__all__ = ["ModelScore", "CompareResult", "compare_structures"]
+
+
+@dataclass
+class ModelScore:
+    """One identified structure and its validation scores (or why it failed)."""
+
+    structure: str
+    method: str
+    fit: FitResult | None
+    simulation: ModelOutput | None
+    one_step: ModelOutput | None
+    error: str | None = None
+    one_step_error: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"structure": self.structure, "method": self.method}
+        if self.error:
+            out["error"] = self.error
+            return out
+        out["simulation"] = self.simulation.metrics
+        out["one_step"] = None if self.one_step is None else self.one_step.metrics
+        if self.one_step_error:
+            out["one_step_error"] = self.one_step_error
+        out["parameters"] = getattr(self.fit.model, "parameters", None) or (
+            self.fit.model.to_dict().get("parameters")
+        )
+        out["estimation"] = self.fit.estimation_record()
+        return out
+
+
+@dataclass
+class CompareResult:
+    """Scores of every structure, in the order asked for."""
+
+    models: list[ModelScore] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"models": [m.to_dict() for m in self.models]}
+
+    def ranking(self, output: str, metric: str = "mse") -> list[str]:
+        """Structures sorted by a free-run validation metric (failed ones last)."""
+        ok = [m for m in self.models if m.simulation is not None]
+        key = (
+            (lambda m: -m.simulation.metrics[metric][output])
+            if metric == "fit_percent"
+            else (lambda m: m.simulation.metrics[metric][output])
+        )
+        return [m.structure for m in sorted(ok, key=key)]
+
+
+def compare_structures(
+    estimation: Dataset,
+    validation: Dataset,
+    structures: Sequence[str] = ("arx", "hammerstein", "wiener", "hammerstein-wiener"),
+    *,
+    method: str | None = None,
+    options: dict[str, Any] | None = None,
+) -> CompareResult:
+    """Fit each structure on ``estimation`` and score it on ``validation``.
+
+    ``method`` applies to the structures that offer it (others use their default), so
+    ``method="key-term-rls"`` compares paper B's four models fitted its way. Options
+    (orders ``na, nb, nk, r1, r2`` and method settings) are passed to every structure
+    that uses them. A structure whose estimator fails is kept in the result with its
+    error message rather than dropped.
+    """
+    options = dict(options or {})
+    result = CompareResult()
+    for structure in structures:
+        m = method if method in METHODS.get(structure, ()) else DEFAULT_METHOD.get(structure)
+        opts = _options_for(structure, options)
+        try:
+            fit = fit_model(estimation, structure, method=m, **opts)
+        except EstimationError as exc:
+            result.models.append(ModelScore(structure, m, None, None, None, error=str(exc)))
+            continue
+        sim = evaluate(fit.model, validation, "simulation")
+        one, one_err = None, None
+        try:
+            one = evaluate(fit.model, validation, "one-step")
+        except BlockidError as exc:
+            one_err = str(exc)
+        result.models.append(ModelScore(structure, fit.method, fit, sim, one, None, one_err))
+    return result
+
+
+_BLOCK_ONLY = {"r1", "r2", "refine"}
+
+
+def _options_for(structure: str, options: dict[str, Any]) -> dict[str, Any]:
+    """Drop options that a structure cannot use (``r1`` for ARX, ``r2`` without output block)."""
+    opts = dict(options)
+    if structure == "arx":
+        for k in _BLOCK_ONLY:
+            opts.pop(k, None)
+    if structure in ("hammerstein", "backlash"):
+        opts.pop("r2", None)
+    if structure in ("wiener", "backlash"):
+        opts.pop("r1", None)
+    return opts
