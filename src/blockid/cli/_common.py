@@ -63,7 +63,8 @@ def metrics_table(title: str, rows: list[tuple[str, dict[str, dict[str, float]]]
     """A rich table: one row per (label, output), columns MSE .. fit %."""
     table = Table(title=title, title_justify="left")
     for col in ("model", "output", "MSE", "RMSE", "mean |e|", "max |e|", "fit %"):
-        table.add_column(col, justify="left" if col in ("model", "output") else "right")
+        left = col in ("model", "output")
+        table.add_column(col, justify="left" if left else "right", no_wrap=col == "model")
     for label, metrics in rows:
         for out in metrics["mse"]:
             table.add_row(
