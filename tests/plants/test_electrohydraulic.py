@@ -1,0 +1,454 @@
+"""Tests of the electrohydraulic excavator-arm plant (paper B simulator).
+
+The numba right-hand side and integrator are checked against a plain-Python twin
+written from the equations in ``docs/plants/electrohydraulic.md`` and integrated by
+``scipy.integrate.solve_ivp``; the physics is checked against hand-derived steady states.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import fsolve
+
+from blockid._kernels.electrohydraulic import (
+    electrohydraulic_geometry,
+    electrohydraulic_integrate,
+    electrohydraulic_rhs,
+)
+from blockid.errors import ParameterError
+from blockid.plants.electrohydraulic import (
+    ElectrohydraulicParameters,
+    _trim_experiment,
+    electrohydraulic_equilibrium,
+    electrohydraulic_experiment,
+    electrohydraulic_static_velocity,
+    general_trajectory_current,
+    multisine_current,
+    simulate_electrohydraulic,
+)
+
+P = ElectrohydraulicParameters()
+TS = 0.05
+
+
+# ----------------------------------------------------------------------------------
+# Plain-Python twin of the model, from the documented equations
+# ----------------------------------------------------------------------------------
+
+
+def ref_geometry(h, par=P):
+    """Arm angle by the law of cosines; derivatives by the chain rule."""
+    a, b = par.pin_base_distance, par.pin_rod_distance
+    length = par.retracted_length + h
+    phi = math.acos((a * a + b * b - length * length) / (2 * a * b))
+    dphi = length / (a * b * math.sin(phi))
+    d2phi = 1 / (a * b * math.sin(phi)) - length * math.cos(phi) * dphi / (
+        a * b * math.sin(phi) ** 2
+    )
+    return phi + par.angle_offset, dphi, d2phi
+
+
+def ref_flow(xv, p1, p2, par=P):
+    """Four-way valve flows into chamber 1 and out of chamber 2."""
+    opening = math.copysign(max(abs(xv) - par.spool_overlap, 0.0), xv)
+    k = par.discharge_coefficient * par.area_gradient * math.sqrt(2 / par.oil_density) * opening
+
+    def root(dp):
+        return dp / (dp**2 + par.transition_pressure**2) ** 0.25
+
+    ps, pr = par.supply_pressure, par.return_pressure
+    if xv >= 0:
+        return k * root(ps - p1), k * root(p2 - pr)
+    return k * root(p1 - pr), k * root(ps - p2)
+
+
+def ref_rhs(x, current, par=P):
+    h, v, p1, p2, xv = x
+    theta, dth, d2th = ref_geometry(h, par)
+    mass = par.piston_mass + par.arm_inertia * dth**2
+    dmass = 2 * par.arm_inertia * dth * d2th
+    gravity = par.arm_mass * par.gravity * par.arm_com_distance * math.cos(theta) * dth
+    spring = par.spring_stiffness * (h - par.spring_free_position)
+    stribeck = par.coulomb_friction + (par.static_friction - par.coulomb_friction) * math.exp(
+        -((v / par.stribeck_velocity) ** 2)
+    )
+    friction = stribeck * math.tanh(v / par.friction_smoothing_velocity)
+    force = (
+        par.area_head * p1
+        - par.area_rod * p2
+        - friction
+        - par.viscous_friction * v
+        - gravity
+        - spring
+        - par.external_load
+    )
+    q1, q2 = ref_flow(xv, p1, p2, par)
+    v1 = par.dead_volume_head + par.area_head * h
+    v2 = par.dead_volume_rod + par.area_rod * (par.stroke - h)
+    beta1 = par.bulk_modulus * (1 - math.exp(-p1 / par.air_pressure))
+    beta2 = par.bulk_modulus * (1 - math.exp(-p2 / par.air_pressure))
+    leak = par.internal_leakage * (p1 - p2)
+    dp1 = beta1 / v1 * (q1 - par.area_head * v - leak - par.external_leakage * p1)
+    dp2 = beta2 / v2 * (-q2 + par.area_rod * v + leak - par.external_leakage * p2)
+    if abs(current) <= par.deadband_current:
+        effective = 0.0
+    else:
+        effective = current - math.copysign(par.deadband_current, current)
+    target = float(np.clip(par.spool_gain * effective, -par.spool_max, par.spool_max))
+    dxv = (target - xv) / par.spool_time_constant
+    return np.array([v, (force - 0.5 * dmass * v * v) / mass, dp1, dp2, dxv])
+
+
+def ref_simulate(current, x0, par=P, ts=TS):
+    """solve_ivp (Radau) per sample interval, the delayed current held constant."""
+    delay = int(round(par.input_delay / ts))
+    scale = np.array([1e-6, 1e-6, 10.0, 10.0, 1e-9])
+    states = [np.asarray(x0, float)]
+    x = np.asarray(x0, float)
+    for k in range(len(current) - 1):
+        u = current[k - delay] if k >= delay else 0.0
+        sol = solve_ivp(
+            lambda t, y, u=u: ref_rhs(y, u, par),
+            (k * ts, (k + 1) * ts),
+            x,
+            method="Radau",
+            rtol=1e-9,
+            atol=scale,
+        )
+        x = sol.y[:, -1]
+        states.append(x)
+    return np.array(states)
+
+
+def steady_speed(current, h, par=P):
+    """Steady velocity at position h from the full balance (leakage, regularised roots)."""
+    effective = abs(current) - par.deadband_current
+    xv = math.copysign(min(par.spool_gain * effective, par.spool_max), current)
+    guess = float(electrohydraulic_static_velocity(current, h, par))
+    p_mid = 0.5 * (par.supply_pressure + par.return_pressure)
+
+    def equations(z):
+        v, p1, p2 = z[0], z[1] * 1e6, z[2] * 1e6
+        d = ref_rhs([h, v, p1, p2, xv], current, par)
+        return [d[1] * 1e-2, d[2] * 1e-6, d[3] * 1e-6]
+
+    sol, info, ier, msg = fsolve(equations, [guess, p_mid / 1e6, p_mid / 1e6], full_output=True)
+    assert ier == 1, msg
+    return sol[0]
+
+
+def trimmed(raw, par=P):
+    """Offset and start position so a noise-free run stays inside the stroke."""
+    current, _, run_par = _trim_experiment(raw, par)
+    return current, run_par
+
+
+# ----------------------------------------------------------------------------------
+# Kernel against its twin
+# ----------------------------------------------------------------------------------
+
+
+def test_geometry_matches_law_of_cosines_and_finite_differences():
+    p = P.to_array()
+    for h in np.linspace(0.01, P.stroke - 0.01, 7):
+        theta, dth, d2th = electrohydraulic_geometry(h, p)
+        ref = ref_geometry(h)
+        np.testing.assert_allclose([theta, dth, d2th], ref, rtol=1e-12)
+        eps = 1e-5
+        hp, hm = h + eps, h - eps
+        fd = (electrohydraulic_geometry(hp, p)[0] - electrohydraulic_geometry(hm, p)[0]) / (hp - hm)
+        fd2 = (electrohydraulic_geometry(hp, p)[1] - electrohydraulic_geometry(hm, p)[1]) / (
+            hp - hm
+        )
+        assert fd == pytest.approx(dth, rel=1e-6)
+        assert fd2 == pytest.approx(d2th, rel=1e-4)
+    # Arm roughly horizontal at mid-stroke, about +-50 degrees at the ends.
+    ends = [electrohydraulic_geometry(h, p)[0] for h in (0.0, P.stroke)]
+    assert abs(electrohydraulic_geometry(0.5 * P.stroke, p)[0]) < 0.1
+    assert -1.0 < ends[0] < -0.7 and 0.7 < ends[1] < 1.0
+
+
+def test_rhs_matches_python_reference(rng):
+    p = P.to_array()
+    dx = np.empty(5)
+    for _ in range(200):
+        x = np.array(
+            [
+                rng.uniform(0, P.stroke),
+                rng.uniform(-0.4, 0.4),
+                rng.uniform(0.05e6, 21e6),
+                rng.uniform(0.05e6, 21e6),
+                rng.uniform(-P.spool_max, P.spool_max),
+            ]
+        )
+        current = rng.choice([rng.uniform(-1.2, 1.2), rng.uniform(-0.1, 0.1), 0.0])
+        electrohydraulic_rhs(x, current, p, dx)
+        np.testing.assert_allclose(dx, ref_rhs(x, current), rtol=1e-9, atol=1e-12)
+
+
+def test_kernel_matches_solve_ivp_reference():
+    t = np.arange(80) * TS  # 4 s, the first 0.35 s is the input delay
+    current = 0.5 * np.sin(2 * np.pi * 0.5 * t) + 0.3 * np.sin(2 * np.pi * 1.3 * t + 1.0)
+    x0 = electrohydraulic_equilibrium()
+    fast = electrohydraulic_integrate(x0, P.to_array(), current, TS / 50, 50)
+    slow = ref_simulate(current, x0)
+    assert np.ptp(fast[:, 0]) > 0.05  # the arm really moved
+    assert fast[:, 2:4].min() > 1e5  # no clipping, which the twin does not model
+    for i in range(5):
+        scale = np.ptp(slow[:, i])
+        assert np.abs(fast[:, i] - slow[:, i]).max() < 2e-4 * scale, i
+
+
+def test_input_delay_and_spool_lag():
+    current = np.zeros(60)
+    current[20:] = 0.5  # step at t = 1 s
+    df = simulate_electrohydraulic(current, noise=False)
+    onset = 20 + int(round(P.input_delay / TS))
+    assert np.all(df["xv"].to_numpy()[: onset + 1] == 0.0)
+    assert df["xv"].iloc[onset + 1] > 0.0
+    # First-order lag towards kv (I - Id) with time constant tau_v.
+    target = P.spool_gain * (0.5 - P.deadband_current)
+    k = onset + 2
+    expected = target * (1 - math.exp(-(k - onset) * TS / P.spool_time_constant))
+    assert df["xv"].iloc[k] == pytest.approx(expected, rel=1e-6)
+
+
+# ----------------------------------------------------------------------------------
+# Physics
+# ----------------------------------------------------------------------------------
+
+
+def test_zero_current_holds_the_arm():
+    x0 = electrohydraulic_equilibrium()
+    # (A1 - A2) p_eq balances gravity through the linkage and the spring.
+    theta, dth, _ = ref_geometry(P.initial_position)
+    load = P.arm_mass * P.gravity * P.arm_com_distance * math.cos(theta) * dth
+    load += P.spring_stiffness * (P.initial_position - P.spring_free_position)
+    assert x0[2] == x0[3] == pytest.approx(load / (P.area_head - P.area_rod), rel=1e-12)
+    df = simulate_electrohydraulic(np.zeros(1100), noise=False)
+    assert np.abs(df["h"] - x0[0]).max() < 5e-4  # < 0.5 mm in 55 s (external leakage)
+    assert np.abs(df["velocity"]).max() < 1e-4
+    assert np.abs(df["p1"] / x0[2] - 1).max() < 0.01
+    assert np.all(df["xv"] == 0.0)
+
+
+def test_pressures_settle_to_equilibrium():
+    # Start force-balanced but with p1 != p2: internal leakage equalises them.
+    x0 = electrohydraulic_equilibrium()
+    force = (P.area_head - P.area_rod) * x0[2]
+    p2 = 3e6
+    p1 = (force + P.area_rod * p2) / P.area_head
+    start = np.array([x0[0], 0.0, p1, p2, 0.0])
+    sealed = dataclasses.replace(P, external_leakage=0.0)
+    states = electrohydraulic_integrate(start, sealed.to_array(), np.zeros(8000), TS / 25, 25)
+    h_end = states[-1, 0]
+    assert 0.005 < x0[0] - h_end < 0.05  # the arm sinks while oil crosses the piston
+    expected = electrohydraulic_equilibrium(h_end, sealed)[2]
+    np.testing.assert_allclose(states[-1, 2:4], expected, rtol=0.005)
+    assert abs(states[-1, 1]) < 1e-6
+    # External leakage alone lets the held arm sink at Ce (p1 + p2) / (A1 - A2).
+    # (after the ~70 s leakage transient that sets up the small p1 - p2 it needs).
+    states = electrohydraulic_integrate(x0, P.to_array(), np.zeros(8000), TS / 25, 25)
+    sink = (states[-1, 0] - states[4000, 0]) / (4000 * TS)
+    rate = P.external_leakage * (states[-1, 2] + states[-1, 3]) / (P.area_head - P.area_rod)
+    assert sink == pytest.approx(-rate, rel=0.05)
+    assert abs(x0[0] - states[1100, 0]) < 3e-4  # < 0.3 mm in a 55 s experiment
+
+
+def test_dead_band():
+    total = P.deadband_total
+    assert total == pytest.approx(P.deadband_current + P.spool_overlap / P.spool_gain)
+    ramp = np.concatenate([np.linspace(0, 0.95 * total, 200), np.full(100, 0.95 * total)])
+    for sign in (1.0, -1.0):
+        df = simulate_electrohydraulic(sign * ramp, noise=False)
+        assert np.abs(df["h"] - df["h"].iloc[0]).max() < 2e-4  # no flow inside the band
+        assert np.abs(df["velocity"]).max() < 1e-3
+        # Pilot dead band: the spool does not even move while |I| <= Id.
+        inside = np.abs(ramp) <= P.deadband_current
+        inside_delayed = np.r_[np.ones(7, bool), inside[:-7]]
+        assert np.all(df["xv"].to_numpy()[inside_delayed] == 0.0)
+        above = np.concatenate([np.zeros(20), np.full(80, sign * 1.25 * total)])
+        df = simulate_electrohydraulic(above, noise=False)
+        assert sign * (df["h"].iloc[-1] - df["h"].iloc[0]) > 0.02  # it moves, that way
+
+
+def test_direction_asymmetry_matches_force_and_flow_balance():
+    speeds = {}
+    for current, start in ((0.6, 0.35), (-0.6, 0.85)):
+        par = dataclasses.replace(P, initial_position=start)
+        df = simulate_electrohydraulic(np.full(45, current), params=par, noise=False)
+        h, v = df["h"].iloc[-1], df["hdot"].iloc[-1]
+        assert 0.45 < h < 0.75  # near mid-stroke, still moving
+        assert v == pytest.approx(steady_speed(current, h, par), rel=0.01)
+        speeds[current] = steady_speed(current, 0.6, par)
+    ratio = speeds[0.6] / -speeds[-0.6]
+    # Leakage-free closed form: (v_ext / v_ret)^2 = drive_ext / drive_ret minus friction.
+    p = P.to_array()
+    theta, dth, _ = electrohydraulic_geometry(0.6, p)
+    load = P.arm_mass * P.gravity * P.arm_com_distance * math.cos(theta) * dth
+    a1, a2, ps, pr = P.area_head, P.area_rod, P.supply_pressure, P.return_pressure
+    fric_ext = P.coulomb_friction + P.viscous_friction * speeds[0.6]
+    fric_ret = P.coulomb_friction - P.viscous_friction * speeds[-0.6]
+    closed = math.sqrt(
+        (a1 * ps - a2 * pr - load - fric_ext) / (a2 * ps - a1 * pr + load - fric_ret)
+    )
+    assert ratio == pytest.approx(closed, rel=0.01)
+    assert ratio < 0.95  # gravity makes lowering faster despite A1 > A2
+    # Without the arm's weight the area ratio dominates: extension is faster.
+    light = dataclasses.replace(P, arm_mass=1.0, spring_stiffness=0.0)
+    up = electrohydraulic_static_velocity(0.6, 0.6, light)
+    down = electrohydraulic_static_velocity(-0.6, 0.6, light)
+    assert up / -down == pytest.approx(math.sqrt(a1 / a2), rel=0.03)
+
+
+def test_static_velocity_matches_simulation():
+    for current in (0.3, 0.8, -0.3, -0.8):
+        start = 0.35 if current > 0 else 0.85
+        par = dataclasses.replace(P, initial_position=start)
+        df = simulate_electrohydraulic(np.full(50, current), params=par, noise=False)
+        h, v = df["h"].iloc[-1], df["hdot"].iloc[-1]
+        assert v == pytest.approx(electrohydraulic_static_velocity(current, h, par), rel=0.02)
+
+
+def test_end_stops_are_inelastic():
+    df = simulate_electrohydraulic(np.full(200, 1.0), noise=False)
+    assert df["h"].max() == P.stroke
+    at_stop = df["h"] == P.stroke
+    assert at_stop.sum() > 50
+    assert np.all(df["hdot"][at_stop] == 0.0)
+    assert df["p1"].max() <= 1.1 * P.supply_pressure
+
+
+@pytest.mark.parametrize("generator", [multisine_current, general_trajectory_current])
+def test_step_halving_changes_outputs_below_0p1_percent(generator):
+    current, par = trimmed(generator(seed=3))
+    coarse = simulate_electrohydraulic(current, params=par, noise=False)
+    fine = simulate_electrohydraulic(current, params=par, noise=False, substeps=100)
+    assert 0.0 < coarse["h"].min() and coarse["h"].max() < P.stroke
+    for column in ("velocity", "angle"):
+        change = np.abs(coarse[column] - fine[column]).max() / np.ptp(fine[column])
+        assert change < 1e-3, column
+
+
+def test_noise_free_velocity_is_derivative_of_angle():
+    current, par = trimmed(multisine_current(seed=1))
+    df = simulate_electrohydraulic(current, params=par, noise=False)
+    assert np.array_equal(df["angle"], df["angle_measured"])
+    _, dth, _ = np.vectorize(lambda h: ref_geometry(h, par))(df["h"].to_numpy())
+    true_rate = dth * df["hdot"].to_numpy()
+    error = np.abs(df["velocity"].to_numpy() - true_rate)[1:-1]
+    assert error.max() < 0.05 * np.ptp(true_rate)
+    assert np.sqrt(np.mean(error**2)) < 0.01 * np.ptp(true_rate)
+
+
+def test_measurement_noise_level():
+    current = multisine_current(seed=2)
+    df = simulate_electrohydraulic(current, seed=5)
+    noise = df["angle_measured"] - df["angle"]
+    assert noise.std() == pytest.approx(P.angle_noise_std, rel=0.1)
+    clean = simulate_electrohydraulic(current, noise=False)
+    velocity_noise = (df["velocity"] - clean["velocity"])[1:-1]
+    # Central difference of white noise: sigma / (sqrt(2) Ts).
+    assert velocity_noise.std() == pytest.approx(P.angle_noise_std / (math.sqrt(2) * TS), rel=0.1)
+
+
+def test_seeds_reproduce():
+    current = multisine_current(duration=10.0, seed=4)
+    np.testing.assert_array_equal(current, multisine_current(duration=10.0, seed=4))
+    assert not np.array_equal(current, multisine_current(duration=10.0, seed=5))
+    a = simulate_electrohydraulic(current, seed=7)
+    b = simulate_electrohydraulic(current, seed=7)
+    c = simulate_electrohydraulic(current, seed=8)
+    np.testing.assert_array_equal(a["velocity"], b["velocity"])
+    assert not np.array_equal(a["velocity"], c["velocity"])
+    np.testing.assert_array_equal(a["h"], c["h"])  # noise is only in the measurement
+    np.testing.assert_array_equal(
+        general_trajectory_current(seed=3), general_trajectory_current(seed=3)
+    )
+
+
+def test_multisine_spectrum_and_range():
+    freqs = (0.05, 0.1, 0.2, 0.4, 0.5)
+    u = multisine_current(duration=100.0, frequencies=freqs, amplitude=0.7, offset=0.1, seed=0)
+    assert u.max() - 0.1 == pytest.approx(0.7) or 0.1 - u.min() == pytest.approx(0.7)
+    assert np.abs(u - 0.1).max() == pytest.approx(0.7)
+    assert u.mean() == pytest.approx(0.1, abs=0.01)
+    spectrum = np.abs(np.fft.rfft(u - u.mean()))
+    grid = np.fft.rfftfreq(u.size, TS)
+    peaks = np.sort(grid[np.argsort(spectrum)[-5:]])
+    np.testing.assert_allclose(peaks, freqs, atol=1e-9)
+
+
+def test_experiment_records():
+    data = electrohydraulic_experiment(seed=11, n_repeats=4)
+    est, val = data["estimation"], data["validation"]
+    for frame in (est, val):
+        assert list(frame.columns) == ["t", "current", "velocity"]
+        assert len(frame) == 1100
+        assert frame["t"].iloc[-1] == pytest.approx(54.95)
+        # The command crosses the dead band both ways and stays within +-1 A.
+        assert frame["current"].max() > 2 * P.deadband_total
+        assert frame["current"].min() < -2 * P.deadband_total
+        assert np.abs(frame["current"]).max() <= 1.0
+        par = dataclasses.replace(P, initial_position=frame.attrs["initial_position"])
+        clean = simulate_electrohydraulic(frame["current"].to_numpy(), params=par, noise=False)
+        assert 0.02 < clean["h"].min() and clean["h"].max() < P.stroke - 0.02
+        assert np.ptp(clean["h"]) > 0.3  # large motion: the geometry matters
+        residual = (frame["velocity"] - clean["velocity"])[1:-1]
+        n = 4 if frame is est else 1
+        sigma = P.angle_noise_std / (math.sqrt(2) * TS) / math.sqrt(n)
+        assert residual.std() == pytest.approx(sigma, rel=0.15)
+    again = electrohydraulic_experiment(seed=11, n_repeats=4)
+    np.testing.assert_array_equal(again["estimation"]["velocity"], est["velocity"])
+
+
+def test_run_time():
+    current = multisine_current(seed=0)
+    simulate_electrohydraulic(current)  # compile / load cache
+    start = time.perf_counter()
+    simulate_electrohydraulic(current)
+    assert time.perf_counter() - start < 0.5
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"current": [0.0, np.nan, 0.1]}, "current"),
+        ({"current": np.zeros((3, 2))}, "current"),
+        ({"current": np.zeros(10), "sample_time": 0.0}, "sample_time"),
+        ({"current": np.zeros(10), "substeps": 0}, "substeps"),
+        ({"current": np.zeros(10), "params": {"stroke": 1.0}}, "params"),
+        (
+            {"current": np.zeros(10), "params": ElectrohydraulicParameters(rod_diameter=0.2)},
+            "rod_diameter",
+        ),
+        (
+            {"current": np.zeros(10), "params": ElectrohydraulicParameters(bulk_modulus=-1.0)},
+            "bulk_modulus",
+        ),
+        (
+            {"current": np.zeros(10), "params": ElectrohydraulicParameters(stroke=3.0)},
+            "linkage",
+        ),
+    ],
+)
+def test_bad_input_raises(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        simulate_electrohydraulic(**kwargs)
+
+
+def test_bad_signal_options_raise():
+    with pytest.raises(ParameterError, match="frequencies"):
+        multisine_current(frequencies=(0.05, 12.0))
+    with pytest.raises(ParameterError, match="amplitude"):
+        multisine_current(amplitude=0.0)
+    with pytest.raises(ParameterError, match="duration"):
+        general_trajectory_current(duration=0.01)
+    with pytest.raises(ParameterError, match="n_repeats"):
+        electrohydraulic_experiment(n_repeats=0)
