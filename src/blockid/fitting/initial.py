@@ -1,0 +1,487 @@
+"""Initial estimates of block-oriented models, the starting points of the refinement.
+
+None of these is the final answer: :func:`blockid.fitting.simulation_error.refine`
+minimises the free-run simulation error from here. They only have to be cheap, stable
+and close enough for a Gauss-Newton method to converge.
+
+Hammerstein (static input block linear in its parameters, e.g. the two-segment
+polynomial B1): the over-parameterised linear regression
+
+.. math::
+
+    y(k) = -\\sum_{j=1}^{n_a} a_j\\, y(k-j)
+           + \\sum_{i=0}^{n_b-1} \\sum_{l} c_{il}\\, g_l(u(k - n_k - i)),
+    \\qquad c_{il} = b_i \\theta_l
+
+with ``g`` the block's basis (``regressors``), solved by least squares (QR), then the
+rank-one factorisation ``C ≈ b θᵀ`` by SVD, normalised ``b_0 = 1``. A basis that spans
+the constant function (``1`` of B1, the hat functions of a piecewise-linear block) would
+make the constant column repeat at every lag; the basis is rotated so that the constant
+appears once, and its coefficient ``B(1) θ_0`` gives ``θ_0`` after the factorisation.
+
+Hammerstein-Wiener and Wiener: the linear part is first fitted with the output block
+taken as the identity (``q = [1, 0, ..]``): a Hammerstein estimate as above, or a plain
+ARX fit for Wiener. Then a short alternating scheme improves the output block: fit
+``q`` by least squares from the simulated ``x̂`` to ``y``, move the gain ``q_1`` into the
+linear part (``q_1 = 1`` again), invert the new output block on ``y`` where it is
+monotone, ``x̃ = N_2^{-1}(y)``, and refit the linear part on ``x̃``. Every candidate is
+scored by its free-run simulation error and the best is returned.
+
+Static blocks that are not linear in their parameters, and the backlash (A3): a small
+grid over the shape with unit slopes (backlash ``c_L = c_R = c``; dead zone
+``[-d, d]``; saturation ``[-L, L]``, all centred on ``u = 0``), each with the linear block
+fitted by ARX least squares on ``w = N(u)``; the slope then is ``b_0`` of that fit (so
+``b_0 = 1`` afterwards) and the grid point with the smallest free-run simulation error
+wins, refined once on a finer grid around it. The backlash simulator is compiled, so
+the grid costs a few milliseconds.
+
+All estimates use the signals as measured (no operating-point offsets): the constant
+terms of the input block carry the operating point. A linear block that comes out
+unstable has its unstable poles reflected into the unit circle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from blockid.blocks import (
+    Backlash,
+    DeadZone,
+    Polynomial,
+    Saturation,
+    TwoSegmentPolynomial,
+)
+from blockid.blocks.base import Block, StaticBlock
+from blockid.data.dataset import Dataset
+from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
+from blockid.estimators import BatchLeastSquares
+from blockid.fitting.checks import simulation_mse
+from blockid.models.block import (
+    BLOCK_STRUCTURES,
+    BacklashModel,
+    BlockModel,
+    Hammerstein,
+    HammersteinWiener,
+)
+
+__all__ = ["initial_estimate", "resolve_structure", "scaled_block"]
+
+#: Unit-slope shapes tried by the grid search, as fractions of the input scale.
+_BACKLASH_GRID = (0.0, 0.0025, 0.005, 0.01, 0.02, 0.035, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3)
+_DEAD_ZONE_GRID = (0.0, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6)
+_SATURATION_GRID = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
+
+#: Rounds of the alternating scheme for models with an output block.
+_ROUNDS = 3
+
+
+def resolve_structure(structure: str | type[BlockModel]) -> type[BlockModel]:
+    """The model class of a structure name (``"hammerstein-wiener"``) or class."""
+    if isinstance(structure, type) and issubclass(structure, BlockModel):
+        if structure.structure not in BLOCK_STRUCTURES:
+            raise ParameterError(f"{structure.__name__} is not a block-oriented structure")
+        return structure
+    if structure not in BLOCK_STRUCTURES:
+        known = ", ".join(BLOCK_STRUCTURES)
+        raise ParameterError(
+            f"structure={structure!r} is not a block-oriented structure; choose one of {known}"
+        )
+    return BLOCK_STRUCTURES[structure]
+
+
+def scaled_block(block: Block, gain: float) -> Block:
+    """The block followed by a positive ``gain``: ``gain * N(u)`` as a block of its kind.
+
+    Used to move a gain from the linear block into the input block (normalisation
+    ``b_0 = 1``).
+    """
+    if block.linear_in_parameters:
+        return block.with_vector(gain * block.to_vector())
+    if gain <= 0:
+        raise EstimationError(
+            f"cannot absorb the gain {gain:.4g} into a {block.kind} block, whose slopes must "
+            "be positive: the plant's gain from u has the opposite sign. Negate the input "
+            "(or the output) and fit again"
+        )
+    if isinstance(block, Backlash):
+        return Backlash(gain * block.m_left, block.c_left, gain * block.m_right, block.c_right)
+    if isinstance(block, DeadZone):
+        return DeadZone(block.lower, block.upper, gain * block.slope_left, gain * block.slope_right)
+    if isinstance(block, Saturation):
+        return Saturation(gain * block.lower, gain * block.upper, gain * block.slope)
+    raise ParameterError(
+        f"no initial estimate for a {block.kind} input block; pass a starting model "
+        "(initial=...) to the simulation-error fit"
+    )
+
+
+# ----------------------------------------------------------------------------- helpers
+def _cascade_class(block: Block) -> type[BlockModel]:
+    """The structure without output block that has ``block`` as input block."""
+    return BacklashModel if isinstance(block, Backlash) else Hammerstein
+
+
+def _build(
+    like: BlockModel,
+    input_block: Block | None,
+    output_block: Polynomial | None,
+    a: np.ndarray | None,
+    b: np.ndarray | None,
+    cls: type[BlockModel] | None = None,
+) -> BlockModel:
+    """A model with the names, orders and sampling time of ``like`` (class ``cls``)."""
+    cls = cls or type(like)
+    kwargs: dict[str, Any] = dict(
+        na=like.na, nb=like.nb, nk=like.nk, a=a, b=b, sampling_time=like.sampling_time
+    )
+    if cls.requires_input_block:
+        kwargs["input_block"] = input_block
+    if cls.requires_output_block:
+        kwargs["output_block"] = output_block
+    return cls(like.inputs[0], like.outputs[0], **kwargs)
+
+
+def _signals(data: Dataset) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    return [e.u[:, 0] for e in data.experiments], [e.y[:, 0] for e in data.experiments]
+
+
+def _lagged(sig: np.ndarray, lag: int, n0: int) -> np.ndarray:
+    """``sig(t - lag)`` for ``t = n0 .. N-1``."""
+    return sig[n0 - lag : sig.shape[0] - lag]
+
+
+def _least_squares(Phi: np.ndarray, target: np.ndarray, what: str) -> np.ndarray:
+    """QR least squares on RMS-scaled columns (powers of ``u`` differ wildly in scale)."""
+    scale = np.sqrt(np.mean(Phi**2, axis=0))
+    scale[scale == 0] = 1.0
+    try:
+        theta = BatchLeastSquares().fit(Phi / scale, target).coef_
+    except EstimationError as exc:
+        raise EstimationError(f"initial estimate ({what}): {exc}") from None
+    return theta / scale
+
+
+def _stabilise(a: np.ndarray) -> np.ndarray:
+    """Reflect poles on or outside the unit circle to ``0.99 / conj(p)``-ish inside."""
+    if a.size == 0:
+        return a
+    poles = np.roots(np.concatenate(([1.0], a)))
+    mag = np.abs(poles)
+    if np.all(mag < 1.0):
+        return a
+    fixed = np.where(mag < 1.0, poles, 0.99 * poles / np.maximum(mag, 1e-300) ** 2)
+    fixed = np.where(np.abs(fixed) >= 0.99, 0.99 * fixed / np.abs(fixed), fixed)
+    return np.real(np.poly(fixed))[1:]
+
+
+def _max_lag(na: int, nb: int, nk: int) -> int:
+    return max(na, nk + nb - 1, 1)
+
+
+def _constant_rotation(G: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Basis change ``T`` with ``(G T)[:, 0] == 1`` when the constant is in span(G).
+
+    Returns ``(T, True)``, ``T = [v, Q]`` with ``G v = 1`` and ``Q`` an orthonormal
+    complement of ``v``; or ``(I, False)`` when the basis does not span constants.
+    """
+    n = G.shape[1]
+    ones = np.ones(G.shape[0])
+    v, *_ = np.linalg.lstsq(G, ones, rcond=None)
+    if np.linalg.norm(G @ v - ones) > 1e-8 * np.sqrt(G.shape[0]):
+        return np.eye(n), False
+    Q, _ = np.linalg.qr(v[:, None], mode="complete")
+    return np.column_stack((v, Q[:, 1:])), True
+
+
+def _arx_fit(
+    w: Sequence[np.ndarray], z: Sequence[np.ndarray], na: int, nb: int, nk: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares ARX from ``w`` to ``z`` (``b_0`` free); returns stable ``a`` and ``b``."""
+    n0 = _max_lag(na, nb, nk)
+    Phi = np.vstack(
+        [
+            np.column_stack(
+                [-_lagged(zi, j, n0) for j in range(1, na + 1)]
+                + [_lagged(wi, nk + i, n0) for i in range(nb)]
+            )
+            for wi, zi in zip(w, z, strict=True)
+        ]
+    )
+    target = np.concatenate([zi[n0:] for zi in z])
+    theta = _least_squares(Phi, target, "linear block")
+    return _stabilise(theta[:na]), theta[na:]
+
+
+def _hammerstein_ls(
+    u: Sequence[np.ndarray],
+    z: Sequence[np.ndarray],
+    block: StaticBlock,
+    na: int,
+    nb: int,
+    nk: int,
+) -> tuple[StaticBlock, np.ndarray, np.ndarray]:
+    """Over-parameterised regression and rank-one factorisation (module docstring)."""
+    n0 = _max_lag(na, nb, nk)
+    G = [np.asarray(block.regressors(ui)) for ui in u]
+    T, has_constant = _constant_rotation(np.vstack(G))
+    Gt = [g @ T for g in G]
+    k0 = 1 if has_constant else 0  # columns of Gt that vary
+    rows = []
+    for gi, zi in zip(Gt, z, strict=True):
+        cols = [-_lagged(zi, j, n0) for j in range(1, na + 1)]
+        if has_constant:
+            cols.append(np.ones(zi.shape[0] - n0))
+        for i in range(nb):
+            cols.extend(_lagged(gi[:, l], nk + i, n0) for l in range(k0, gi.shape[1]))
+        rows.append(np.column_stack(cols))
+    target = np.concatenate([zi[n0:] for zi in z])
+    theta = _least_squares(np.vstack(rows), target, f"{block.kind} Hammerstein regression")
+    a = _stabilise(theta[:na])
+    C = theta[na + k0 :].reshape(nb, -1)  # C[i, l] = b_i theta_l  (rank one)
+    U, s, Vt = np.linalg.svd(C, full_matrices=False)
+    b = U[:, 0] * s[0]
+    if abs(b[0]) <= 1e-8 * np.linalg.norm(b):
+        raise EstimationError(
+            "initial estimate: b_0 came out as zero, so the normalisation b_0 = 1 is "
+            "impossible; the input delay nk is probably too small (raise nk)"
+        )
+    f = Vt[0] * b[0]
+    b = b / b[0]
+    if has_constant:
+        gain = float(np.sum(b))
+        phi0 = theta[na] / gain if abs(gain) > 1e-12 else 0.0
+        vector = T[:, 0] * phi0 + T[:, 1:] @ f
+    else:
+        vector = T @ f
+    return block.with_vector(vector), a, b
+
+
+def _grid_shapes(
+    block: Block, u: Sequence[np.ndarray]
+) -> tuple[Callable[[float], Block], list[float]]:
+    """Unit-slope shape of a block kind, and the grid values it takes."""
+    u_all = np.concatenate(u)
+    if isinstance(block, Backlash):
+        scale = float(np.ptp(u_all))
+        return lambda c: Backlash(1.0, c, 1.0, c), [scale * g for g in _BACKLASH_GRID]
+    if isinstance(block, DeadZone):
+        scale = float(np.max(np.abs(u_all)))
+        return lambda d: DeadZone(-d, d), [scale * g for g in _DEAD_ZONE_GRID]
+    if isinstance(block, Saturation):
+        scale = float(np.max(np.abs(u_all))) or 1.0
+        return lambda L: Saturation(-L, L), [scale * g for g in _SATURATION_GRID]
+    raise ParameterError(
+        f"no initial estimate for a {block.kind} input block; pass a starting model "
+        "(initial=...) to the simulation-error fit"
+    )
+
+
+def _grid_search(
+    u: Sequence[np.ndarray],
+    z: Sequence[np.ndarray],
+    template: BlockModel,
+) -> tuple[Block, np.ndarray, np.ndarray]:
+    """Profile grid search over a unit-slope shape; linear block by ARX on ``w = N(u)``."""
+    shape, grid = _grid_shapes(template.input_block, u)
+    n0 = template.max_lag
+
+    def score(value: float) -> tuple[float, Any]:
+        block = shape(value)
+        probe = _build(template, block, None, None, None, cls=_cascade_class(block))
+        w = [probe.internal(ui) for ui in u]
+        a, b = _arx_fit(w, z, template.na, template.nb, template.nk)
+        if not b[0] > 1e-12 * max(np.max(np.abs(b)), 1e-300):
+            return np.inf, None
+        candidate = _build(probe, scaled_block(block, b[0]), None, a, b / b[0])
+        err = 0.0
+        for ui, zi in zip(u, z, strict=True):
+            with np.errstate(all="ignore"):
+                sim = candidate.simulate(ui, zi[:n0])[n0:, 0]
+            err += float(np.sum((zi[n0:] - sim) ** 2))
+        return (err if np.isfinite(err) else np.inf), candidate
+
+    scores = [score(v) for v in grid]
+    k = int(np.argmin([s for s, _ in scores]))
+    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+    fine = [score(v) for v in np.linspace(lo, hi, 9)]
+    best_err, best = min(scores + fine, key=lambda s: s[0])
+    if best is None:
+        raise EstimationError(
+            f"initial estimate: no {template.input_block.kind} shape gave a positive gain "
+            "b_0; the block's slopes must be positive, so the plant's gain from u has the "
+            "opposite sign. Negate the input (or the output) and fit again"
+        )
+    return best.input_block, best.a, best.b
+
+
+def _input_and_linear(
+    u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
+) -> tuple[Block | None, np.ndarray, np.ndarray]:
+    """Input block and linear block fitted to the target ``z`` (output block ignored)."""
+    na, nb, nk = template.na, template.nb, template.nk
+    block = template.input_block
+    if block is None:
+        a, b = _arx_fit(u, z, na, nb, nk)
+        return None, a, b
+    if block.linear_in_parameters:
+        return _hammerstein_ls(u, z, block, na, nb, nk)
+    return _grid_search(u, z, template)
+
+
+def _output_polynomial(x: Sequence[np.ndarray], y: Sequence[np.ndarray], r2: int, n0: int):
+    """Least-squares ``q`` of ``y = sum_m q_m x^m`` (free ``q_1``)."""
+    Phi = np.vstack([np.vander(xi[n0:], r2 + 1, increasing=True)[:, 1:] for xi in x])
+    target = np.concatenate([yi[n0:] for yi in y])
+    return _least_squares(Phi, target, "output polynomial")
+
+
+def _score(model: BlockModel, data: Dataset) -> float:
+    try:
+        with np.errstate(all="ignore"):
+            return simulation_mse(model, data) if model.is_stable() else np.inf
+    except BlockidError:
+        return np.inf
+
+
+def _with_output_block(data: Dataset, template: BlockModel, r2: int) -> BlockModel:
+    """Alternating scheme for Wiener and Hammerstein-Wiener (module docstring)."""
+    u, y = _signals(data)
+    n0 = template.max_lag
+    identity = Polynomial([1.0] + [0.0] * (r2 - 1), constant=False)
+    candidates: list[BlockModel] = []
+    z = y
+    for _ in range(_ROUNDS):
+        block, a, b = _input_and_linear(u, z, template)
+        linear = _build(template, block, identity, a, b)
+        candidates.append(linear)
+        if r2 == 1:
+            break
+        x = [linear.simulate(ui)[:, 0] for ui in u]  # y = x with the identity block
+        q = _output_polynomial(x, y, r2, n0)
+        if not q[0] > 0:
+            break
+        g = float(q[0])  # x' = g x keeps q_1 = 1: q'_m = q_m / g^m, input side times g
+        q = q / g ** np.arange(1, r2 + 1)
+        if block is None:
+            b = g * b
+        else:
+            block = scaled_block(block, g)
+        model = _build(template, block, Polynomial(q, constant=False), a, b)
+        candidates.append(model)
+        x_all = g * np.concatenate(x)
+        lo, hi = float(np.min(x_all)), float(np.max(x_all))
+        margin = 0.25 * (hi - lo) + 1e-12
+        try:
+            z = [
+                model.output_block.inverse(yi, u_range=(lo - margin, hi + margin), clip=True)
+                for yi in y
+            ]
+        except BlockidError:
+            break
+    scores = [_score(m, data) for m in candidates]
+    return candidates[int(np.argmin(scores))]
+
+
+# ----------------------------------------------------------------------------- public
+def initial_estimate(
+    data: Dataset,
+    structure: str | type[BlockModel],
+    *,
+    na: int,
+    nb: int,
+    nk: int,
+    r1: int = 3,
+    r2: int = 3,
+    input_block: Block | None = None,
+) -> BlockModel:
+    """A cheap, stable starting model of a block-oriented structure (module docstring).
+
+    Parameters
+    ----------
+    data : Dataset
+        Estimation data with one input and one output. For the two-segment input block
+        (B1) the input must take both signs, or its ``p`` parameters are not
+        identifiable.
+    structure : str or type
+        ``"hammerstein"``, ``"wiener"``, ``"hammerstein-wiener"`` or ``"backlash"`` (or
+        the model class).
+    na, nb, nk : int
+        Orders of the linear block (MATLAB convention).
+    r1 : int, default 3
+        Order of the default two-segment polynomial input block (B1).
+    r2 : int, default 3
+        Degree of the output polynomial (B3), ``y = x + q_2 x^2 + .. + q_r2 x^r2``.
+    input_block : Block, optional
+        Template of the input block: its kind and form (order, breakpoints) are used,
+        its parameter values are not. Default: ``TwoSegmentPolynomial`` of order ``r1``
+        (a ``Backlash`` for the backlash structure).
+
+    Returns
+    -------
+    BlockModel
+        A model of the structure with a stable linear block, ``b_0 = 1`` with an input
+        block and ``q_1 = 1`` with an output block.
+
+    Raises
+    ------
+    EstimationError
+        If the data do not determine the parameters (e.g. rank-deficient regression).
+    OrderError, ParameterError
+        If the orders, the data's signals or the options are invalid.
+    """
+    cls = resolve_structure(structure)
+    template = _template(cls, data, na, nb, nk, r1, r2, input_block)
+    n_par = template.free_parameters().size
+    data.check_orders(template.max_lag, n_par, what=f"{cls.structure} na={na}, nb={nb}, nk={nk}")
+    if template.output_block is not None:
+        model = _with_output_block(data, template, template.output_block.degree)
+    else:
+        u, y = _signals(data)
+        block, a, b = _input_and_linear(u, y, template)
+        model = _build(template, block, None, a, b)
+    return model
+
+
+def _template(
+    cls: type[BlockModel],
+    data: Dataset,
+    na: int,
+    nb: int,
+    nk: int,
+    r1: int,
+    r2: int,
+    input_block: Block | None,
+) -> BlockModel:
+    """A model of the right structure and orders with placeholder parameters."""
+    for name, value, low in (("na", na, 0), ("nb", nb, 1), ("nk", nk, 0), ("r1", r1, 1)):
+        if not isinstance(value, int | np.integer) or value < low:
+            raise OrderError(f"{name} must be a whole number >= {low}, got {value!r}")
+    if not isinstance(r2, int | np.integer) or r2 < 1:
+        raise OrderError(f"r2 must be a whole number >= 1, got {r2!r}")
+    kwargs: dict[str, Any] = dict(na=na, nb=nb, nk=nk, sampling_time=data.sampling_time)
+    if cls.requires_input_block:
+        if input_block is None:
+            if cls is BacklashModel:
+                input_block = Backlash(1.0, 0.0, 1.0, 0.0)
+            else:
+                input_block = TwoSegmentPolynomial(np.zeros(r1 + 1), np.zeros(r1 + 1))
+        if not isinstance(input_block, Block):
+            raise ParameterError(
+                f"input_block must be a block (e.g. TwoSegmentPolynomial), got {input_block!r}"
+            )
+        kwargs["input_block"] = input_block
+    elif input_block is not None:
+        raise ParameterError(f"a {cls.structure} model has no input block; drop input_block")
+    if cls.requires_output_block:
+        kwargs["output_block"] = Polynomial([1.0] + [0.0] * (int(r2) - 1), constant=False)
+    if cls in (Hammerstein, HammersteinWiener) and not isinstance(
+        kwargs["input_block"], StaticBlock
+    ):
+        raise ParameterError(
+            f"a {cls.structure} model needs a static input block, got {input_block.kind}; "
+            "use the backlash structure for a backlash"
+        )
+    return cls(data.inputs, data.outputs, **kwargs)
