@@ -89,9 +89,13 @@ class ElectrohydraulicParameters:
     spool_time_constant : float
         ``tau_v`` [s] of the first-order spool response.
     deadband_current : float
-        ``Id`` [A]: no spool opening while ``|I| <= Id`` (overlap of the spool lands).
+        ``Id`` [A]: dead band of the pilot stage, the spool does not move while
+        ``|I| <= Id`` (paper B, Fig. 2a).
     spool_max : float
         Spool saturation [m].
+    spool_overlap : float
+        Overlap of the main-spool lands [m]: no flow while ``|xv|`` is below it (paper B,
+        Fig. 2b). The dead band seen at the cylinder is :attr:`deadband_total`.
     input_delay : float
         Pure delay ``tau_d`` [s] between the commanded current and the spool
         (controller, bus and pilot stage), rounded to whole integration steps.
