@@ -5,23 +5,24 @@ current dead band, lifts the arm of a mid-size (about 13 t class) hydraulic exca
 about its pivot. The measured output is the arm's angular velocity, obtained as in
 paper B: the arm angle from an inclinometer sampled at 20 Hz, differentiated
 numerically. The equations, the parameter values and their justification are in
-``docs/plants/electrohydraulic.md``.
+``docs/plants/electrohydraulic.md``. State ``x = [h, hdot, p1, p2, xv]`` (SPEC.md, Paper B):
 
 .. math::
 
     \\dot h &= v, \\qquad
     M(h)\\dot v + \\tfrac12 M'(h) v^2 = A_1 p_1 - A_2 p_2 - F_f(v) - F_c(v) - F_s(h) - F_l, \\\\
-    \\dot p_1 &= \\frac{\\beta_e}{V_{01} + A_1 h}\\bigl(Q_1 - A_1 v - C_i(p_1 - p_2)
+    \\dot p_1 &= \\frac{\\beta(p_1)}{V_{01} + A_1 h}\\bigl(Q_1 - A_1 v - C_i(p_1 - p_2)
         - C_e p_1\\bigr), \\\\
-    \\dot p_2 &= \\frac{\\beta_e}{V_{02} + A_2 (L - h)}\\bigl(-Q_2 + A_2 v + C_i(p_1 - p_2)
-        - C_e p_2\\bigr), \\\\
+    \\dot p_2 &= \\frac{\\beta(p_2)}{V_{02} + A_2 (L - h)}\\bigl(-Q_2 + A_2 v
+        + C_i(p_1 - p_2) - C_e p_2\\bigr), \\\\
     \\tau_v \\dot x_v &= \\mathrm{sat}\\bigl(k_v\\,\\mathrm{dz}(I(t - \\tau_d))\\bigr) - x_v,
 
-with the four-way valve flows :math:`Q_1 = C_d W x_v \\sqrt{2/\\rho}\\,s(p_s - p_1)`,
-:math:`Q_2 = C_d W x_v \\sqrt{2/\\rho}\\,s(p_2 - p_r)` for :math:`x_v \\ge 0` and
-:math:`Q_1 = C_d W x_v \\sqrt{2/\\rho}\\,s(p_1 - p_r)`,
-:math:`Q_2 = C_d W x_v \\sqrt{2/\\rho}\\,s(p_s - p_2)` for :math:`x_v < 0`, where
-:math:`s(\\Delta p) = \\Delta p / (\\Delta p^2 + p_{tr}^2)^{1/4}` is the signed square root
+with ``M(h) = m_p + J theta'(h)^2`` (arm inertia through the linkage),
+``beta(p) = beta_e (1 - exp(-p / p_a))`` (air release near zero pressure) and the
+four-way valve flows, ``x_o = sgn(xv) max(|xv| - overlap, 0)`` the opening beyond the
+land overlap and ``k = Cd W x_o sqrt(2 / rho)``: ``Q1 = k s(ps - p1)``,
+``Q2 = k s(p2 - pr)`` for ``xv >= 0``; ``Q1 = k s(p1 - pr)``, ``Q2 = k s(ps - p2)`` for
+``xv < 0``, where ``s(dp) = dp / (dp^2 + p_tr^2)^(1/4)`` is the signed square root,
 regularised (laminar) near zero.
 """
 
