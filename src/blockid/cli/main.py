@@ -485,6 +485,105 @@ def demo(
     stdout.print(f"data, models and figure written to {result['output_dir']}/")
 
 
+reproduce_app = typer.Typer(
+    help="Reproduce the seed papers' experiments on blockid's simulated plants.",
+    no_args_is_help=True,
+)
+app.add_typer(reproduce_app, name="reproduce")
+
+FiguresDir = Annotated[Path, typer.Option("--figures", help="Folder for the PNG figures.")]
+Seed = Annotated[int, typer.Option(help="Random seed: the same seed gives the same run.")]
+
+
+@reproduce_app.command("windtunnel")
+@cli_errors
+def reproduce_windtunnel_cmd(
+    seed: Seed = 0,
+    figures: FiguresDir = Path("reproduce-windtunnel"),
+    json_out: Json = False,
+) -> None:
+    """Paper A: block-oriented network vs conventional linear model (Table 2)."""
+    from blockid.workflows.reproduce_windtunnel import PAPER_TABLE, reproduce_windtunnel
+
+    result = reproduce_windtunnel(seed=seed, figures_dir=figures)
+    if json_out:
+        print_json(result.to_dict())
+        return
+    from rich.table import Table
+
+    table = Table(
+        title="Paper A, Table 2 form: free-run simulation from u1, u2 on the validation record",
+        title_justify="left",
+    )
+    for col in ("condition", "model", "estimator", "RMSE P0", "RMSE Ma", "max|e| P0", "max|e| Ma"):
+        table.add_column(col, justify="right" if "|" in col or "RMSE" in col else "left")
+    for row in result.table:
+        if "error" in row:
+            table.add_row(
+                row["condition"], row["model"], row["estimator"], "failed", "see below", "", ""
+            )
+            continue
+        table.add_row(
+            row["condition"],
+            row["model"],
+            row["estimator"],
+            f"{row['rmse']['y1']:.4f}",
+            f"{row['rmse']['y2']:.5f}",
+            f"{row['max_abs_error']['y1']:.4f}",
+            f"{row['max_abs_error']['y2']:.5f}",
+        )
+    for row in PAPER_TABLE:
+        table.add_row(
+            row["condition"],
+            row["model"],
+            "paper A (measured data)",
+            f"{row['rmse']['y1']:.4f}",
+            f"{row['rmse']['y2']:.5f}",
+            f"{row['max_abs_error']['y1']:.4f}",
+            f"{row['max_abs_error']['y2']:.5f}",
+        )
+    stdout.print(table)
+    for row in result.table:
+        if "error" in row:
+            stdout.print(
+                f"{row['condition']} {row['estimator']}: {row['error']}",
+                markup=False,
+                soft_wrap=True,
+            )
+    params = Table(
+        title="identified actuator parameters (truth of the simulator)", title_justify="left"
+    )
+    for col in (
+        "condition",
+        "estimator",
+        "a1 S1",
+        "b0 S1",
+        "m_left",
+        "c_left",
+        "m_right",
+        "c_right",
+        "a1 S2",
+        "a2 S2",
+    ):
+        params.add_column(col)
+    for condition, by_est in result.parameters.items():
+        tr = result.truth[condition]
+        rows = [("truth", tr)] + list(by_est.items())
+        for est, p in rows:
+            s1, s2 = p["S1"], p["S2"]
+            params.add_row(
+                condition,
+                est,
+                f"{s1['a'][0]:.4f}",
+                f"{s1['b'][0]:.4f}",
+                *(f"{s2[k]:.4f}" for k in ("m_left", "c_left", "m_right", "c_right")),
+                f"{s2['a'][0]:.4f}",
+                f"{s2['a'][1]:.4f}",
+            )
+    stdout.print(params)
+    stdout.print(f"figures written to {figures}/")
+
+
 def main() -> None:
     """Console-script entry point."""
     app()
