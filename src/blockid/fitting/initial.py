@@ -28,15 +28,27 @@ monotone, ``x̃ = N_2^{-1}(y)``, and refit the linear part on ``x̃``. Every can
 scored by its free-run simulation error and the best is returned.
 
 Static blocks that are not linear in their parameters, and the backlash (A3): a small
-grid over the shape with unit slopes (backlash ``c_L = c_R = c``; dead zone
-``[-d, d]``; saturation ``[-L, L]``, all centred on ``u = 0``), each with the linear block
-fitted by ARX least squares on ``w = N(u)``; the slope then is ``b_0`` of that fit (so
-``b_0 = 1`` afterwards) and the grid point with the smallest free-run simulation error
-wins, refined once on a finer grid around it. The backlash simulator is compiled, so
-the grid costs a few milliseconds.
+grid over the block's shape, every grid point completed by linear least squares and
+scored by its free-run simulation error; the best one wins.
+
+* backlash: equal slopes and ``c_L = c_R = c`` **(choice)**, ``c`` on a grid
+  of fractions of the input's range, refined once on a finer grid around the best;
+  for each ``c`` the unit-slope backlash gives ``w`` and an ARX fit from ``w`` gives the
+  linear block, whose ``b_0`` becomes the slope (so ``b_0 = 1`` afterwards). The
+  backlash simulator is compiled, so the grid costs a few milliseconds;
+* dead zone: edges ``[-f_1 U, f_2 U]`` (``U = max |u|``) on a 7 x 7 grid; for fixed edges
+  the dead zone is linear in its two slopes, so both slopes and the linear block come
+  from the rank-one regression above;
+* saturation: knees at ``u = -f_1 U`` and ``f_2 U`` on a 6 x 6 grid, slope from ``b_0`` of
+  the ARX fit as for the backlash.
+
+The grids contain ``u = 0`` in the dead band and between the knees; the refinement
+moves the edges from there.
 
 All estimates use the signals as measured (no operating-point offsets): the constant
-terms of the input block carry the operating point. A linear block that comes out
+terms of the input block carry the operating point. A Wiener model has no constant term
+anywhere (B3 has none), so it cannot represent an output that does not vanish with
+the input; remove such an operating point from the data first. A linear block that comes out
 unstable has its unstable poles reflected into the unit circle.
 """
 
@@ -71,8 +83,8 @@ __all__ = ["initial_estimate", "resolve_structure", "scaled_block"]
 
 #: Unit-slope shapes tried by the grid search, as fractions of the input scale.
 _BACKLASH_GRID = (0.0, 0.0025, 0.005, 0.01, 0.02, 0.035, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3)
-_DEAD_ZONE_GRID = (0.0, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6)
-_SATURATION_GRID = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
+_DEAD_ZONE_GRID = (0.0, 0.05, 0.1, 0.2, 0.3, 0.45, 0.6)
+_SATURATION_GRID = (0.2, 0.35, 0.5, 0.65, 0.8, 1.0)
 
 #: Rounds of the alternating scheme for models with an output block.
 _ROUNDS = 3
@@ -165,7 +177,8 @@ def _least_squares(Phi: np.ndarray, target: np.ndarray, what: str) -> np.ndarray
 
 
 def _stabilise(a: np.ndarray) -> np.ndarray:
-    """Reflect poles on or outside the unit circle to ``0.99 / conj(p)``-ish inside."""
+    """Move poles on or outside the unit circle inside: ``p -> 0.99 / conj(p)``, and at
+    most radius 0.99 (a start for the refinement, which needs a stable model)."""
     if a.size == 0:
         return a
     poles = np.roots(np.concatenate(([1.0], a)))
@@ -215,17 +228,22 @@ def _arx_fit(
     return _stabilise(theta[:na]), theta[na:]
 
 
-def _hammerstein_ls(
+def _rank_one_fit(
     u: Sequence[np.ndarray],
     z: Sequence[np.ndarray],
-    block: StaticBlock,
+    basis: Callable[[np.ndarray], np.ndarray],
     na: int,
     nb: int,
     nk: int,
-) -> tuple[StaticBlock, np.ndarray, np.ndarray]:
-    """Over-parameterised regression and rank-one factorisation (module docstring)."""
+    what: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Over-parameterised regression and rank-one factorisation (module docstring).
+
+    ``basis(u)`` gives the regressors ``g_l(u)``, shape (N, n); returns the block's
+    coefficient vector, a stable ``a`` and ``b`` with ``b_0 = 1``.
+    """
     n0 = _max_lag(na, nb, nk)
-    G = [np.asarray(block.regressors(ui)) for ui in u]
+    G = [np.asarray(basis(ui), dtype=float) for ui in u]
     T, has_constant = _constant_rotation(np.vstack(G))
     Gt = [g @ T for g in G]
     k0 = 1 if has_constant else 0  # columns of Gt that vary
@@ -238,9 +256,9 @@ def _hammerstein_ls(
             cols.extend(_lagged(gi[:, l], nk + i, n0) for l in range(k0, gi.shape[1]))
         rows.append(np.column_stack(cols))
     target = np.concatenate([zi[n0:] for zi in z])
-    theta = _least_squares(np.vstack(rows), target, f"{block.kind} Hammerstein regression")
+    theta = _least_squares(np.vstack(rows), target, what)
     a = _stabilise(theta[:na])
-    C = theta[na + k0 :].reshape(nb, -1)  # C[i, l] = b_i theta_l  (rank one)
+    C = theta[na + k0 :].reshape(nb, -1)  # C[i, l] = b_i theta_l: rank one by (B1)-(B2)
     U, s, Vt = np.linalg.svd(C, full_matrices=False)
     b = U[:, 0] * s[0]
     if abs(b[0]) <= 1e-8 * np.linalg.norm(b):
@@ -253,81 +271,142 @@ def _hammerstein_ls(
     if has_constant:
         gain = float(np.sum(b))
         phi0 = theta[na] / gain if abs(gain) > 1e-12 else 0.0
-        vector = T[:, 0] * phi0 + T[:, 1:] @ f
-    else:
-        vector = T @ f
+        return T[:, 0] * phi0 + T[:, 1:] @ f, a, b
+    return T @ f, a, b
+
+
+def _hammerstein_ls(
+    u: Sequence[np.ndarray], z: Sequence[np.ndarray], block: StaticBlock, template: BlockModel
+) -> tuple[StaticBlock, np.ndarray, np.ndarray]:
+    """Input block linear in its parameters and linear block, by :func:`_rank_one_fit`."""
+    if isinstance(block, TwoSegmentPolynomial):
+        u_all = np.concatenate(u)
+        if not (np.any(u_all < 0) and np.any(u_all >= 0)):
+            raise EstimationError(
+                "the input never changes sign, so the two polynomials of the two-segment "
+                "input block (B1) cannot both be identified; use data that span both signs "
+                "of u, or a Polynomial input block"
+            )
+    vector, a, b = _rank_one_fit(
+        u,
+        z,
+        block.regressors,
+        template.na,
+        template.nb,
+        template.nk,
+        f"{block.kind} Hammerstein regression",
+    )
     return block.with_vector(vector), a, b
 
 
-def _grid_shapes(
-    block: Block, u: Sequence[np.ndarray]
-) -> tuple[Callable[[float], Block], list[float]]:
-    """Unit-slope shape of a block kind, and the grid values it takes."""
-    u_all = np.concatenate(u)
-    if isinstance(block, Backlash):
-        scale = float(np.ptp(u_all))
-        return lambda c: Backlash(1.0, c, 1.0, c), [scale * g for g in _BACKLASH_GRID]
-    if isinstance(block, DeadZone):
-        scale = float(np.max(np.abs(u_all)))
-        return lambda d: DeadZone(-d, d), [scale * g for g in _DEAD_ZONE_GRID]
-    if isinstance(block, Saturation):
-        scale = float(np.max(np.abs(u_all))) or 1.0
-        return lambda L: Saturation(-L, L), [scale * g for g in _SATURATION_GRID]
-    raise ParameterError(
-        f"no initial estimate for a {block.kind} input block; pass a starting model "
-        "(initial=...) to the simulation-error fit"
-    )
+def _profile_fit(
+    unit: Block, u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
+) -> BlockModel | None:
+    """ARX from ``w = unit(u)`` to ``z``, its ``b_0`` moved into the block (None if <= 0)."""
+    probe = _build(template, unit, None, None, None, cls=_cascade_class(unit))
+    w = [probe.internal(ui) for ui in u]
+    a, b = _arx_fit(w, z, template.na, template.nb, template.nk)
+    if not b[0] > 1e-12 * max(np.max(np.abs(b)), 1e-300):
+        return None
+    return _build(probe, scaled_block(unit, b[0]), None, a, b / b[0])
 
 
-def _grid_search(
+def _dead_zone_fit(
+    lower: float,
+    upper: float,
     u: Sequence[np.ndarray],
     z: Sequence[np.ndarray],
     template: BlockModel,
+) -> BlockModel | None:
+    """For fixed edges a dead zone is linear in its two slopes: rank-one fit of those."""
+
+    def basis(v: np.ndarray) -> np.ndarray:
+        return np.column_stack((np.minimum(v - lower, 0.0), np.maximum(v - upper, 0.0)))
+
+    try:
+        slopes, a, b = _rank_one_fit(
+            u, z, basis, template.na, template.nb, template.nk, "dead zone"
+        )
+    except EstimationError:  # an edge beyond the data: a slope is not excited
+        return None
+    if np.any(slopes <= 0):
+        return None
+    return _build(template, DeadZone(lower, upper, *slopes), None, a, b, cls=Hammerstein)
+
+
+def _grid_search(
+    u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
 ) -> tuple[Block, np.ndarray, np.ndarray]:
-    """Profile grid search over a unit-slope shape; linear block by ARX on ``w = N(u)``."""
-    shape, grid = _grid_shapes(template.input_block, u)
-    n0 = template.max_lag
+    """Profile grid search over the block's shape, scored by free-run error on ``z``."""
+    block = template.input_block
+    u_all = np.concatenate(u)
+    span, peak = float(np.ptp(u_all)) or 1.0, float(np.max(np.abs(u_all))) or 1.0
+    a_lin, b_lin = _arx_fit(u, z, template.na, template.nb, template.nk)
+    if np.sum(b_lin) / (1.0 + np.sum(a_lin)) < 0:  # static gain of a linear fit
+        raise EstimationError(
+            f"initial estimate: the plant's static gain from u is negative, but a "
+            f"{block.kind} block has positive slopes and b_0 = 1. Negate the input (or the "
+            "output) and fit again"
+        )
+    if isinstance(block, Backlash):  # c_L = c_R = c, equal slopes (choice, see module)
 
-    def score(value: float) -> tuple[float, Any]:
-        block = shape(value)
-        probe = _build(template, block, None, None, None, cls=_cascade_class(block))
-        w = [probe.internal(ui) for ui in u]
-        a, b = _arx_fit(w, z, template.na, template.nb, template.nk)
-        if not b[0] > 1e-12 * max(np.max(np.abs(b)), 1e-300):
-            return np.inf, None
-        candidate = _build(probe, scaled_block(block, b[0]), None, a, b / b[0])
-        err = 0.0
-        for ui, zi in zip(u, z, strict=True):
-            with np.errstate(all="ignore"):
-                sim = candidate.simulate(ui, zi[:n0])[n0:, 0]
-            err += float(np.sum((zi[n0:] - sim) ** 2))
-        return (err if np.isfinite(err) else np.inf), candidate
+        def backlash(c: float) -> BlockModel | None:
+            return _profile_fit(Backlash(1.0, c, 1.0, c), u, z, template)
 
-    scores = [score(v) for v in grid]
-    k = int(np.argmin([s for s, _ in scores]))
-    lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
-    fine = [score(v) for v in np.linspace(lo, hi, 9)]
-    best_err, best = min(scores + fine, key=lambda s: s[0])
+        grid = [span * g for g in _BACKLASH_GRID]
+        candidates = [backlash(c) for c in grid]
+        k = int(np.argmin([_sse(m, u, z) for m in candidates]))
+        fine = np.linspace(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)], 9)
+        candidates += [backlash(c) for c in fine]
+    elif isinstance(block, DeadZone):  # edges [-f1 peak, f2 peak], both slopes fitted
+        candidates = [
+            _dead_zone_fit(-peak * f1, peak * f2, u, z, template)
+            for f1 in _DEAD_ZONE_GRID
+            for f2 in _DEAD_ZONE_GRID
+        ]
+    elif isinstance(block, Saturation):  # knees at u = -f1 peak and f2 peak, slope fitted
+        candidates = [
+            _profile_fit(Saturation(-peak * f1, peak * f2), u, z, template)
+            for f1 in _SATURATION_GRID
+            for f2 in _SATURATION_GRID
+        ]
+    else:
+        raise ParameterError(
+            f"no initial estimate for a {block.kind or type(block).__name__} input block; "
+            "pass a starting model (initial=...) to the simulation-error fit"
+        )
+    errors = [_sse(m, u, z) for m in candidates]
+    best = candidates[int(np.argmin(errors))]
     if best is None:
         raise EstimationError(
-            f"initial estimate: no {template.input_block.kind} shape gave a positive gain "
-            "b_0; the block's slopes must be positive, so the plant's gain from u has the "
-            "opposite sign. Negate the input (or the output) and fit again"
+            f"initial estimate: no {block.kind} shape gave positive slopes; the plant's "
+            "gain from u has the opposite sign. Negate the input (or the output) and fit "
+            "again"
         )
     return best.input_block, best.a, best.b
+
+
+def _sse(model: BlockModel | None, u: Sequence[np.ndarray], z: Sequence[np.ndarray]) -> float:
+    """Free-run sum of squared errors against ``z`` (inf for no model)."""
+    if model is None:
+        return np.inf
+    n0, err = model.max_lag, 0.0
+    for ui, zi in zip(u, z, strict=True):
+        with np.errstate(all="ignore"):
+            err += float(np.sum((zi[n0:] - model.simulate(ui, zi[:n0])[n0:, 0]) ** 2))
+    return err if np.isfinite(err) else np.inf
 
 
 def _input_and_linear(
     u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
 ) -> tuple[Block | None, np.ndarray, np.ndarray]:
     """Input block and linear block fitted to the target ``z`` (output block ignored)."""
-    na, nb, nk = template.na, template.nb, template.nk
     block = template.input_block
     if block is None:
-        a, b = _arx_fit(u, z, na, nb, nk)
+        a, b = _arx_fit(u, z, template.na, template.nb, template.nk)
         return None, a, b
     if block.linear_in_parameters:
-        return _hammerstein_ls(u, z, block, na, nb, nk)
+        return _hammerstein_ls(u, z, block, template)
     return _grid_search(u, z, template)
 
 

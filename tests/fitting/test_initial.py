@@ -1,0 +1,209 @@
+"""Initial estimates: exact on noise-free Hammerstein data, close elsewhere, always stable.
+
+Inputs are uniform white noise on [-1, 1] (both signs, as the two-segment block B1
+needs) unless a test says otherwise; the backlash gets a slow sinusoid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from blockid.blocks import (
+    Backlash,
+    DeadZone,
+    PiecewiseLinear,
+    Polynomial,
+    Saturation,
+    TwoSegmentPolynomial,
+)
+from blockid.data.dataset import Dataset
+from blockid.errors import EstimationError, OrderError, ParameterError
+from blockid.fitting.checks import linear_baseline, simulation_mse
+from blockid.fitting.initial import (
+    _stabilise,
+    initial_estimate,
+    resolve_structure,
+    scaled_block,
+)
+from blockid.models.block import (
+    BacklashModel,
+    Hammerstein,
+    HammersteinWiener,
+    Wiener,
+)
+
+A2 = [-1.2, 0.5]  # poles 0.6 +- 0.37j
+TWO_SEGMENT = TwoSegmentPolynomial([0.2, 1.0, 0.8, -0.6], [-0.3, -0.5, 1.2, 0.8])
+
+
+def record(model, u, rng=None):
+    y = model.simulate(u)[:, 0]
+    if rng is not None:  # 40 dB output SNR
+        y = y + 0.01 * np.std(y) * rng.standard_normal(y.size)
+    return Dataset.from_arrays(u, y)
+
+
+def uniform(seed, n=2000):
+    return np.random.default_rng(seed).uniform(-1, 1, n)
+
+
+@pytest.mark.parametrize(
+    "block",
+    [
+        TWO_SEGMENT,
+        Polynomial([0.3, 1.0, -0.5, 0.4]),  # with constant
+        PiecewiseLinear([-1.0, -0.3, 0.4, 1.0], [-0.5, -0.2, 0.6, 0.8]),  # spans constants
+    ],
+    ids=["two-segment", "polynomial", "piecewise-linear"],
+)
+def test_hammerstein_estimate_is_exact_on_noise_free_data(block):
+    """The over-parameterised regression is exact for a Hammerstein plant; the SVD
+    factorisation recovers b and the block, including the constant that every lag
+    shares."""
+    true = Hammerstein("u1", "y1", input_block=block, na=2, nb=3, nk=1, a=A2, b=[1, 0.5, -0.2])
+    data = record(true, uniform(0))
+    template = type(block).from_dict(block.to_dict())
+    est = initial_estimate(data, "hammerstein", na=2, nb=3, nk=1, input_block=template)
+    np.testing.assert_allclose(est.free_parameters(), true.free_parameters(), atol=1e-9)
+    assert est.b[0] == 1.0
+
+
+def test_default_input_block_is_a_two_segment_polynomial_of_order_r1():
+    true = Hammerstein("u1", "y1", input_block=TWO_SEGMENT, na=2, nb=2, nk=1, a=A2, b=[1, 0.5])
+    est = initial_estimate(record(true, uniform(1)), "hammerstein", na=2, nb=2, nk=1)
+    assert isinstance(est.input_block, TwoSegmentPolynomial)
+    assert est.input_block.order == 3
+    np.testing.assert_allclose(est.free_parameters(), true.free_parameters(), atol=1e-9)
+    wider = initial_estimate(record(true, uniform(1)), "hammerstein", na=2, nb=2, nk=1, r1=5)
+    assert wider.input_block.order == 5
+    np.testing.assert_allclose(wider.input_block.f[4:], 0.0, atol=1e-8)  # truth is cubic
+
+
+def test_wiener_estimate_is_close_on_noise_free_data():
+    """ARX, then q by least squares from the simulated x, then a refit on N2^-1(y)."""
+    true = Wiener(
+        "u1",
+        "y1",
+        output_block=Polynomial([1.0, 0.3, 0.1], constant=False),
+        na=3,
+        nb=3,
+        nk=2,
+        a=[-1.1, 0.55, -0.125],
+        b=[0.8, -0.3, 0.2],
+    )
+    est = initial_estimate(record(true, uniform(2)), "wiener", na=3, nb=3, nk=2)
+    assert est.output_block.coefficients[0] == 1.0
+    np.testing.assert_allclose(est.free_parameters(), true.free_parameters(), atol=1e-4)
+
+
+def test_hammerstein_wiener_estimate_is_a_good_start_at_40_db():
+    true = HammersteinWiener(
+        "u1",
+        "y1",
+        input_block=TWO_SEGMENT,
+        output_block=Polynomial([1.0, 0.2, 0.05], constant=False),
+        na=3,
+        nb=3,
+        nk=2,
+        a=[-1.1, 0.55, -0.125],
+        b=[1, -0.3, 0.2],
+    )
+    rng = np.random.default_rng(3)
+    data = record(true, rng.uniform(-1, 1, 3000), rng)
+    est = initial_estimate(data, "hammerstein-wiener", na=3, nb=3, nk=2)
+    assert est.is_stable() and est.b[0] == 1.0 and est.output_block.coefficients[0] == 1.0
+    base = simulation_mse(linear_baseline(data, 3, 3, 2), data)
+    assert simulation_mse(est, data) < 0.05 * base  # measured 0.5 %
+    identity_q = initial_estimate(data, "hammerstein", na=3, nb=3, nk=2)
+    assert simulation_mse(est, data) < simulation_mse(identity_q, data)
+
+
+def test_backlash_estimate_from_the_grid_search():
+    """Paper A's S2 on a slow sinusoid: c on the grid next to the truth, equal slopes."""
+    true = BacklashModel(
+        "u1", "y1", input_block=Backlash(0.9, 0.8, 0.9, 0.85), na=2, nb=1, nk=1, a=[-1.0, 0.17]
+    )
+    u = 10 * np.sin(2 * np.pi * np.arange(2000) / 400)
+    data = record(true, u)
+    est = initial_estimate(data, "backlash", na=2, nb=1, nk=1)
+    block = est.input_block
+    assert block.c_left == block.c_right == pytest.approx(0.825, abs=0.1)
+    assert block.m_left == block.m_right > 0
+    assert est.is_stable() and est.b[0] == 1.0
+    base = simulation_mse(linear_baseline(data, 2, 1, 1), data)
+    assert simulation_mse(est, data) < 0.1 * base
+
+
+@pytest.mark.parametrize(
+    "true_block, template",
+    [
+        (DeadZone(-0.3, 0.2, 1.5, 0.8), DeadZone(0.0, 0.0)),
+        (Saturation(-0.6, 0.5, 1.5), Saturation(-1.0, 1.0)),
+    ],
+    ids=["dead-zone", "saturation"],
+)
+def test_hard_nonlinearity_estimates_beat_a_linear_model(true_block, template):
+    true = Hammerstein("u1", "y1", input_block=true_block, na=2, nb=2, nk=1, a=A2, b=[1, 0.5])
+    rng = np.random.default_rng(4)
+    data = record(true, rng.uniform(-1, 1, 3000), rng)
+    est = initial_estimate(data, "hammerstein", na=2, nb=2, nk=1, input_block=template)
+    assert type(est.input_block) is type(true_block)
+    assert est.is_stable() and est.b[0] == 1.0
+    base = simulation_mse(linear_baseline(data, 2, 2, 1), data)
+    assert simulation_mse(est, data) < 0.25 * base  # measured 0.1 % and 15 %
+
+
+def test_scaled_block_is_the_block_times_the_gain():
+    u = np.linspace(-2, 2, 101)
+    for block in (TWO_SEGMENT, DeadZone(-0.3, 0.2, 1.5, 0.8), Saturation(-0.6, 0.5, 1.5)):
+        np.testing.assert_allclose(scaled_block(block, 2.5)(u), 2.5 * block(u), atol=1e-14)
+    b = Backlash(0.9, 0.4, 1.1, 0.3)
+    u = 2 * np.sin(np.arange(200) / 9)
+    np.testing.assert_allclose(scaled_block(b, 2.5).simulate(u), 2.5 * b.simulate(u), atol=1e-13)
+    with pytest.raises(EstimationError, match="opposite sign"):
+        scaled_block(DeadZone(0, 0), -1.0)
+
+
+def test_unstable_poles_are_reflected_inside():
+    a = np.real(np.poly([1.25, 0.5]))[1:]
+    fixed = _stabilise(a)
+    poles = np.sort(np.abs(np.roots(np.concatenate(([1.0], fixed)))))
+    np.testing.assert_allclose(poles, [0.5, 0.99 / 1.25])
+    stable = np.array([-1.2, 0.5])
+    assert _stabilise(stable) is stable
+
+
+def test_resolve_structure():
+    assert resolve_structure("hammerstein-wiener") is HammersteinWiener
+    assert resolve_structure(Wiener) is Wiener
+    with pytest.raises(ParameterError, match="choose one of"):
+        resolve_structure("narx")
+
+
+def test_bad_requests_name_the_fix():
+    true = Hammerstein("u1", "y1", input_block=TWO_SEGMENT, na=2, nb=2, nk=1, a=A2, b=[1, 0.5])
+    data = record(true, uniform(5, 300))
+    with pytest.raises(ParameterError, match="no input block"):
+        initial_estimate(data, "wiener", na=2, nb=2, nk=1, input_block=TWO_SEGMENT)
+    with pytest.raises(ParameterError, match="static input block"):
+        initial_estimate(data, "hammerstein", na=2, nb=2, nk=1, input_block=Backlash(1, 0, 1, 0))
+    with pytest.raises(OrderError, match="nb must be"):
+        initial_estimate(data, "hammerstein", na=2, nb=0, nk=1)
+    with pytest.raises(OrderError, match="r2 must be"):
+        initial_estimate(data, "wiener", na=2, nb=2, nk=1, r2=0)
+    with pytest.raises(OrderError, match="lower the orders"):
+        initial_estimate(data.select(0, 10), "hammerstein", na=2, nb=2, nk=1)
+    positive = Dataset.from_arrays(np.abs(data.experiments[0].u), data.experiments[0].y)
+    with pytest.raises(EstimationError, match="never changes sign"):
+        initial_estimate(positive, "hammerstein", na=2, nb=2, nk=1)
+
+
+def test_a_backlash_plant_with_negative_gain_is_reported():
+    true = BacklashModel(
+        "u1", "y1", input_block=Backlash(0.9, 0.3, 0.9, 0.3), na=1, nb=1, nk=1, a=[-0.5]
+    )
+    u = 3 * np.sin(2 * np.pi * np.arange(600) / 200)
+    flipped = Dataset.from_arrays(u, -true.simulate(u)[:, 0])
+    with pytest.raises(EstimationError, match="static gain from u is negative"):
+        initial_estimate(flipped, "backlash", na=1, nb=1, nk=1)
