@@ -25,7 +25,7 @@ from blockid.blocks import (
     TwoSegmentPolynomial,
 )
 from blockid.blocks.base import StaticBlock
-from blockid.data.dataset import Dataset
+from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.fitting.arx import fit_arx
 from blockid.fitting.checks import simulation_mse
@@ -469,3 +469,18 @@ def test_fit_from_a_given_initial_model():
     result = fit_simulation_error(data, "hammerstein-wiener", initial=start, na=3)
     assert result.settings["initial"] == "given model"
     np.testing.assert_allclose(result.model.free_parameters(), theta, atol=1e-6)
+
+
+def test_several_experiments_each_start_from_their_own_measurements():
+    """Two records of different length and amplitude, each with its own held-out tail."""
+    true = hw_plant()
+    rng = np.random.default_rng(11)
+    exps = []
+    for name, n, amp in (("a", 1500, 1.0), ("b", 900, 0.7)):
+        u = rng.uniform(-amp, amp, n)
+        exps.append(Experiment(name, u, true.simulate(u)))
+    data = Dataset(("u1",), ("y1",), None, exps)
+    result = fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=2)
+    np.testing.assert_allclose(result.model.free_parameters(), true.free_parameters(), atol=1e-6)
+    assert result.n_samples == 2400
+    assert result.settings["initial_tail_mse"] > 0 and result.settings["tail_mse"] < 1e-12
