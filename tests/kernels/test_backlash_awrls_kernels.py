@@ -16,8 +16,8 @@ def h(s):
 def aw_rls_backlash_reference(u, v, theta0, na, nb, nk, eps1, eps2, mu):
     """(A6)–(A8) one sample at a time; internal variables by (A7) literally.
 
-    theta = [mL, mL cL, mR, mR cR, b_1..b_{nb-1}, a_1..a_na]; values before the record
-    are 0; updates start at n0 = max(na, nk + nb - 1, 1).
+    theta = [mL, mL cL, mR, mR cR, b_1..b_{nb-1}, a_1..a_na]; before the record the
+    backlash rests mid-dead-band at u(0); updates start at n0 = max(na, nk + nb - 1, 1).
     """
     N, n = len(u), len(theta0)
     theta = np.array(theta0, dtype=float)
@@ -25,8 +25,10 @@ def aw_rls_backlash_reference(u, v, theta0, na, nb, nk, eps1, eps2, mu):
     x, f1, f2 = np.zeros(N), np.zeros(N), np.zeros(N)
     n0 = max(na, nk + nb - 1, 1)
 
+    x_rest = 0.5 * ((theta[0] * u[0] + theta[1]) + (theta[2] * u[0] - theta[3]))
+
     def past(sig, j):
-        return sig[j] if j >= 0 else 0.0
+        return sig[j] if j >= 0 else x_rest
 
     for t in range(N):
         if t >= n0:

@@ -27,8 +27,10 @@ those switching values, as the paper does. Where a wrong estimate makes the bran
 lines cross (``z_L > z_R``) both switching values can be 1 and (A4) adds both
 branches; that is the paper's algorithm, kept as is.
 
-Values before the start of the record are 0; parameters are updated from sample
-``n0 = max_lag`` on.
+Before the first sample the backlash is at rest in the middle of its estimated dead
+band at the first input (the convention of
+:meth:`blockid.models.BacklashModel.simulate`; paper A does not say); parameters are
+updated from sample ``n0 = max_lag`` on.
 """
 
 from __future__ import annotations
@@ -89,17 +91,20 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist):
     out = np.empty(2)
     n_hist = hist.shape[0]
     row = 0
+    # the backlash starts at rest in the middle of its (estimated) dead band at u(0),
+    # the convention of BacklashModel.simulate: x(-1) = (mL (u + cL) + mR (u - cR)) / 2
+    x_rest = 0.5 * (theta[0] * u[0] + theta[1] + theta[2] * u[0] - theta[3]) if N > 0 else 0.0
     for t in range(N):
         if t >= n0:
             d = t - nk  # the key term's sample
-            x_before = x[d - 1] if d >= 1 else 0.0
+            x_before = x[d - 1] if d >= 1 else x_rest
             phi[0] = u[d] * f1[d]  # (A6)
             phi[1] = f1[d]
             phi[2] = u[d] * f2[d]
             phi[3] = -f2[d]
             for i in range(1, nb):
                 j = d - i
-                phi[3 + i] = x[j] if j >= 0 else 0.0
+                phi[3 + i] = x[j] if j >= 0 else x_rest
             for j in range(1, na + 1):
                 phi[3 + nb + j - 1] = -v[t - j]
             target = v[t] - x_before * (1.0 - f1[d]) * (1.0 - f2[d])  # (A6)
@@ -115,7 +120,7 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist):
         m_left, m_right = theta[0], theta[2]
         if m_left == 0.0 or m_right == 0.0:
             return t, REASON_ZERO_SLOPE
-        x_prev = x[t - 1] if t >= 1 else 0.0
+        x_prev = x[t - 1] if t >= 1 else x_rest
         _, s1, s2 = backlash_step(
             u[t], x_prev, m_left, theta[1] / m_left, m_right, theta[3] / m_right
         )
