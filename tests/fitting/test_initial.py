@@ -19,6 +19,7 @@ from blockid.blocks import (
 )
 from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError, OrderError, ParameterError
+from blockid.fitting.arx import fit_arx
 from blockid.fitting.checks import linear_baseline, simulation_mse
 from blockid.fitting.initial import (
     _stabilise,
@@ -117,6 +118,9 @@ def test_hammerstein_wiener_estimate_is_a_good_start_at_40_db():
     assert simulation_mse(est, data) < 0.05 * base  # measured 0.5 %
     identity_q = initial_estimate(data, "hammerstein", na=3, nb=3, nk=2)
     assert simulation_mse(est, data) < simulation_mse(identity_q, data)
+    # the plain ARX fit is one of the candidates, so the start is never worse than it
+    plain = fit_arx(data, 3, 3, 2).model
+    assert simulation_mse(est, data) <= simulation_mse(plain, data)
 
 
 def test_backlash_estimate_from_the_grid_search():
