@@ -196,6 +196,23 @@ def fit_backlash_aw_rls(
     -------
     FitResult
         ``model`` is a :class:`~blockid.models.BacklashModel`.
+
+    Examples
+    --------
+    Paper A's choke finger (sign-corrected linear block), a command with a new random
+    level every sample:
+
+    >>> import numpy as np
+    >>> from blockid.blocks import Backlash
+    >>> from blockid.data import Dataset
+    >>> from blockid.models import BacklashModel
+    >>> s2 = BacklashModel("u2", "v2", input_block=Backlash(0.9, 0.8, 0.9, 0.85),
+    ...                    na=2, nb=1, nk=1, a=[-1.0, 0.17])
+    >>> u = np.random.default_rng(0).uniform(-5.0, 5.0, 3000)
+    >>> data = Dataset.from_arrays(u, s2.simulate(u), inputs=["u2"], outputs=["v2"])
+    >>> fit = fit_backlash_aw_rls(data)
+    >>> {k: round(v, 4) for k, v in fit.model.input_block.parameters.items()}
+    {'m_left': 0.9, 'c_left': 0.8, 'm_right': 0.9, 'c_right': 0.85}
     """
     method = "AW-RLS"
     check_siso(data, method)
@@ -229,11 +246,11 @@ def fit_backlash_aw_rls(
         if count == 0:  # a new pass
             switching.clear()
         switching.append((u, f1, f2))
-        return _k.backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist)
+        status, reason = _k.backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist)
+        return status, reason, ""
 
     reasons = {
-        _k.REASON_STEP: "the AW-RLS update became non-finite (covariance lost positive "
-        "definiteness)",
+        _k.REASON_STEP: "the AW-RLS update became non-finite or lost positive definiteness",
         _k.REASON_EXPLODED: "the estimated backlash output x exceeded 1e6 (1 + max|v|)",
         _k.REASON_ZERO_SLOPE: "a slope estimate (theta_1 or theta_3) reached exactly 0, "
         "where the dead-band edges of (A7) are undefined",

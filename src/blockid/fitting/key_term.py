@@ -161,7 +161,7 @@ def start_vector(value: Any, factors: np.ndarray, names: list[str]) -> np.ndarra
 
 
 def run_passes(
-    run: Callable[[np.ndarray, np.ndarray, int, np.ndarray, int], tuple[int, int]],
+    run: Callable[[np.ndarray, np.ndarray, int, np.ndarray, int], tuple[int, int, str]],
     theta: np.ndarray,
     records: list[tuple[str, np.ndarray, np.ndarray]],
     *,
@@ -175,8 +175,9 @@ def run_passes(
 ) -> tuple[int, bool | None, np.ndarray | None, np.ndarray | None]:
     """Repeat passes of a recursive kernel until ``theta`` settles; raise on failure.
 
-    ``run(u, y, count, hist, stride) -> (status, reason)`` processes one experiment
-    once, updating ``theta`` in place; ``count`` is the number of updates before it in
+    ``run(u, y, count, hist, stride) -> (status, reason, detail)`` processes one
+    experiment once, updating ``theta`` in place (``detail``: text added to a failure
+    report); ``count`` is the number of updates before it in
     the current pass (where a forgetting schedule stands). ``records`` holds ``(name,
     u, y)`` per experiment. ``poles(theta)`` gives the linear block's poles, checked
     after every pass.
@@ -197,12 +198,12 @@ def run_passes(
         for name, u, y in records:
             m = (u.size - n0) // stride if record else 0
             hist = np.zeros((m, theta.size))
-            status, reason = run(u, y, in_pass, hist, stride)
+            status, reason, detail = run(u, y, in_pass, hist, stride)
             if status != OK:
                 raise EstimationError(
                     f"{method} diverged in pass {p}, experiment '{name}', at sample "
-                    f"{status}: {reasons[reason]}. No model is returned; try other orders, "
-                    f"more exciting data or another method. {_CONVERGENCE_DOC}"
+                    f"{status}: {reasons[reason]}{detail}. No model is returned; try other "
+                    f"orders, more exciting data or another method. {_CONVERGENCE_DOC}"
                 )
             if record:
                 rows.append(hist)
@@ -398,6 +399,24 @@ def fit_key_term_rls(
         The recursion diverged (non-finite step, exploding internal signal, unstable
         linear block after a pass), did not converge in ``passes``, or the model fails
         :func:`~blockid.fitting.check_model`.
+
+    Examples
+    --------
+    A Hammerstein plant (two-segment input block, paper B's orders) driven by white
+    noise:
+
+    >>> import numpy as np
+    >>> from blockid.blocks import TwoSegmentPolynomial
+    >>> from blockid.data import Dataset
+    >>> from blockid.models import Hammerstein
+    >>> n1 = TwoSegmentPolynomial.from_segments(positive=[0, 0.3, 0.1], negative=[0, 0.15])
+    >>> plant = Hammerstein("u", "y", input_block=n1, na=3, nb=3, nk=8,
+    ...                     a=[-0.9, -0.01, 0.105], b=[1.0, 0.5, 0.2])
+    >>> u = np.random.default_rng(0).uniform(-1.0, 1.0, 3000)
+    >>> data = Dataset.from_arrays(u, plant.simulate(u), inputs=["u"], outputs=["y"])
+    >>> fit = fit_key_term_rls(data, "hammerstein", r1=2)
+    >>> fit.settings["converged"], np.round(fit.model.a, 4).tolist()
+    (True, [-0.9, -0.01, 0.105])
     """
     method = "key-term RLS"
     if structure not in KEY_TERM_STRUCTURES:
@@ -436,10 +455,15 @@ def fit_key_term_rls(
         lam[n0:] = schedule.factors(count, N - n0)
         orders[8] = stride
         w, x = np.empty(N), np.empty(N)
-        return _k.key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist)
+        status, reason = _k.key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist)
+        detail = ""
+        if status != OK and has_out:
+            x_max = float(np.max(np.abs(x[:status]), initial=0.0)) * sy
+            detail = f" (largest |x_hat| so far {x_max:.3g}, largest |y| {y_max * sy:.3g})"
+        return status, reason, detail
 
     reasons = {
-        _k.REASON_STEP: "the RLS update became non-finite (covariance lost positive definiteness)",
+        _k.REASON_STEP: "the RLS update became non-finite or lost positive definiteness",
         _k.REASON_EXPLODED: "the estimated internal signal x exceeded 1e6 (1 + max|y|): "
         "the estimated linear block drives it unstable",
     }
