@@ -92,12 +92,12 @@ def _input_sensitivity(model: BlockModel, u: np.ndarray) -> tuple[np.ndarray, np
         lo, hi, sl, sr = block.lower, block.upper, block.slope_left, block.slope_right
         left, right = np.minimum(u - lo, 0.0), np.maximum(u - hi, 0.0)
         G = np.column_stack((-sl * (u < lo), -sr * (u > hi), left, right))
-        return sl * left + sr * right, G
+        return np.asarray(block(u), dtype=float), G
     if isinstance(block, Saturation):
         v = block.slope * u
         inside = (v >= block.lower) & (v <= block.upper)
         G = np.column_stack((v < block.lower, v > block.upper, u * inside)).astype(float)
-        return np.clip(v, block.lower, block.upper), G
+        return np.asarray(block(u), dtype=float), G
     return _numerical_input_sensitivity(model, u)
 
 
@@ -342,7 +342,10 @@ class _Problem:
 
 
 def _segments(data: Dataset, n0: int, tail_fraction: float, n_par: int) -> list[_Segment]:
-    """Split every experiment into a fitted head and a monitored tail."""
+    """Split every experiment into a fitted head and a monitored tail.
+
+    An experiment whose head would hold fewer than ``n_par`` samples keeps no tail.
+    """
     segments = []
     for e in data.experiments:
         N = e.n_samples
@@ -350,11 +353,6 @@ def _segments(data: Dataset, n0: int, tail_fraction: float, n_par: int) -> list[
         if N - n_tail - n0 < max(n_par, 1):  # too short to hold out a tail
             n_tail = 0
         segments.append(_Segment(np.ascontiguousarray(e.u[:, 0]), e.y[:, 0].copy(), N - n_tail))
-    if sum(s.n_fit - n0 for s in segments) < n_par:
-        raise DataError(
-            f"the estimation data give {sum(s.n_fit - n0 for s in segments)} fitted samples "
-            f"for {n_par} parameters; use more data or lower the orders"
-        )
     return segments
 
 
@@ -415,8 +413,7 @@ def refine(
         estimation data), ``initial_tail_mse``/``tail_mse``, ``early_stopping``
         (whether it triggered) and the solver's ``stop_reason``; ``history`` holds the
         fitted MSE and the tail MSE per accepted iterate and ``seconds`` the solver's
-        wall time. ``estimation_metrics`` are
-        free-run (``metrics_mode="simulation"``).
+        wall time. ``estimation_metrics`` are free-run (``metrics_mode="simulation"``).
 
     Raises
     ------
@@ -486,7 +483,7 @@ def refine(
         theta = sol.x
         stop_reason = "max_nfev reached" if sol.status == 0 else sol.message
     except _EarlyStop:
-        stop_reason = f"early stopping: no better tail error in {patience} iterations"
+        stop_reason = f"early stopping: no better tail error in {patience} accepted iteration(s)"
     if problem.has_tail and tracker.best_theta is not None:
         theta = tracker.best_theta
     fitted = model.with_free_parameters(theta)
