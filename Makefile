@@ -24,7 +24,8 @@ lint: $(STAMP)
 	$(BIN)/ruff format --check src tests benchmarks
 
 bench: $(STAMP)
-	$(BIN)/python benchmarks/bench_rls.py
+	$(BIN)/python benchmarks/bench_rls.py --write-docs
+	$(BIN)/python benchmarks/bench_simulation_error.py --write-docs
 
 clean:
 	rm -rf $(VENV) build dist src/*.egg-info

@@ -3,10 +3,15 @@
 from blockid.fitting.arx import ARX_METHODS, fit_arx, make_estimator
 from blockid.fitting.checks import check_model, linear_baseline, simulation_mse
 from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, STRUCTURES, fit_model
+from blockid.fitting.initial import initial_estimate
 from blockid.fitting.network import SubsystemSpec, fit_network, parse_subsystem, subset
 from blockid.fitting.result import FitResult
+from blockid.fitting.simulation_error import fit_simulation_error, refine
 
 __all__ = [
+    "fit_simulation_error",
+    "initial_estimate",
+    "refine",
     "DEFAULT_METHOD",
     "METHODS",
     "STRUCTURES",
