@@ -33,6 +33,9 @@ Choices (SPEC leaves them open):
 * Convergence: the passes stop when every parameter changed by less than
   ``tol * (1 + |theta_i|)`` over the last pass. Reaching ``passes`` without that (with
   ``passes > 1``) is a failure, reported as :class:`~blockid.errors.EstimationError`.
+* The recursion runs on ``u / std(u)``, ``y / std(y)`` (``normalize=True``) and the
+  parameters are mapped back exactly; on raw signals its behaviour depends on the
+  units (``P(0) = 1e6 I`` meets ``x^3`` of large signals).
 * Divergence is detected while running: a non-finite RLS step, an internal signal
   ``|x_hat|`` beyond ``1e6 (1 + max|y|)``, and, after every pass, an unstable linear
   block. The returned model then passes :func:`~blockid.fitting.check_model`.
@@ -103,7 +106,10 @@ def check_siso(data: Dataset, method: str) -> None:
 
 def initial_vector(value: Any, n: int, names: list[str]) -> np.ndarray:
     """``theta(0)``: a number for every entry, or one value per parameter."""
-    arr = np.asarray(value, dtype=float)
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        arr = np.full(n + 1, np.nan)  # reported below
     if arr.ndim == 0:
         arr = np.full(n, float(arr))
     if arr.shape != (n,) or not np.all(np.isfinite(arr)):
