@@ -26,6 +26,7 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_rls.py --write-docs
 	$(BIN)/python benchmarks/bench_simulation_error.py --write-docs
+	$(BIN)/python benchmarks/bench_key_term.py --write-docs
 
 clean:
 	rm -rf $(VENV) build dist src/*.egg-info

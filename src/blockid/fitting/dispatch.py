@@ -12,6 +12,12 @@ backlash               simulation-error, aw-rls                    simulation-er
 
 ``refine=True`` follows any method of a block-oriented structure with the refinement on
 free-run simulation error, started from that method's estimate.
+
+``center=True`` fits a block-oriented model around the mean operating point of the
+estimation data: the means of input and output are subtracted before estimation and
+kept in the model as its offsets. It is the default for Wiener models, which have no
+constant term anywhere and could not otherwise fit an output that does not vanish with
+the input. (ARX handles ``center`` itself.)
 """
 
 from __future__ import annotations
@@ -20,7 +26,9 @@ import inspect
 from collections.abc import Callable
 from typing import Any
 
-from blockid.data.dataset import Dataset
+import numpy as np
+
+from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import ParameterError
 from blockid.fitting.result import FitResult
 
@@ -74,6 +82,7 @@ def fit_model(
     *,
     method: str | None = None,
     refine: bool = False,
+    center: bool | None = None,
     **options: Any,
 ) -> FitResult:
     """Identify a model of the given structure with the given method.
@@ -89,6 +98,9 @@ def fit_model(
     refine : bool
         Refine the estimate on free-run simulation error afterwards (block-oriented
         structures).
+    center : bool, optional
+        Fit around the mean operating point (default: True for Wiener and ARX-free
+        structures as described in the module docstring, False otherwise).
     **options
         Orders (``na``, ``nb``, ``nk``, ``r1``, ``r2``) and method settings; an option
         the method does not use is an error, not silently ignored. ``None`` values are
@@ -105,6 +117,11 @@ def fit_model(
             f"{', '.join(METHODS[structure])}"
         )
     options = {k: v for k, v in options.items() if v is not None}
+    if structure == "arx":
+        if center is not None:
+            options["center"] = center
+    elif center if center is not None else structure == "wiener":
+        return _centered(data, structure, method, refine, options)
     accepted = _accepted(structure, method)
     unused = sorted(set(options) - accepted)
     if unused:
@@ -118,4 +135,23 @@ def fit_model(
         refined.settings = {"started_from": result.method, **result.settings, **refined.settings}
         refined.method = f"{result.method}+refine"
         return refined
+    return result
+
+
+def _centered(
+    data: Dataset, structure: str, method: str, refine: bool, options: dict[str, Any]
+) -> FitResult:
+    """Fit on mean-removed signals; keep the means as the model's offsets."""
+    u_off = float(np.mean(np.concatenate([e.u[:, 0] for e in data.experiments])))
+    y_off = float(np.mean(np.concatenate([e.y[:, 0] for e in data.experiments])))
+    shifted = Dataset(
+        data.inputs,
+        data.outputs,
+        data.sampling_time,
+        [Experiment(e.name, e.u - u_off, e.y - y_off) for e in data.experiments],
+        data.source,
+    )
+    result = fit_model(shifted, structure, method=method, refine=refine, center=False, **options)
+    result.model = result.model._replace(input_offset=u_off, output_offset=y_off)
+    result.settings = {**result.settings, "center": True}
     return result
