@@ -16,8 +16,12 @@ from blockid.errors import BlockidError, OrderError
 
 __all__ = ["stdout", "stderr", "cli_errors", "parse_order", "print_json", "metrics_table"]
 
-stdout = Console(highlight=False)
-stderr = Console(stderr=True, highlight=False)
+# rich falls back to 80 columns when writing to a pipe or file, which truncates numbers
+# in tables; use a wide console there (a terminal keeps its own width).
+stdout = Console(highlight=False, soft_wrap=True, width=None if sys.stdout.isatty() else 160)
+stderr = Console(
+    stderr=True, highlight=False, soft_wrap=True, width=None if sys.stderr.isatty() else 400
+)
 
 
 def cli_errors(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -64,7 +68,7 @@ def metrics_table(title: str, rows: list[tuple[str, dict[str, dict[str, float]]]
     table = Table(title=title, title_justify="left")
     for col in ("model", "output", "MSE", "RMSE", "mean |e|", "max |e|", "fit %"):
         left = col in ("model", "output")
-        table.add_column(col, justify="left" if left else "right", no_wrap=col == "model")
+        table.add_column(col, justify="left" if left else "right", no_wrap=True)
     for label, metrics in rows:
         for out in metrics["mse"]:
             table.add_row(

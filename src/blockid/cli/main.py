@@ -223,6 +223,11 @@ def fit(
         allow_unstable,
         convergence_check,
     )
+    from blockid.fitting import DEFAULT_METHOD
+
+    chosen = method or DEFAULT_METHOD.get(structure)
+    if plot is not None and chosen in ("key-term-rls", "aw-rls") and structure != "arx":
+        options["record_history"] = True  # parameter trajectories for the figure
     result = fit_model(data, structure, method=method, refine=refine, **options)
     record = result.estimation_record()
     if out is not None:
@@ -582,6 +587,58 @@ def reproduce_windtunnel_cmd(
             )
     stdout.print(params)
     stdout.print(f"figures written to {figures}/")
+
+
+EXAMPLES = ("electrohydraulic", "windtunnel-110kPa", "windtunnel-130kPa")
+
+
+@app.command("example-data")
+@cli_errors
+def example_data(
+    name: Annotated[str, typer.Argument(help=f"One of: {', '.join(EXAMPLES)}.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="File to write (.csv/.parquet).")],
+    seed: Seed = 0,
+    force: Force = False,
+) -> None:
+    """Write a record of a built-in simulated plant, to try the other commands on.
+
+    One continuous record: the estimation experiment followed by the validation
+    experiment (the ranges to use are printed). electrohydraulic: columns t, current,
+    velocity (estimation: the averaged multisine runs; validation: a general trajectory).
+    windtunnel-*: t, u1, u2, v1, v2, y1, y2 at that operating condition.
+    """
+    import numpy as np
+    import pandas as pd
+
+    from blockid.data import write_table
+    from blockid.errors import ParameterError
+
+    if name not in EXAMPLES:
+        raise ParameterError(f"unknown example {name!r}; choose one of {', '.join(EXAMPLES)}")
+    if out.exists() and not force:
+        raise ParameterError(f"{out} exists; pass --force to replace it")
+    if name == "electrohydraulic":
+        from blockid.plants.electrohydraulic import electrohydraulic_experiment
+
+        exp = electrohydraulic_experiment(seed=seed)
+        parts = {k: exp[k][["t", "current", "velocity"]] for k in ("estimation", "validation")}
+    else:
+        from blockid.plants.windtunnel import windtunnel_experiment
+
+        condition = name.split("-", 1)[1]
+        parts = {
+            k: windtunnel_experiment(condition, seed=seed, kind=k).drop(columns=["x_true"])
+            for k in ("estimation", "validation")
+        }
+    frame = pd.concat(list(parts.values()), ignore_index=True)
+    dt = float(parts["estimation"]["t"].iloc[1] - parts["estimation"]["t"].iloc[0])
+    frame["t"] = np.arange(len(frame)) * dt
+    write_table(frame, out, overwrite=force)
+    n_est = len(parts["estimation"])
+    stdout.print(
+        f"{name} (seed {seed}) written to {out}: estimation record 0:{n_est}, "
+        f"validation record {n_est}:{len(frame)} (use with --estimation/--validation)"
+    )
 
 
 def main() -> None:

@@ -98,8 +98,7 @@ def plot_parameter_history(
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(rows, cols, figsize=(10, 2.2 * rows), squeeze=False)
-    step = history.get("step", 1)
-    k = np.arange(theta.shape[0]) * step
+    k = np.asarray(history.get("update", np.arange(theta.shape[0])))
     for i, name in enumerate(names):
         ax = axes[i // cols, i % cols]
         ax.plot(k, theta[:, i], lw=1.0)
