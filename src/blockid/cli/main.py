@@ -589,6 +589,62 @@ def reproduce_windtunnel_cmd(
     stdout.print(f"figures written to {figures}/")
 
 
+@reproduce_app.command("electrohydraulic")
+@cli_errors
+def reproduce_electrohydraulic_cmd(
+    seed: Seed = 0,
+    figures: FiguresDir = Path("reproduce-electrohydraulic"),
+    json_out: Json = False,
+) -> None:
+    """Paper B: Hammerstein-Wiener vs Hammerstein, Wiener and ARX (Table 2)."""
+    from blockid.workflows.reproduce_electrohydraulic import reproduce_electrohydraulic
+
+    result = reproduce_electrohydraulic(seed=seed, figures_dir=figures)
+    if json_out:
+        print_json(result.to_dict())
+        return
+    _print_electrohydraulic(result)
+    stdout.print(f"figures written to {figures}/")
+
+
+def _print_electrohydraulic(result) -> None:
+    from rich.table import Table
+
+    from blockid.workflows.reproduce_electrohydraulic import PAPER_MSE
+
+    table = Table(
+        title="Paper B, Table 2 form: MSE of free-run simulation on the validation trajectory "
+        "[(rad/s)^2]",
+        title_justify="left",
+    )
+    for col in ("model", "estimator", "MSE", "fit %", "best", "paper B MSE"):
+        table.add_column(col, justify="left" if col in ("model", "estimator") else "right")
+    for row in result.table:
+        best = result.best.get(row["model"], {}).get("estimator") == row["estimator"]
+        if "error" in row:
+            table.add_row(row["model"], row["estimator"], "failed", "", "", "")
+            continue
+        table.add_row(
+            row["model"],
+            row["estimator"],
+            f"{row['mse']['velocity']:.4g}",
+            f"{row['fit_percent']['velocity']:.1f}",
+            "*" if best else "",
+            f"{PAPER_MSE[row['model']]:.4f}" if best else "",
+        )
+    stdout.print(table)
+    if "hammerstein-wiener" in result.best:
+        red = result.reductions()
+        stdout.print(
+            "best H-W MSE below: "
+            + ", ".join(f"{s} {100 * r:.0f} %" for s, r in red.items())
+            + "  (paper B: hammerstein 13 %, wiener 54 %, arx 58 %)"
+        )
+    for row in result.table:
+        if "error" in row:
+            stdout.print(f"{row['model']} {row['estimator']}: {row['error']}", markup=False)
+
+
 EXAMPLES = ("electrohydraulic", "windtunnel-110kPa", "windtunnel-130kPa")
 
 
