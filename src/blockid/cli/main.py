@@ -469,25 +469,19 @@ def demo(
     seed: Annotated[int, typer.Option(help="Random seed of the simulated plant.")] = 0,
     json_out: Json = False,
 ) -> None:
-    """Run the built-in example: identify paper A's wind-tunnel loops from simulated data."""
+    """Run the built-in example: paper B's experiment on the simulated excavator arm.
+
+    Same as 'blockid reproduce electrohydraulic', and keeps the data, the best model of
+    every structure and the figures in the output folder.
+    """
     from blockid.workflows.demo import run_demo
 
     result = run_demo(output_dir, seed=seed)
     if json_out:
-        print_json(result)
+        print_json(result.to_dict())
         return
-    s1 = result["s1"]
-    stdout.print(
-        f"S1 exhaust valve (RLS): a1 = {s1['a'][0]:.4f} (true -0.62), "
-        f"b0 = {s1['b'][0]:.4f} (true 0.39)"
-    )
-    stdout.print(
-        metrics_table(
-            "flow field S3, free-run simulation on the validation record (110 kPa)",
-            list(result["flow_field"].items()),
-        )
-    )
-    stdout.print(f"data, models and figure written to {result['output_dir']}/")
+    _print_electrohydraulic(result)
+    stdout.print(f"data, models, figures and results.json written to {output_dir}/")
 
 
 reproduce_app = typer.Typer(

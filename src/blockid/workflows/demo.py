@@ -1,68 +1,39 @@
-"""The built-in example run by ``blockid demo`` / ``make demo``."""
+"""The built-in example run by ``blockid demo`` / ``make demo``: paper B's experiment."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
 __all__ = ["run_demo"]
 
 
-def run_demo(output_dir: str | Path, seed: int = 0) -> dict[str, Any]:
-    """Identify paper A's wind-tunnel actuator loop and flow field from simulated data.
+def run_demo(output_dir: str | Path, seed: int = 0) -> Any:
+    """Reproduce paper B on the simulated electrohydraulic arm and keep everything.
 
-    Writes the data (``windtunnel_estimation.csv``, ``windtunnel_validation.csv``), the
-    model files and a figure to ``output_dir`` and returns the numbers: the exhaust
-    valve loop S1 identified by RLS against the simulator's truth, and the flow field S3
-    (two-input two-output ARX, na = nb = 2, nk = 1) by batch least squares and by
-    hierarchical RLS, scored by free-run simulation on the validation record.
+    Writes to ``output_dir``: the estimation and validation records
+    (``electrohydraulic_estimation.csv``, ``electrohydraulic_validation.csv``), the best
+    model file of every structure (``model_<structure>.json``), the figures of the
+    reproduction and ``results.json`` (what ``blockid reproduce electrohydraulic
+    --json`` prints). Returns the :class:`ElectrohydraulicReproduction`.
     """
-    from blockid.data import Dataset
-    from blockid.evaluation import evaluate
-    from blockid.fitting import fit_arx, subset
     from blockid.models import save_model
-    from blockid.plants.windtunnel import windtunnel_experiment
-    from blockid.plotting import plot_model_output
+    from blockid.plants.electrohydraulic import electrohydraulic_experiment
+    from blockid.workflows.reproduce_electrohydraulic import reproduce_electrohydraulic
 
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    frames = {
-        kind: windtunnel_experiment("110kPa", seed=seed, kind=kind)
-        for kind in ("estimation", "validation")
-    }
-    data = {}
-    for kind, df in frames.items():
-        df.drop(columns=["x_true"]).to_csv(out / f"windtunnel_{kind}.csv", index=False)
-        data[kind] = Dataset.from_frame(
-            df, ["u1", "u2"], ["v1", "v2", "y1", "y2"], time_column="t", source=kind
+    exp = electrohydraulic_experiment(seed=seed)
+    for kind in ("estimation", "validation"):
+        exp[kind][["t", "current", "velocity"]].to_csv(
+            out / f"electrohydraulic_{kind}.csv", index=False
         )
-    s1 = fit_arx(subset(data["estimation"], ["u1"], ["v1"]), 1, 1, 1, method="rls")
-    save_model(s1.model, out / "s1_exhaust_valve.json", s1.estimation_record(), overwrite=True)
-    flow = {}
-    for method, kw in (("batch", {}), ("hierarchical-rls", {"forgetting": 0.98, "passes": 5})):
-        res = fit_arx(
-            subset(data["estimation"], ["v1", "v2"], ["y1", "y2"]),
-            2,
-            2,
-            1,
-            method=method,
-            center=True,
-            max_mse_ratio=None,
-            **kw,
-        )
-        val = evaluate(res.model, subset(data["validation"], ["v1", "v2"], ["y1", "y2"]))
-        flow[method] = val
+    result = reproduce_electrohydraulic(seed=seed, figures_dir=out)
+    for structure, best in result.best.items():
+        model = result.models[(structure, best["estimator"])]
         save_model(
-            res.model, out / f"s3_flow_field_{method}.json", res.estimation_record(), overwrite=True
+            model, out / f"model_{structure}.json", {"estimator": best["estimator"]}, overwrite=True
         )
-    fig = plot_model_output(flow["batch"], data_label="validation record (110 kPa)")
-    fig.savefig(out / "flow_field_simulation.png", dpi=110)
-    return {
-        "s1": {
-            "a": s1.model.a["v1"]["v1"].tolist(),
-            "b": s1.model.b["v1"]["u1"].tolist(),
-            "true": {"a": [-0.62], "b": [0.39]},
-        },
-        "flow_field": {m: v.metrics for m, v in flow.items()},
-        "output_dir": str(out),
-    }
+    (out / "results.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n")
+    return result

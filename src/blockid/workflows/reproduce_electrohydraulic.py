@@ -107,7 +107,12 @@ def reproduce_electrohydraulic(
     result = ElectrohydraulicReproduction()
     for structure in STRUCTURES:
         for estimator in (PAPER, DEFAULT):
-            row: dict[str, Any] = {"model": structure, "estimator": estimator}
+            label = (
+                "default (least squares)"
+                if (structure, estimator) == ("arx", DEFAULT)
+                else (estimator)
+            )
+            row: dict[str, Any] = {"model": structure, "estimator": label}
             try:
                 fit = _fit(structure, estimator, data["estimation"])
             except EstimationError as exc:
@@ -120,13 +125,13 @@ def reproduce_electrohydraulic(
             row["fit_percent"] = sim.metrics["fit_percent"]
             row["method"] = fit.method
             result.table.append(row)
-            key = (structure, estimator)
+            key = (structure, label)
             result.outputs[key] = sim
             result.models[key] = fit.model
             best = result.best.get(structure)
             if best is None or row["mse"]["velocity"] < best["mse"]["velocity"]:
                 result.best[structure] = {
-                    "estimator": estimator,
+                    "estimator": label,
                     "mse": row["mse"],
                     "fit_percent": row["fit_percent"],
                 }
@@ -136,7 +141,7 @@ def reproduce_electrohydraulic(
                     "a": fit.model.a["velocity"]["velocity"].tolist(),
                     "b": fit.model.b["velocity"]["current"].tolist(),
                 }
-            result.parameters.setdefault(structure, {})[estimator] = params
+            result.parameters.setdefault(structure, {})[label] = params
     if figures_dir is not None:
         result.figures = [str(p) for p in _figures(result, Path(figures_dir), data)]
     return result
