@@ -78,6 +78,11 @@ def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> A
                 x = model.linear.simulate(model.internal(u)[:, None])[:, 0]
                 rng = (float(x.min()), float(x.max()))
             block.plot(ax=ax, u_range=rng, truth=ref)
+            ax.set_xlabel("x (output of the linear block)")
+            ax.set_ylabel("y = N2(x) (relative to the output offset)")
+        if which == "input_block":
+            ax.set_xlabel(f"u = {model.inputs[0]} (relative to the input offset)")
+            ax.set_ylabel("w = N1(u)")
         ax.set_title(f"{which.replace('_', ' ')}: {block.kind}", fontsize=9)
     fig.tight_layout()
     return fig
