@@ -19,14 +19,18 @@ from scipy.optimize import fsolve
 from blockid._kernels.electrohydraulic import (
     electrohydraulic_geometry,
     electrohydraulic_integrate,
+    electrohydraulic_metering_area,
+    electrohydraulic_pilot_setpoint,
     electrohydraulic_rhs,
 )
 from blockid.errors import ParameterError
 from blockid.plants.electrohydraulic import (
+    PHASE_TRIALS,
     ElectrohydraulicParameters,
     _trim_experiment,
     electrohydraulic_equilibrium,
     electrohydraulic_experiment,
+    electrohydraulic_static_spool,
     electrohydraulic_static_velocity,
     general_trajectory_current,
     multisine_current,
@@ -54,10 +58,22 @@ def ref_geometry(h, par=P):
     return phi + par.angle_offset, dphi, d2phi
 
 
+def ref_area(xv, par=P):
+    """Metering area: overlap, then a V-notch (quadratic), then the full slot (linear)."""
+    opening = abs(xv) - par.spool_overlap
+    if opening <= 0:
+        return 0.0
+    if opening <= par.notch_length:
+        # V-notch: width W * opening / x_n grows linearly, area is its integral.
+        return 0.5 * par.area_gradient * opening**2 / par.notch_length
+    return 0.5 * par.area_gradient * par.notch_length + par.area_gradient * (
+        opening - par.notch_length
+    )
+
+
 def ref_flow(xv, p1, p2, par=P):
     """Four-way valve flows into chamber 1 and out of chamber 2."""
-    opening = math.copysign(max(abs(xv) - par.spool_overlap, 0.0), xv)
-    k = par.discharge_coefficient * par.area_gradient * math.sqrt(2 / par.oil_density) * opening
+    k = par.discharge_coefficient * ref_area(xv, par) * math.sqrt(2 / par.oil_density)
 
     def root(dp):
         return dp / (dp**2 + par.transition_pressure**2) ** 0.25
@@ -65,11 +81,34 @@ def ref_flow(xv, p1, p2, par=P):
     ps, pr = par.supply_pressure, par.return_pressure
     if xv >= 0:
         return k * root(ps - p1), k * root(p2 - pr)
-    return k * root(p1 - pr), k * root(ps - p2)
+    return -k * root(p1 - pr), -k * root(ps - p2)
+
+
+def ref_pilot_setpoint(current, par=P):
+    """Pilot pressure difference the two pilot valves settle to."""
+    if abs(current) <= par.deadband_current:
+        return 0.0
+    level = min(par.pilot_gain * (abs(current) - par.deadband_current), par.pilot_pressure_max)
+    return math.copysign(level, current)
+
+
+def ref_spool_rate(xv, pp, par=P):
+    """Spool: pilot force against the preloaded spring, viscous pilot-flow damping."""
+    drive = par.spool_end_area * pp
+    if xv == 0:
+        if abs(drive) <= par.spool_preload:
+            return 0.0  # held by the spring retainers
+        spring = math.copysign(par.spool_preload, drive)
+    else:
+        spring = par.spool_stiffness * xv + math.copysign(par.spool_preload, xv)
+    rate = (drive - spring) / par.spool_damping
+    if abs(xv) >= par.spool_max and rate * xv > 0:
+        return 0.0  # end cap
+    return rate
 
 
 def ref_rhs(x, current, par=P):
-    h, v, p1, p2, xv = x
+    h, v, p1, p2, xv, pp = x
     theta, dth, d2th = ref_geometry(h, par)
     mass = par.piston_mass + par.arm_inertia * dth**2
     dmass = 2 * par.arm_inertia * dth * d2th
@@ -96,46 +135,64 @@ def ref_rhs(x, current, par=P):
     leak = par.internal_leakage * (p1 - p2)
     dp1 = beta1 / v1 * (q1 - par.area_head * v - leak - par.external_leakage * p1)
     dp2 = beta2 / v2 * (-q2 + par.area_rod * v + leak - par.external_leakage * p2)
-    if abs(current) <= par.deadband_current:
-        effective = 0.0
-    else:
-        effective = current - math.copysign(par.deadband_current, current)
-    target = float(np.clip(par.spool_gain * effective, -par.spool_max, par.spool_max))
-    dxv = (target - xv) / par.spool_time_constant
-    return np.array([v, (force - 0.5 * dmass * v * v) / mass, dp1, dp2, dxv])
+    dxv = ref_spool_rate(xv, pp, par)
+    dpp = (ref_pilot_setpoint(current, par) - pp) / par.pilot_time_constant
+    return np.array([v, (force - 0.5 * dmass * v * v) / mass, dp1, dp2, dxv, dpp])
 
 
 def ref_simulate(current, x0, par=P, ts=TS):
-    """solve_ivp (Radau) per sample interval, the delayed current held constant."""
+    """solve_ivp (DOP853) per sample interval, the delayed current held constant.
+
+    An explicit method: an implicit one's Newton iterates step across ``xv = 0`` onto
+    the wrong branch of the spring's preload when the spool leaves neutral.
+
+    The spool's return to neutral is an event: where it reaches zero the integration
+    restarts from ``xv = 0``, where ``ref_spool_rate`` holds it while the pilot force
+    is below the preload (or lets it pass through when the pilot drives it on).
+    """
     delay = int(round(par.input_delay / ts))
-    scale = np.array([1e-6, 1e-6, 10.0, 10.0, 1e-9])
+    scale = np.array([1e-6, 1e-6, 10.0, 10.0, 1e-9, 10.0])
     states = [np.asarray(x0, float)]
     x = np.asarray(x0, float)
+
+    def crossing(t, y):
+        return y[4]
+
+    crossing.terminal = True
     for k in range(len(current) - 1):
         u = current[k - delay] if k >= delay else 0.0
-        sol = solve_ivp(
-            lambda t, y, u=u: ref_rhs(y, u, par),
-            (k * ts, (k + 1) * ts),
-            x,
-            method="Radau",
-            rtol=1e-9,
-            atol=scale,
-        )
-        x = sol.y[:, -1]
+        t, end = k * ts, (k + 1) * ts
+        while t < end:
+            sol = solve_ivp(
+                lambda t, y, u=u: ref_rhs(y, u, par),
+                (t, end),
+                x,
+                method="DOP853",
+                rtol=1e-9,
+                atol=scale,
+                first_step=1e-4,
+                max_step=2e-3,
+                events=crossing if x[4] != 0.0 else None,
+            )
+            if sol.status == 1:  # the spool reached neutral
+                t, x = sol.t_events[0][0], sol.y_events[0][0].copy()
+                x[4] = 0.0
+            else:
+                t, x = end, sol.y[:, -1]
         states.append(x)
     return np.array(states)
 
 
 def steady_speed(current, h, par=P):
     """Steady velocity at position h from the full balance (leakage, regularised roots)."""
-    effective = abs(current) - par.deadband_current
-    xv = math.copysign(min(par.spool_gain * effective, par.spool_max), current)
+    xv = float(electrohydraulic_static_spool(current, par))
+    pp = ref_pilot_setpoint(current, par)
     guess = float(electrohydraulic_static_velocity(current, h, par))
     p_mid = 0.5 * (par.supply_pressure + par.return_pressure)
 
     def equations(z):
         v, p1, p2 = z[0], z[1] * 1e6, z[2] * 1e6
-        d = ref_rhs([h, v, p1, p2, xv], current, par)
+        d = ref_rhs([h, v, p1, p2, xv, pp], current, par)
         return [d[1] * 1e-2, d[2] * 1e-6, d[3] * 1e-6]
 
     sol, info, ier, msg = fsolve(equations, [guess, p_mid / 1e6, p_mid / 1e6], full_output=True)
@@ -176,47 +233,107 @@ def test_geometry_matches_law_of_cosines_and_finite_differences():
 
 def test_rhs_matches_python_reference(rng):
     p = P.to_array()
-    dx = np.empty(5)
-    for _ in range(200):
+    dx = np.empty(6)
+    for _ in range(300):
         x = np.array(
             [
                 rng.uniform(0, P.stroke),
                 rng.uniform(-0.4, 0.4),
                 rng.uniform(0.05e6, 21e6),
                 rng.uniform(0.05e6, 21e6),
-                rng.uniform(-P.spool_max, P.spool_max),
+                rng.choice([rng.uniform(-P.spool_max, P.spool_max), 0.0, P.spool_max]),
+                rng.uniform(-3e6, 3e6),
             ]
         )
-        current = rng.choice([rng.uniform(-1.2, 1.2), rng.uniform(-0.1, 0.1), 0.0])
+        current = rng.choice([rng.uniform(-1.2, 1.2), rng.uniform(-0.2, 0.2), 0.0])
         electrohydraulic_rhs(x, current, p, dx)
         np.testing.assert_allclose(dx, ref_rhs(x, current), rtol=1e-9, atol=1e-12)
 
 
+def test_metering_area_and_pilot_setpoint_match_reference():
+    p = P.to_array()
+    for xv in np.linspace(-P.spool_max, P.spool_max, 401):
+        assert electrohydraulic_metering_area(xv, p) == pytest.approx(ref_area(xv), abs=1e-15)
+    for current in np.linspace(-1.5, 1.5, 301):
+        assert electrohydraulic_pilot_setpoint(current, p) == pytest.approx(
+            ref_pilot_setpoint(current), abs=1e-6
+        )
+    # Progressive profile: a quarter of the notch's end area at half its length, the
+    # slot's gradient W beyond it, continuous slope at the joint.
+    xn, xo = P.notch_length, P.spool_overlap
+    end = electrohydraulic_metering_area(xo + xn, p)
+    assert end == pytest.approx(0.5 * P.area_gradient * xn)
+    assert electrohydraulic_metering_area(xo + 0.5 * xn, p) == pytest.approx(0.25 * end)
+    eps = 1e-7
+    for x in (xo + xn - eps, xo + xn + eps, P.spool_max - eps):
+        slope = (
+            electrohydraulic_metering_area(x + 0.5 * eps, p)
+            - electrohydraulic_metering_area(x - 0.5 * eps, p)
+        ) / eps
+        assert slope == pytest.approx(P.area_gradient, rel=1e-4)
+    assert electrohydraulic_metering_area(xo, p) == 0.0
+    # Pilot supply limits the pilot pressure.
+    capped = dataclasses.replace(P, pilot_pressure_max=1e6)
+    assert electrohydraulic_pilot_setpoint(-1.0, capped.to_array()) == -1e6
+
+
 def test_kernel_matches_solve_ivp_reference():
-    t = np.arange(80) * TS  # 4 s, the first 0.35 s is the input delay
-    current = 0.5 * np.sin(2 * np.pi * 0.5 * t) + 0.3 * np.sin(2 * np.pi * 1.3 * t + 1.0)
+    t = np.arange(80) * TS  # 4 s, the first 0.25 s is the input delay
+    current = 0.6 * np.sin(2 * np.pi * 0.4 * t) + 0.27 * np.sin(2 * np.pi * 1.3 * t + 1.0)
     x0 = electrohydraulic_equilibrium()
     fast = electrohydraulic_integrate(x0, P.to_array(), current, TS / 50, 50)
     slow = ref_simulate(current, x0)
     assert np.ptp(fast[:, 0]) > 0.05  # the arm really moved
     assert fast[:, 2:4].min() > 1e5  # no clipping, which the twin does not model
-    for i in range(5):
+    assert np.abs(fast[:, 4]).max() < P.spool_max  # no end cap either
+    assert np.sum(np.diff(np.sign(slow[:, 4])) != 0) >= 4  # the spool passed neutral
+    for i in range(6):
         scale = np.ptp(slow[:, i])
-        assert np.abs(fast[:, i] - slow[:, i]).max() < 2e-4 * scale, i
+        # The spool's seat at neutral is a projection (first order in the step, inside
+        # the overlap where it changes no flow); everything else agrees to 1e-5.
+        tol = 1e-3 if i == 4 else 1e-5
+        assert np.abs(fast[:, i] - slow[:, i]).max() < tol * scale, i
 
 
-def test_input_delay_and_spool_lag():
+def test_input_delay_pilot_lag_and_spool_response():
     current = np.zeros(60)
-    current[20:] = 0.5  # step at t = 1 s
-    df = simulate_electrohydraulic(current, noise=False)
+    current[20:] = 0.6  # step at t = 1 s
+    df = simulate_electrohydraulic(current, noise=False, substeps=200)
     onset = 20 + int(round(P.input_delay / TS))
-    assert np.all(df["xv"].to_numpy()[: onset + 1] == 0.0)
-    assert df["xv"].iloc[onset + 1] > 0.0
-    # First-order lag towards kv (I - Id) with time constant tau_v.
-    target = P.spool_gain * (0.5 - P.deadband_current)
-    k = onset + 2
-    expected = target * (1 - math.exp(-(k - onset) * TS / P.spool_time_constant))
-    assert df["xv"].iloc[k] == pytest.approx(expected, rel=1e-6)
+    assert np.all(df["pilot"].to_numpy()[: onset + 1] == 0.0)
+    # First-order pilot lag towards kp (I - Id), exact at the samples.
+    target = P.pilot_gain * (0.6 - P.deadband_current)
+    s = (np.arange(onset, 60) - onset) * TS
+    np.testing.assert_allclose(
+        df["pilot"].to_numpy()[onset:], target * (1 - np.exp(-s / P.pilot_time_constant)), rtol=1e-8
+    )
+    # The spool waits for the pilot force to reach the preload, then follows
+    # cs xv' = As pp - F0 - ks xv, solved in closed form for the exponential pilot.
+    a = P.spool_end_area * target / P.spool_stiffness
+    b = P.spool_preload / P.spool_stiffness
+    tau_p, tau_s = P.pilot_time_constant, P.spool_time_constant
+    crack = -tau_p * math.log(1 - b / a)
+    e = math.exp(-crack / tau_p)
+    c = -a * e * tau_p / (tau_p - tau_s)
+    xv = df["xv"].to_numpy()[onset:]
+    before = s < crack
+    assert np.all(xv[before] == 0.0)
+    r = s[~before] - crack
+    expected = a * e + c * np.exp(-r / tau_p) - (a * e + c) * np.exp(-r / tau_s)
+    np.testing.assert_allclose(xv[~before], expected, rtol=1e-5, atol=1e-9)
+    assert xv[-1] == pytest.approx(float(electrohydraulic_static_spool(0.6)), rel=1e-4)
+
+
+def test_spool_returns_to_neutral_and_stays():
+    current = np.zeros(80)
+    current[5:30] = -0.7
+    df = simulate_electrohydraulic(current, noise=False)
+    xv = df["xv"].to_numpy()
+    assert xv.min() < -0.8 * abs(float(electrohydraulic_static_spool(-0.7)))
+    # The preload pushes the spool onto its seat in finite time: exactly zero afterwards.
+    back = 30 + int(round(P.input_delay / TS)) + 20
+    assert np.all(xv[back:] == 0.0)
+    assert np.all(np.abs(df["pilot"].to_numpy()[back:]) * P.spool_end_area < P.spool_preload)
 
 
 # ----------------------------------------------------------------------------------
@@ -236,6 +353,7 @@ def test_zero_current_holds_the_arm():
     assert np.abs(df["velocity"]).max() < 1e-4
     assert np.abs(df["p1"] / x0[2] - 1).max() < 0.01
     assert np.all(df["xv"] == 0.0)
+    assert np.all(df["pilot"] == 0.0)
 
 
 def test_pressures_settle_to_equilibrium():
@@ -244,7 +362,7 @@ def test_pressures_settle_to_equilibrium():
     force = (P.area_head - P.area_rod) * x0[2]
     p2 = 3e6
     p1 = (force + P.area_rod * p2) / P.area_head
-    start = np.array([x0[0], 0.0, p1, p2, 0.0])
+    start = np.array([x0[0], 0.0, p1, p2, 0.0, 0.0])
     sealed = dataclasses.replace(P, external_leakage=0.0)
     states = electrohydraulic_integrate(start, sealed.to_array(), np.zeros(8000), TS / 25, 25)
     h_end = states[-1, 0]
@@ -263,19 +381,44 @@ def test_pressures_settle_to_equilibrium():
 
 def test_dead_band():
     total = P.deadband_total
-    assert total == pytest.approx(P.deadband_current + P.spool_overlap / P.spool_gain)
+    crack = P.deadband_current + P.spool_preload / (P.spool_end_area * P.pilot_gain)
+    land = P.spool_stiffness * P.spool_overlap / (P.spool_end_area * P.pilot_gain)
+    assert total == pytest.approx(crack + land)
+    # The static spool position is zero up to the crack current, the overlap's end at
+    # the total dead band.
+    assert float(electrohydraulic_static_spool(0.999 * crack)) == 0.0
+    assert float(electrohydraulic_static_spool(-total)) == pytest.approx(-P.spool_overlap)
+    assert float(electrohydraulic_static_velocity(0.999 * total)) == 0.0
+    delay = int(round(P.input_delay / TS))
     ramp = np.concatenate([np.linspace(0, 0.95 * total, 200), np.full(100, 0.95 * total)])
     for sign in (1.0, -1.0):
         df = simulate_electrohydraulic(sign * ramp, noise=False)
         assert np.abs(df["h"] - df["h"].iloc[0]).max() < 2e-4  # no flow inside the band
         assert np.abs(df["velocity"]).max() < 1e-3
-        # Pilot dead band: the spool does not even move while |I| <= Id.
-        inside = np.abs(ramp) <= P.deadband_current
-        inside_delayed = np.r_[np.ones(7, bool), inside[:-7]]
-        assert np.all(df["xv"].to_numpy()[inside_delayed] == 0.0)
+        assert np.abs(df["xv"]).max() < P.spool_overlap  # inside the overlap
+        # Pilot threshold: no pilot pressure while |I| <= Id (delayed) ...
+        delayed = np.r_[np.zeros(delay), ramp[:-delay]]
+        assert np.all(df["pilot"].to_numpy()[1:][np.abs(delayed[:-1]) <= P.deadband_current] == 0)
+        # ... and the spool stays on its seat while the pilot force is below the preload.
+        held = np.abs(df["pilot"].to_numpy()) * P.spool_end_area <= P.spool_preload
+        assert np.all(df["xv"].to_numpy()[held] == 0.0)
+        assert not np.all(held)  # the ramp did crack the spool
         above = np.concatenate([np.zeros(20), np.full(80, sign * 1.25 * total)])
         df = simulate_electrohydraulic(above, noise=False)
         assert sign * (df["h"].iloc[-1] - df["h"].iloc[0]) > 0.02  # it moves, that way
+
+
+def test_static_spool_matches_spring_balance():
+    currents = np.array([0.0, 0.25, 0.4, 0.6, 0.85, 0.95, 1.2])
+    for sign in (1.0, -1.0):
+        spool = electrohydraulic_static_spool(sign * currents)
+        for current, xv in zip(sign * currents, spool, strict=True):
+            force = P.spool_end_area * abs(ref_pilot_setpoint(current))
+            travel = min(max(force - P.spool_preload, 0.0) / P.spool_stiffness, P.spool_max)
+            assert xv == pytest.approx(math.copysign(travel, current) if travel else 0.0)
+    # Full stroke near 0.9 A: the end caps saturate the valve.
+    assert float(electrohydraulic_static_spool(0.9)) == pytest.approx(P.spool_max, rel=0.01)
+    assert float(electrohydraulic_static_spool(1.0)) == P.spool_max
 
 
 def test_direction_asymmetry_matches_force_and_flow_balance():
@@ -308,11 +451,14 @@ def test_direction_asymmetry_matches_force_and_flow_balance():
 
 
 def test_static_velocity_matches_simulation():
-    for current in (0.3, 0.8, -0.3, -0.8):
+    # (Below about 0.05 m/s internal leakage, which the static characteristic
+    # neglects, takes a few per cent of the flow; these speeds are 0.07-0.22 m/s.)
+    for current in (0.6, 0.8, -0.6, -0.8):
         start = 0.35 if current > 0 else 0.85
         par = dataclasses.replace(P, initial_position=start)
         df = simulate_electrohydraulic(np.full(50, current), params=par, noise=False)
-        h, v = df["h"].iloc[-1], df["hdot"].iloc[-1]
+        # Averaged over the last 0.5 s, across the ringing of the hydraulic resonance.
+        h, v = df["h"].iloc[-10:].mean(), df["hdot"].iloc[-10:].mean()
         assert v == pytest.approx(electrohydraulic_static_velocity(current, h, par), rel=0.02)
 
 
@@ -327,7 +473,7 @@ def test_end_stops_are_inelastic():
 
 @pytest.mark.parametrize("generator", [multisine_current, general_trajectory_current])
 def test_step_halving_changes_outputs_below_0p1_percent(generator):
-    current, par = trimmed(generator(seed=3))
+    current, par = trimmed(generator(seed=3))  # the multisine reaches the spool's end caps
     coarse = simulate_electrohydraulic(current, params=par, noise=False)
     fine = simulate_electrohydraulic(current, params=par, noise=False, substeps=100)
     assert 0.0 < coarse["h"].min() and coarse["h"].max() < P.stroke
@@ -385,6 +531,19 @@ def test_multisine_spectrum_and_range():
     np.testing.assert_allclose(peaks, freqs, atol=1e-9)
 
 
+def test_multisine_phase_search_lowers_the_crest_factor():
+    def crest(u):
+        return np.abs(u).max() / np.sqrt(np.mean(u**2))
+
+    single = [crest(multisine_current(seed=s)) for s in range(20)]
+    searched = [crest(multisine_current(seed=s, phase_trials=PHASE_TRIALS)) for s in range(20)]
+    # The search keeps the best of its draws; its first draw is the single-trial signal.
+    assert all(b <= a + 1e-12 for a, b in zip(single, searched, strict=True))
+    assert np.median(searched) < 0.85 * np.median(single)
+    u = multisine_current(seed=3, phase_trials=PHASE_TRIALS)
+    assert np.abs(u).max() == pytest.approx(0.9)
+
+
 def test_experiment_records():
     data = electrohydraulic_experiment(seed=11, n_repeats=4)
     est, val = data["estimation"], data["validation"]
@@ -393,8 +552,8 @@ def test_experiment_records():
         assert len(frame) == 1100
         assert frame["t"].iloc[-1] == pytest.approx(54.95)
         # The command crosses the dead band both ways and stays within +-1 A.
-        assert frame["current"].max() > 2 * P.deadband_total
-        assert frame["current"].min() < -2 * P.deadband_total
+        assert frame["current"].max() > 1.5 * P.deadband_total
+        assert frame["current"].min() < -1.5 * P.deadband_total
         assert np.abs(frame["current"]).max() <= 1.0
         par = dataclasses.replace(P, initial_position=frame.attrs["initial_position"])
         clean = simulate_electrohydraulic(frame["current"].to_numpy(), params=par, noise=False)
@@ -448,6 +607,8 @@ def test_bad_signal_options_raise():
         multisine_current(frequencies=(0.05, 12.0))
     with pytest.raises(ParameterError, match="amplitude"):
         multisine_current(amplitude=0.0)
+    with pytest.raises(ParameterError, match="phase_trials"):
+        multisine_current(phase_trials=0)
     with pytest.raises(ParameterError, match="duration"):
         general_trajectory_current(duration=0.01)
     with pytest.raises(ParameterError, match="n_repeats"):

@@ -1,11 +1,15 @@
-"""Simulated plant of paper B: a proportional-valve-controlled excavator arm cylinder.
+"""Simulated plant of paper B: a pilot-operated proportional valve drives an excavator arm.
 
-An asymmetric (single-rod) cylinder, driven by a four-way proportional valve with a
-current dead band, lifts the arm of a mid-size (about 13 t class) hydraulic excavator
-about its pivot. The measured output is the arm's angular velocity, obtained as in
-paper B: the arm angle from an inclinometer sampled at 20 Hz, differentiated
-numerically. The equations, the parameter values and their justification are in
-``docs/plants/electrohydraulic.md``. State ``x = [h, hdot, p1, p2, xv]`` (SPEC.md, Paper B):
+An asymmetric (single-rod) cylinder lifts the arm of a mid-size (about 13 t class)
+hydraulic excavator about its pivot. As on paper B's retrofitted machine, the computer's
+current drives electro-proportional pilot valves (one per direction, each with a
+threshold current); their pilot pressure acts on the ends of the spring-centred main
+spool of the directional valve, whose V-notch metering edges open a progressive flow
+area. The measured output is the arm's angular velocity, obtained as in paper B: the
+arm angle from an inclinometer sampled at 20 Hz, differentiated numerically. The
+equations, the parameter values and their justification are in
+``docs/plants/electrohydraulic.md``. State ``x = [h, hdot, p1, p2, xv, pp]`` (SPEC.md's
+five states, Paper B, and the pilot pressure difference ``pp``):
 
 .. math::
 
@@ -15,15 +19,18 @@ numerically. The equations, the parameter values and their justification are in
         - C_e p_1\\bigr), \\\\
     \\dot p_2 &= \\frac{\\beta(p_2)}{V_{02} + A_2 (L - h)}\\bigl(-Q_2 + A_2 v
         + C_i(p_1 - p_2) - C_e p_2\\bigr), \\\\
-    \\tau_v \\dot x_v &= \\mathrm{sat}\\bigl(k_v\\,\\mathrm{dz}(I(t - \\tau_d))\\bigr) - x_v,
+    c_s \\dot x_v &= A_s p_p - k_s x_v - F_0\\,\\mathrm{sgn}(x_v)
+        \\quad (x_v = 0 \\text{ held while } |A_s p_p| \\le F_0), \\\\
+    \\tau_p \\dot p_p &= \\mathrm{sgn}(I)\\min\\bigl(k_p \\max(|I(t - \\tau_d)| - I_d, 0),
+        p_{p,max}\\bigr) - p_p,
 
 with ``M(h) = m_p + J theta'(h)^2`` (arm inertia through the linkage),
 ``beta(p) = beta_e (1 - exp(-p / p_a))`` (air release near zero pressure) and the
-four-way valve flows, ``x_o = sgn(xv) max(|xv| - overlap, 0)`` the opening beyond the
-land overlap and ``k = Cd W x_o sqrt(2 / rho)``: ``Q1 = k s(ps - p1)``,
-``Q2 = k s(p2 - pr)`` for ``xv >= 0``; ``Q1 = k s(p1 - pr)``, ``Q2 = k s(ps - p2)`` for
-``xv < 0``, where ``s(dp) = dp / (dp^2 + p_tr^2)^(1/4)`` is the signed square root,
-regularised (laminar) near zero.
+four-way valve flows through the metering area ``A(xv)`` (overlap ``x_ov``, then a
+V-notch of length ``x_n``, then the full slot of width ``W``), ``k = Cd A(xv) sqrt(2 / rho)``:
+``Q1 = k s(ps - p1)``, ``Q2 = k s(p2 - pr)`` for ``xv >= 0``; ``Q1 = -k s(p1 - pr)``,
+``Q2 = -k s(ps - p2)`` for ``xv < 0``, where ``s(dp) = dp / (dp^2 + p_tr^2)^(1/4)`` is the
+signed square root, regularised (laminar) near zero.
 """
 
 from __future__ import annotations
@@ -41,6 +48,7 @@ from blockid.errors import ParameterError
 __all__ = [
     "ElectrohydraulicParameters",
     "electrohydraulic_equilibrium",
+    "electrohydraulic_static_spool",
     "electrohydraulic_static_velocity",
     "simulate_electrohydraulic",
     "multisine_current",
@@ -51,6 +59,9 @@ __all__ = [
 #: Integration steps per 50 ms sample by default (1 ms RK4 step, see the docs for the
 #: step-halving check); other sample times keep the step near 1 ms.
 DEFAULT_STEP = 1.0e-3
+
+#: Random phase sets searched for the lowest-crest-factor multisine of an experiment.
+PHASE_TRIALS = 64
 
 
 @dataclass(frozen=True)
@@ -84,22 +95,40 @@ class ElectrohydraulicParameters:
     discharge_coefficient : float
         ``Cd`` of the valve orifices [-].
     area_gradient : float
-        Orifice area per spool displacement ``W`` [m^2/m].
-    spool_gain : float
-        ``kv`` [m/A]: spool displacement per effective current.
-    spool_time_constant : float
-        ``tau_v`` [s] of the first-order spool response.
+        ``W`` [m^2/m]: metering area per spool displacement once the V-shaped notch has
+        run into the full-width slot (the largest area gradient of the profile).
+    notch_length : float
+        ``x_n`` [m]: length of the V-shaped metering notch beyond the overlap; over it
+        the area grows quadratically, ``W x_o^2 / (2 x_n)`` (fine metering).
     deadband_current : float
-        ``Id`` [A]: dead band of the pilot stage, the spool does not move while
-        ``|I| <= Id`` (paper B, Fig. 2a).
+        ``Id`` [A]: threshold current of the electro-proportional pilot valves; no pilot
+        pressure while ``|I| <= Id`` (paper B, Fig. 2a).
+    pilot_gain : float
+        ``kp`` [Pa/A]: pilot pressure per current above the threshold.
+    pilot_pressure_max : float
+        ``pp,max`` [Pa]: pilot supply pressure, the highest pilot pressure.
+    pilot_time_constant : float
+        ``tau_p`` [s] of the first-order pilot pressure response (solenoid, pilot valve,
+        pilot line).
+    spool_end_area : float
+        ``As`` [m^2]: area of a main-spool end on which the pilot pressure acts.
+    spool_preload : float
+        ``F0`` [N]: preload of the centring spring; the spool leaves neutral only when
+        ``|As pp| > F0`` (part of the main-valve dead band, paper B, Fig. 2b).
+    spool_stiffness : float
+        ``ks`` [N/m] of the centring spring.
+    spool_damping : float
+        ``cs`` [N s/m]: damping of the spool motion by the pilot oil that must flow
+        through the pilot lines and damping orifices (linearised), so that the spool
+        follows the pilot pressure with the time constant ``cs / ks``.
     spool_max : float
-        Spool saturation [m].
+        Main-spool stroke to its end caps [m].
     spool_overlap : float
         Overlap of the main-spool lands [m]: no flow while ``|xv|`` is below it (paper B,
         Fig. 2b). The dead band seen at the cylinder is :attr:`deadband_total`.
     input_delay : float
-        Pure delay ``tau_d`` [s] between the commanded current and the spool
-        (controller, bus and pilot stage), rounded to whole integration steps.
+        Pure delay ``tau_d`` [s] between the commanded current and the pilot valve
+        (controller cycle, bus, current amplifier), rounded to whole integration steps.
     transition_pressure : float
         ``p_tr`` [Pa] of the regularised orifice square root.
     air_pressure : float
@@ -154,13 +183,19 @@ class ElectrohydraulicParameters:
     internal_leakage: float = 5.0e-13
     external_leakage: float = 1.0e-15
     discharge_coefficient: float = 0.65
-    area_gradient: float = 5.0e-3
-    spool_gain: float = 8.0e-3
-    spool_time_constant: float = 0.03
-    deadband_current: float = 0.1
-    spool_max: float = 6.4e-3
-    spool_overlap: float = 0.8e-3
-    input_delay: float = 0.35
+    area_gradient: float = 4.67e-3
+    notch_length: float = 4.0e-3
+    deadband_current: float = 0.20
+    pilot_gain: float = 3.65e6
+    pilot_pressure_max: float = 3.9e6
+    pilot_time_constant: float = 0.03
+    spool_end_area: float = 3.8e-4
+    spool_preload: float = 133.0
+    spool_stiffness: float = 9.3e4
+    spool_damping: float = 9.3e3
+    spool_max: float = 9.0e-3
+    spool_overlap: float = 1.0e-3
+    input_delay: float = 0.25
     transition_pressure: float = 2.0e5
     air_pressure: float = 3.0e5
     min_pressure: float = 1.0e4
@@ -185,8 +220,18 @@ class ElectrohydraulicParameters:
 
     @property
     def deadband_total(self) -> float:
-        """Current dead band seen at the cylinder [A]: ``Id + overlap / kv``."""
-        return self.deadband_current + self.spool_overlap / self.spool_gain
+        """Current dead band seen at the cylinder [A].
+
+        The current at which the held spool reaches the end of the overlap:
+        ``Id + (F0 + ks x_ov) / (As kp)``.
+        """
+        force = self.spool_preload + self.spool_stiffness * self.spool_overlap
+        return self.deadband_current + force / (self.spool_end_area * self.pilot_gain)
+
+    @property
+    def spool_time_constant(self) -> float:
+        """Time constant ``cs / ks`` [s] of the spool following the pilot force."""
+        return self.spool_damping / self.spool_stiffness
 
     @property
     def area_head(self) -> float:
@@ -253,8 +298,8 @@ class ElectrohydraulicParameters:
         p[_k.P_DENSITY] = self.oil_density
         p[_k.P_SUPPLY] = self.supply_pressure
         p[_k.P_RETURN] = self.return_pressure
-        p[_k.P_SPOOL_GAIN] = self.spool_gain
-        p[_k.P_SPOOL_TAU] = self.spool_time_constant
+        p[_k.P_PILOT_GAIN] = self.pilot_gain
+        p[_k.P_PILOT_TAU] = self.pilot_time_constant
         p[_k.P_DEADBAND] = self.deadband_current
         p[_k.P_SPOOL_MAX] = self.spool_max
         p[_k.P_TRANSITION] = self.transition_pressure
@@ -280,6 +325,12 @@ class ElectrohydraulicParameters:
         p[_k.P_DELAY] = self.input_delay
         p[_k.P_OVERLAP] = self.spool_overlap
         p[_k.P_AIR_PRESSURE] = self.air_pressure
+        p[_k.P_PILOT_MAX] = self.pilot_pressure_max
+        p[_k.P_SPOOL_END_AREA] = self.spool_end_area
+        p[_k.P_SPOOL_PRELOAD] = self.spool_preload
+        p[_k.P_SPOOL_STIFFNESS] = self.spool_stiffness
+        p[_k.P_SPOOL_DAMPING] = self.spool_damping
+        p[_k.P_NOTCH_LENGTH] = self.notch_length
         return p
 
 
@@ -291,6 +342,7 @@ _NON_NEGATIVE = frozenset(
         "deadband_current",
         "input_delay",
         "spool_overlap",
+        "spool_preload",
         "spring_stiffness",
         "viscous_friction",
         "angle_noise_std",
@@ -331,8 +383,8 @@ def electrohydraulic_equilibrium(
 
     Returns
     -------
-    ndarray of float, shape (5,)
-        ``[h, 0, p_eq, p_eq, 0]``.
+    ndarray of float, shape (6,)
+        ``[h, 0, p_eq, p_eq, 0, 0]``: spool at neutral, no pilot pressure.
     """
     params = _resolve_params(params)
     p = params.to_array()
@@ -346,7 +398,7 @@ def electrohydraulic_equilibrium(
             f"the closed valve cannot hold the arm at position {h} m (rest pressure "
             f"{p_eq:.3g} Pa outside the pressure range); change external_load or the arm."
         )
-    return np.array([h, 0.0, p_eq, p_eq, 0.0])
+    return np.array([h, 0.0, p_eq, p_eq, 0.0, 0.0])
 
 
 def _substeps(sample_time: float, substeps: int | None) -> int:
@@ -401,8 +453,9 @@ def simulate_electrohydraulic(
     -------
     pandas.DataFrame
         Columns ``t`` [s], ``current`` [A], ``h`` [m], ``hdot`` [m/s], ``p1``, ``p2``
-        [Pa], ``xv`` [m], ``angle`` (true) [rad], ``angle_measured`` [rad] and
-        ``velocity`` [rad/s], the identification output.
+        [Pa], ``xv`` [m], ``pilot`` (pilot pressure difference) [Pa], ``angle`` (true)
+        [rad], ``angle_measured`` [rad] and ``velocity`` [rad/s], the identification
+        output.
 
     Examples
     --------
@@ -439,6 +492,7 @@ def simulate_electrohydraulic(
             "p1": states[:, 2],
             "p2": states[:, 3],
             "xv": states[:, 4],
+            "pilot": states[:, 5],
             "angle": angle,
             "angle_measured": measured,
             "velocity": velocity,
@@ -462,6 +516,7 @@ def multisine_current(
     amplitude: float = 0.9,
     offset: float = 0.0,
     seed: int | np.random.Generator | None = None,
+    phase_trials: int = 1,
 ) -> np.ndarray:
     """Paper B's identification input: equal-amplitude multisine with random phases.
 
@@ -471,7 +526,10 @@ def multisine_current(
         s(k) = \\sum_i \\sin(2\\pi f_i k T_s + \\varphi_i),
         \\quad \\varphi_i \\sim U[0, 2\\pi),
 
-    so that the current spans ``offset +- amplitude`` exactly.
+    so that the current spans ``offset +- amplitude`` exactly. With ``phase_trials > 1``
+    that many phase sets are drawn and the one with the lowest crest factor
+    ``max|s| / rms(s)`` is kept (the usual random-phase search for a multisine that
+    puts more of its time near the peak amplitude).
 
     Parameters
     ----------
@@ -487,6 +545,8 @@ def multisine_current(
         Mean current [A].
     seed : int or numpy.random.Generator, optional
         Seed of the phases.
+    phase_trials : int
+        Number of random phase sets to choose the lowest crest factor from.
 
     Returns
     -------
@@ -515,11 +575,22 @@ def multisine_current(
         raise ParameterError(f"amplitude must be a positive current in A, got {amplitude!r}.")
     if not np.isfinite(offset):
         raise ParameterError(f"offset must be a finite current in A, got {offset!r}.")
+    if (
+        isinstance(phase_trials, bool)
+        or not isinstance(phase_trials, int | np.integer)
+        or phase_trials < 1
+    ):
+        raise ParameterError(f"phase_trials must be a positive integer, got {phase_trials!r}.")
     rng = np.random.default_rng(seed)
-    phases = rng.uniform(0.0, 2.0 * np.pi, size=freqs.size)
     t = np.arange(n) * sample_time
-    s = np.sin(2.0 * np.pi * freqs[None, :] * t[:, None] + phases[None, :]).sum(axis=1)
-    return offset + amplitude * s / np.abs(s).max()
+    best, best_crest = None, np.inf
+    for _ in range(int(phase_trials)):
+        phases = rng.uniform(0.0, 2.0 * np.pi, size=freqs.size)
+        s = np.sin(2.0 * np.pi * freqs[None, :] * t[:, None] + phases[None, :]).sum(axis=1)
+        crest = np.abs(s).max() / np.sqrt(np.mean(s**2))
+        if crest < best_crest:
+            best, best_crest = s, crest
+    return offset + amplitude * best / np.abs(best).max()
 
 
 def general_trajectory_current(
@@ -530,7 +601,7 @@ def general_trajectory_current(
     """A validation command unlike the multisine: an operator's point-to-point moves.
 
     The arm is sent between random positions within the middle 70 % of the stroke:
-    each move holds a random current (0.3-0.85 A in the needed direction) for the
+    each move holds a random current (0.45-0.85 A in the needed direction) for the
     time the default plant's static characteristic
     (:func:`electrohydraulic_static_velocity`) needs to cover the distance, followed
     by a random pause (0.2-1.5 s). A 0.2 s first-order filter rounds the edges and
@@ -566,8 +637,8 @@ def general_trajectory_current(
     while k < n:
         target = position
         while abs(target - position) < 0.15 * stroke:
-            target = rng.uniform(0.15 * stroke, 0.85 * stroke)
-        level = rng.uniform(0.3, 0.85) * np.sign(target - position)
+            target = rng.uniform(0.25 * stroke, 0.75 * stroke)
+        level = rng.uniform(0.45, 0.85) * np.sign(target - position)
         speed = abs(float(electrohydraulic_static_velocity(level, position=position)))
         hold = abs(target - position) / speed
         pause = rng.uniform(0.2, 1.5)
@@ -587,7 +658,45 @@ def general_trajectory_current(
     spectrum[(freqs < 0.1) | (freqs > 1.5)] = 0.0
     jitter = np.fft.irfft(spectrum, n)
     jitter *= 0.05 / jitter.std()
-    return np.clip(smooth + jitter, -1.0, 1.0)
+    return np.clip(smooth + jitter, -0.9, 0.9)
+
+
+def electrohydraulic_static_spool(
+    current: np.ndarray | float, params: ElectrohydraulicParameters | None = None
+) -> np.ndarray:
+    """Main-spool position for a held current: the valve's static characteristic.
+
+    The pilot pressure settles at ``p_set(I)`` and the spool where the pilot force
+    balances the centring spring:
+
+    .. math::
+
+        x_v = \\mathrm{sgn}(I)\\,\\min\\Bigl(\\frac{\\max(A_s |p_{set}(I)| - F_0, 0)}{k_s},
+            x_{max}\\Bigr).
+
+    Parameters
+    ----------
+    current : float or array_like
+        Held current(s) [A].
+    params : ElectrohydraulicParameters, optional
+        Plant parameters; defaults when omitted.
+
+    Returns
+    -------
+    ndarray of float
+        Spool displacement [m], same shape as ``current``.
+    """
+    params = _resolve_params(params)
+    p = params.to_array()
+    currents = np.asarray(current, dtype=float)
+    out = np.zeros(currents.shape)
+    for index, value in np.ndenumerate(currents):
+        force = params.spool_end_area * abs(_k.electrohydraulic_pilot_setpoint(value, p))
+        travel = min(
+            max(force - params.spool_preload, 0.0) / params.spool_stiffness, params.spool_max
+        )
+        out[index] = math.copysign(travel, value) if travel > 0.0 else 0.0
+    return out
 
 
 def electrohydraulic_static_velocity(
@@ -597,12 +706,12 @@ def electrohydraulic_static_velocity(
 ) -> np.ndarray:
     """Steady piston velocity for a constant current: the plant's static characteristic.
 
-    For a held current the spool settles at ``xv = sat(kv dz(I))`` and, neglecting
-    leakage and the laminar regularisation, the orifice equations give
+    For a held current the spool settles at :func:`electrohydraulic_static_spool` and,
+    neglecting leakage and the laminar regularisation, the orifice equations give
     ``p1 = ps - (A1 v / k)^2``, ``p2 = pr + (A2 v / k)^2`` when extending and
     ``p1 = pr + (A1 v / k)^2``, ``p2 = ps - (A2 v / k)^2`` when retracting
-    (``k = Cd W xv sqrt(2 / rho)``). The speed solves the force balance at the given
-    position, e.g. when extending
+    (``k = Cd A(xv) sqrt(2 / rho)``, ``A`` the metering area). The speed solves the
+    force balance at the given position, e.g. when extending
 
     .. math::
 
@@ -633,6 +742,7 @@ def electrohydraulic_static_velocity(
     if not 0.0 <= h <= params.stroke:
         raise ParameterError(f"position must lie in [0, stroke={params.stroke}] m, got {h}.")
     currents = np.asarray(current, dtype=float)
+    spools = electrohydraulic_static_spool(currents, params)
     a1, a2 = params.area_head, params.area_rod
     cubes = a1**3 + a2**3
     load = _load_force(h, params, p)
@@ -646,18 +756,13 @@ def electrohydraulic_static_velocity(
         )
 
     ps, pr = params.supply_pressure, params.return_pressure
-    flow_scale = (
-        params.discharge_coefficient * params.area_gradient * math.sqrt(2.0 / params.oil_density)
-    )
+    flow_scale = params.discharge_coefficient * math.sqrt(2.0 / params.oil_density)
     out = np.zeros(currents.shape)
     for index, value in np.ndenumerate(currents):
-        excess = abs(value) - params.deadband_current
-        if excess <= 0.0:
+        area = _k.electrohydraulic_metering_area(spools[index], p)
+        if area <= 0.0:
             continue
-        opening = min(params.spool_gain * excess, params.spool_max) - params.spool_overlap
-        if opening <= 0.0:
-            continue
-        k = flow_scale * opening
+        k = flow_scale * area
         # Net force driving the motion at zero speed; the load helps retraction.
         drive = a1 * ps - a2 * pr - load if value > 0.0 else a2 * ps - a1 * pr + load
 
@@ -754,7 +859,11 @@ def electrohydraulic_experiment(
     seeds = np.random.SeedSequence(seed).spawn(n_repeats + 3)
     records = {}
     for name, raw, noise_seeds in (
-        ("estimation", multisine_current(seed=np.random.default_rng(seeds[0])), seeds[3:]),
+        (
+            "estimation",
+            multisine_current(seed=np.random.default_rng(seeds[0]), phase_trials=PHASE_TRIALS),
+            seeds[3:],
+        ),
         (
             "validation",
             general_trajectory_current(seed=np.random.default_rng(seeds[1])),
