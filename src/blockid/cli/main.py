@@ -18,6 +18,7 @@ from blockid.cli._common import (
     metrics_table,
     parse_order,
     print_json,
+    stderr,
     stdout,
 )
 
@@ -307,6 +308,8 @@ def _run_model(
         }
         print_json(doc)
         return
+    for note in result.warnings:
+        stderr.print(f"warning: {note}", markup=False)
     label = "free-run simulation" if mode == "simulation" else "one-step-ahead prediction"
     stdout.print(
         metrics_table(
@@ -387,7 +390,9 @@ def compare(
     for m in result.models:
         if m.error:
             stdout.print(f"[red]{m.structure} ({m.method}) failed:[/] {m.error}", soft_wrap=True)
-        elif m.one_step_error:
+        for note in m.simulation.warnings if m.simulation is not None else []:
+            stderr.print(f"warning: {m.structure}: {note}", markup=False)
+        if m.one_step_error:
             stdout.print(
                 f"{m.structure}: no one-step prediction: {m.one_step_error}",
                 soft_wrap=True,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -35,6 +35,9 @@ class ModelOutput:
     metrics : dict
         ``{"mse": {"y1": ...}, "rmse": ..., "mae": ..., "max_abs_error": ...,
         "fit_percent": ...}`` over all experiments, initial samples excluded.
+    warnings : list of str
+        E.g. that the data drive a block-oriented model outside the ranges it was
+        estimated on (its polynomial blocks extrapolate there).
     """
 
     mode: str
@@ -42,6 +45,7 @@ class ModelOutput:
     outputs: list[np.ndarray]
     skip: int
     metrics: dict[str, dict[str, float]]
+    warnings: list[str] = field(default_factory=list)
 
     def to_frame(self) -> pd.DataFrame:
         """The data as a table, with a ``<output>_sim`` / ``<output>_pred`` column each."""
@@ -58,6 +62,7 @@ class ModelOutput:
             "n_samples": int(sum(len(y) for y in self.outputs)),
             "initial_samples_per_experiment": self.skip,
             "metrics": self.metrics,
+            "warnings": self.warnings,
         }
 
 
@@ -92,4 +97,17 @@ def evaluate(model: Any, data: Dataset, mode: str = "simulation") -> ModelOutput
     y = np.vstack([exp.y[skip:] for exp in data.experiments])
     y_hat = np.vstack([out[skip:] for out in outputs])
     metrics = metrics_by_output(y, y_hat, data.outputs)
-    return ModelOutput(mode, data, outputs, skip, metrics)
+    warnings: list[str] = []
+    for model_part in getattr(model, "subsystems", [(None, model)]):
+        sub = model_part[1]
+        if hasattr(sub, "extrapolation"):
+            for exp in data.experiments:
+                cols = [
+                    list(data.inputs).index(n) if n in data.inputs else None for n in sub.inputs
+                ]
+                if None in cols:
+                    continue  # fed by another subsystem: checked through its own input
+                for note in sub.extrapolation(exp.u[:, cols]):
+                    prefix = f"{model_part[0]}: " if model_part[0] else ""
+                    warnings.append(f"{prefix}{note} (experiment {exp.name!r})")
+    return ModelOutput(mode, data, outputs, skip, metrics, warnings)

@@ -4,7 +4,10 @@ The papers' recursive algorithms can diverge or converge to wrong answers on ord
 data; blockid reports that instead of handing out a bad model. A model is accepted when
 
 * all parameters are finite,
-* its linear block is stable (poles strictly inside the unit circle),
+* its linear block is stable with a margin: every pole inside the circle of radius
+  ``1 - STABILITY_MARGIN`` (0.999). A pole on the unit circle (e.g. at -1, an
+  undamped oscillation at the Nyquist frequency) can look harmless on estimation data
+  and ring on any other record,
 * its free-run simulation on the estimation data is finite and does not explode, and
 * that simulation is not worse than a plain linear ARX of the same orders fitted by
   least squares (at most ``max_mse_ratio`` = 1.1 times its MSE). A block-oriented model
@@ -24,7 +27,10 @@ from blockid.estimators import BatchLeastSquares
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.models.arx import ARX
 
-__all__ = ["simulation_mse", "linear_baseline", "check_model"]
+__all__ = ["STABILITY_MARGIN", "simulation_mse", "linear_baseline", "check_model"]
+
+#: Poles must lie inside the circle of radius ``1 - STABILITY_MARGIN``.
+STABILITY_MARGIN = 1e-3
 
 
 def simulation_mse(model: Any, data: Dataset) -> float:
@@ -77,11 +83,12 @@ def check_model(
     theta = model.free_parameters()
     if not np.all(np.isfinite(theta)):
         raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
-    if not model.is_stable():
+    if not model.is_stable(STABILITY_MARGIN):
         rho = float(np.max(np.abs(model.linear.poles())))
         raise EstimationError(
-            f"{method} returned an unstable linear block (largest pole magnitude {rho:.4g}); "
-            "its simulation would diverge, so no model is returned. See docs/convergence.md"
+            f"{method} returned a linear block that is unstable or on the edge of stability "
+            f"(largest pole magnitude {rho:.6g}, limit {1 - STABILITY_MARGIN:g}); its "
+            "simulation would diverge or ring, so no model is returned. See docs/convergence.md"
         )
     mse = simulation_mse(model, data)
     y_all = np.vstack([e.y for e in data.experiments])

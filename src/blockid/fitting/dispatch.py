@@ -134,7 +134,9 @@ def fit_model(
         refined = refine_fit(result.model, data)
         refined.settings = {"started_from": result.method, **result.settings, **refined.settings}
         refined.method = f"{result.method}+refine"
-        return refined
+        result = refined
+    if hasattr(result.model, "record_ranges"):
+        result.model.record_ranges([(e.u, e.y) for e in data.experiments])
     return result
 
 
@@ -153,5 +155,6 @@ def _centered(
     )
     result = fit_model(shifted, structure, method=method, refine=refine, center=False, **options)
     result.model = result.model._replace(input_offset=u_off, output_offset=y_off)
+    result.model.record_ranges([(e.u, e.y) for e in data.experiments])
     result.settings = {**result.settings, "center": True}
     return result

@@ -76,7 +76,7 @@ from blockid.blocks.base import Block, StaticBlock
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
-from blockid.fitting.checks import simulation_mse
+from blockid.fitting.checks import STABILITY_MARGIN, simulation_mse
 from blockid.models.block import (
     BLOCK_STRUCTURES,
     BacklashModel,
@@ -184,12 +184,13 @@ def _least_squares(Phi: np.ndarray, target: np.ndarray, what: str) -> np.ndarray
 
 def _stabilise(a: np.ndarray) -> np.ndarray:
     """Move poles on or outside the unit circle inside: ``p -> 0.99 / conj(p)``, and at
-    most radius 0.99 (a start for the refinement, which needs a stable model)."""
+    most radius 0.99 (a start for the refinement, which needs poles inside radius
+    ``1 - STABILITY_MARGIN``)."""
     if a.size == 0:
         return a
     poles = np.roots(np.concatenate(([1.0], a)))
     mag = np.abs(poles)
-    if np.all(mag < 1.0):
+    if np.all(mag < 1.0 - STABILITY_MARGIN):
         return a
     fixed = np.where(mag < 1.0, poles, 0.99 * poles / np.maximum(mag, 1e-300) ** 2)
     fixed = np.where(np.abs(fixed) >= 0.99, 0.99 * fixed / np.abs(fixed), fixed)
@@ -426,7 +427,8 @@ def _output_polynomial(x: Sequence[np.ndarray], y: Sequence[np.ndarray], r2: int
 def _score(model: BlockModel, data: Dataset) -> float:
     try:
         with np.errstate(all="ignore"):
-            return simulation_mse(model, data) if model.is_stable() else np.inf
+            stable = model.is_stable(STABILITY_MARGIN)
+            return simulation_mse(model, data) if stable else np.inf
     except BlockidError:
         return np.inf
 

@@ -60,7 +60,7 @@ from blockid.blocks import Backlash, DeadZone, Saturation
 from blockid.blocks.base import Block
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
-from blockid.fitting.checks import check_model, simulation_mse
+from blockid.fitting.checks import STABILITY_MARGIN, check_model, simulation_mse
 from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.result import FitResult
 from blockid.models.block import BlockModel
@@ -281,7 +281,7 @@ class _Problem:
             model = self.template.with_free_parameters(theta)
         except BlockidError:
             return None
-        return model if model.is_stable() else None
+        return model if model.is_stable(STABILITY_MARGIN) else None
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         self.tracker.nfev += 1
@@ -443,7 +443,7 @@ def refine(
         raise EstimationError(
             "refinement cannot start: the starting model's parameters are not finite"
         )
-    if not model.is_stable():
+    if not model.is_stable(STABILITY_MARGIN):
         rho = float(np.max(np.abs(model.linear.poles())))
         raise EstimationError(
             "refinement cannot start: the starting model's linear block is unstable "

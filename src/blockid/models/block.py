@@ -123,6 +123,9 @@ class BlockModel(Model):
         self.sampling_time = sampling_time
         self.input_offset = float(input_offset)
         self.output_offset = float(output_offset)
+        #: Ranges of the block inputs seen in the estimation data, ``{"u": [lo, hi],
+        #: "x": [lo, hi]}`` (relative to the offsets); set by :meth:`record_ranges`.
+        self.ranges: dict[str, list[float]] = {}
         for name, value in (("na", na), ("nb", nb), ("nk", nk)):
             if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
                 raise OrderError(
@@ -315,6 +318,45 @@ class BlockModel(Model):
             output_block = Polynomial(np.concatenate(([1.0], theta[pos:])), constant=False)
         return self._replace(input_block=input_block, output_block=output_block, a=a, b=b)
 
+    def record_ranges(self, experiments: Any) -> None:
+        """Remember the ranges of ``u`` and of the linear block's output ``x`` over
+        estimation data (a sequence of ``(u, y)`` arrays), to flag extrapolation later."""
+        us, xs = [], []
+        for u, _ in experiments:
+            us.append(self._u(u))
+            xs.append(self.linear.simulate(self.internal(u)[:, None])[:, 0])
+        u_all, x_all = np.concatenate(us), np.concatenate(xs)
+        self.ranges = {"u": [float(u_all.min()), float(u_all.max())]}
+        if self.output_block is not None and np.all(np.isfinite(x_all)):
+            self.ranges["x"] = [float(x_all.min()), float(x_all.max())]
+
+    def extrapolation(self, u: Any) -> list[str]:
+        """Warnings when ``u`` (or the simulated ``x``) leaves the recorded ranges.
+
+        A polynomial block fitted on a range says nothing outside it; a cubic output
+        block can run away there.
+        """
+        notes = []
+        if not self.ranges:
+            return notes
+        u_rel = self._u(u)
+        checks = [("u", u_rel, f"input {self.inputs[0]!r}")]
+        if "x" in self.ranges:
+            x = self.linear.simulate(self.internal(u)[:, None])[:, 0]
+            checks.append(("x", x, "the linear block's output x (input of the output block)"))
+        for key, values, what in checks:
+            lo, hi = self.ranges[key]
+            span = max(hi - lo, 1e-300)
+            out = (values < lo - 0.02 * span) | (values > hi + 0.02 * span)
+            if out.any():
+                worst = float(max(lo - values.min(), values.max() - hi)) / span
+                notes.append(
+                    f"{what} leaves the range seen in estimation [{lo:.4g}, {hi:.4g}] in "
+                    f"{int(out.sum())} of {values.size} samples (by up to {100 * worst:.0f} % "
+                    "of that range): the model extrapolates there"
+                )
+        return notes
+
     def _replace(self, **changes: Any) -> BlockModel:
         kwargs = dict(
             input_block=self.input_block,
@@ -330,7 +372,10 @@ class BlockModel(Model):
         )
         kwargs.update(changes)
         cls = type(self)
-        return cls(self.inputs[0], self.outputs[0], **_ctor_kwargs(cls, kwargs))
+        new = cls(self.inputs[0], self.outputs[0], **_ctor_kwargs(cls, kwargs))
+        if "input_offset" not in changes and "output_offset" not in changes:
+            new.ranges = dict(self.ranges)
+        return new
 
     # ------------------------------------------------------------------ files
     def to_dict(self) -> dict[str, Any]:
@@ -349,6 +394,7 @@ class BlockModel(Model):
                 "inputs": {self.inputs[0]: self.input_offset},
                 "outputs": {self.outputs[0]: self.output_offset},
             },
+            "estimation_ranges": self.ranges,
         }
 
     @classmethod
@@ -384,7 +430,11 @@ class BlockModel(Model):
             input_offset=offsets.get("inputs", {}).get(data["inputs"][0], 0.0),
             output_offset=offsets.get("outputs", {}).get(data["outputs"][0], 0.0),
         )
-        return cls(data["inputs"][0], data["outputs"][0], **_ctor_kwargs(cls, kwargs))
+        model = cls(data["inputs"][0], data["outputs"][0], **_ctor_kwargs(cls, kwargs))
+        model.ranges = {
+            k: [float(v[0]), float(v[1])] for k, v in data.get("estimation_ranges", {}).items()
+        }
+        return model
 
 
 def _ctor_kwargs(cls: type, kwargs: dict[str, Any]) -> dict[str, Any]:

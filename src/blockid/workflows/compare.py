@@ -33,6 +33,8 @@ class ModelScore:
             out["error"] = self.error
             return out
         out["simulation"] = self.simulation.metrics
+        if self.simulation.warnings:
+            out["warnings"] = self.simulation.warnings
         out["one_step"] = None if self.one_step is None else self.one_step.metrics
         if self.one_step_error:
             out["one_step_error"] = self.one_step_error
