@@ -109,3 +109,18 @@ def test_orders_too_large_for_the_data(rng):
     data = Dataset.from_arrays(rng.standard_normal(30), rng.standard_normal(30))
     with pytest.raises(errors.OrderError, match="needs at least 40 regression rows"):
         fit_arx(data, 20, 20, 1)
+
+
+def test_block_model_on_the_edge_of_stability_is_rejected(rng):
+    from blockid.blocks import TwoSegmentPolynomial
+    from blockid.fitting import check_model
+    from blockid.models import Hammerstein
+
+    block = TwoSegmentPolynomial([0.0, 1.0], [0.0, 0.0])
+    u = rng.uniform(-1, 1, 400)
+    edge = Hammerstein("u", "y", input_block=block, na=1, nb=1, nk=1, a=[0.9996])  # pole -0.9996
+    data = Dataset.from_arrays(u, edge.simulate(u)[:, 0])
+    with pytest.raises(errors.EstimationError, match="edge of stability"):
+        check_model(edge, data, "test")
+    fine = Hammerstein("u", "y", input_block=block, na=1, nb=1, nk=1, a=[0.95])
+    check_model(fine, Dataset.from_arrays(u, fine.simulate(u)[:, 0]), "test")

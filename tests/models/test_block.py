@@ -101,3 +101,14 @@ def test_non_invertible_output_block_refuses_one_step_prediction(rng):
     u = rng.uniform(-2, 2, 100)
     with pytest.raises(errors.EstimationError, match="cannot be inverted"):
         model.predict(u, model.simulate(u))
+
+
+def test_extrapolation_is_flagged_outside_the_recorded_ranges(rng, tmp_path):
+    model = hw()
+    u = rng.uniform(-1.0, 1.0, 500)
+    model.record_ranges([(u, None)])
+    assert model.extrapolation(rng.uniform(-0.9, 0.9, 200)) == []
+    notes = model.extrapolation(np.r_[u[:100], 1.6])
+    assert len(notes) >= 1 and "input 'u' leaves the range seen in estimation" in notes[0]
+    again = load_model(save_model(model, tmp_path / "m.json"))  # ranges travel with the file
+    assert again.ranges == model.ranges
