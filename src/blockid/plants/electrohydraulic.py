@@ -46,6 +46,7 @@ from blockid._kernels import electrohydraulic as _k
 from blockid.errors import ParameterError
 
 __all__ = [
+    "PHASE_TRIALS",
     "ElectrohydraulicParameters",
     "electrohydraulic_equilibrium",
     "electrohydraulic_static_spool",
@@ -127,8 +128,10 @@ class ElectrohydraulicParameters:
         Overlap of the main-spool lands [m]: no flow while ``|xv|`` is below it (paper B,
         Fig. 2b). The dead band seen at the cylinder is :attr:`deadband_total`.
     input_delay : float
-        Pure delay ``tau_d`` [s] between the commanded current and the pilot valve
-        (controller cycle, bus, current amplifier), rounded to whole integration steps.
+        Pure delay ``tau_d`` [s] between the commanded current and the pilot valves,
+        rounded to whole integration steps: what the model does not resolve (computer
+        I/O latency, the inclinometer's filter and bus latency, the pump's pressure
+        build-up); the default makes the plant's dead time paper B's ``nk = 8``.
     transition_pressure : float
         ``p_tr`` [Pa] of the regularised orifice square root.
     air_pressure : float
@@ -600,12 +603,14 @@ def general_trajectory_current(
 ) -> np.ndarray:
     """A validation command unlike the multisine: an operator's point-to-point moves.
 
-    The arm is sent between random positions within the middle 70 % of the stroke:
-    each move holds a random current (0.45-0.85 A in the needed direction) for the
-    time the default plant's static characteristic
+    The arm is sent between random positions within the middle half of the stroke
+    (where the multisine runs go): each move holds a random current (0.45-0.85 A in the
+    needed direction) for the time the default plant's static characteristic
     (:func:`electrohydraulic_static_velocity`) needs to cover the distance, followed
     by a random pause (0.2-1.5 s). A 0.2 s first-order filter rounds the edges and
-    band-limited noise (0.1-1.5 Hz, 0.05 A rms) imitates the operator's hand.
+    band-limited noise (0.1-1.5 Hz, 0.05 A rms) imitates the operator's hand; the
+    command stays within the multisine's +-0.9 A, so that validation does not ask the
+    models to extrapolate.
 
     Parameters
     ----------
@@ -619,12 +624,12 @@ def general_trajectory_current(
     Returns
     -------
     ndarray of float, shape (round(duration / sample_time),)
-        Current [A], within +-1 A.
+        Current [A], within +-0.9 A.
 
     Examples
     --------
     >>> u = general_trajectory_current(seed=0)
-    >>> u.shape, bool(abs(u).max() <= 1.0)
+    >>> u.shape, bool(abs(u).max() <= 0.9)
     ((1100,), True)
     """
     n = _n_samples(duration, sample_time)
@@ -823,10 +828,11 @@ def electrohydraulic_experiment(
 ) -> dict[str, pd.DataFrame]:
     """Paper B's data: an averaged multisine estimation record and a validation record.
 
-    The same multisine (:func:`multisine_current`, 55 s at 20 Hz) is applied
-    ``n_repeats`` times with independent inclinometer noise; the measured angles are
-    averaged and differentiated (equivalently the velocities are averaged, the
-    central difference being linear). The validation record is one measured run of
+    The same multisine (:func:`multisine_current`, 55 s at 20 Hz, the lowest crest
+    factor of :data:`PHASE_TRIALS` random phase sets) is applied ``n_repeats`` times
+    with independent inclinometer noise; the measured angles are averaged and
+    differentiated (equivalently the velocities are averaged, the central difference
+    being linear). The validation record is one measured run of
     :func:`general_trajectory_current`. Before each, the current offset is trimmed so
     that the arm does not creep, and the start position is chosen so that the motion
     is centred in the stroke (see ``docs/plants/electrohydraulic.md``); both are
