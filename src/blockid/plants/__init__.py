@@ -3,6 +3,7 @@
 from blockid.plants.electrohydraulic import (
     ElectrohydraulicParameters,
     electrohydraulic_experiment,
+    electrohydraulic_static_spool,
     general_trajectory_current,
     multisine_current,
     simulate_electrohydraulic,
@@ -20,6 +21,7 @@ __all__ = [
     "ElectrohydraulicParameters",
     "WindTunnelParameters",
     "electrohydraulic_experiment",
+    "electrohydraulic_static_spool",
     "flow_field_arx",
     "general_trajectory_current",
     "multisine_current",
