@@ -75,9 +75,9 @@ def _read_backlash(theta: np.ndarray) -> Backlash:
     c_left, c_right = float(theta[1]) / m_left, float(theta[3]) / m_right
     if c_left < 0.0 or c_right < 0.0:
         raise EstimationError(
-            f"AW-RLS ended with negative dead-band half-widths c_left = {c_left:.4g}, "
+            f"AW-RLS ended with a negative dead-band half-width: c_left = {c_left:.4g}, "
             f"c_right = {c_right:.4g} (theta_2/theta_1, theta_4/theta_3); a backlash needs "
-            "c >= 0, so no model is returned. See docs/convergence.md"
+            "both >= 0, so no model is returned. See docs/convergence.md"
         )
     return Backlash.from_theta(theta[:4])
 
