@@ -120,7 +120,7 @@ def test_sinusoid_drives_the_linear_block_unstable_and_the_report_says_when():
 
 def test_held_command_ends_with_negative_dead_band_and_it_raises():
     u = SLOW["random level held 5 samples"](5000)
-    with pytest.raises(EstimationError, match=r"negative dead-band half-widths"):
+    with pytest.raises(EstimationError, match=r"negative dead-band half-width"):
         fit_backlash_aw_rls(_data(u))
 
 
