@@ -52,8 +52,7 @@ ESTIMATORS: dict[str, list[SubsystemSpec]] = {
                 "center": True,
                 "forgetting": 0.98,
                 "passes": 3,
-                "max_mse_ratio": None,
-            },
+                },
         ),
     ],
     "default (LS, simulation error, LS)": [
