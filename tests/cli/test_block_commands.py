@@ -185,3 +185,40 @@ def test_example_data_gives_the_ranges_it_prints(tmp_path):
     assert list(frame.columns) == ["t", "u1", "u2", "v1", "v2", "y1", "y2"] and len(frame) == 2400
     r = runner.invoke(app, ["example-data", "windtunnel-110kPa", "-o", str(out)])
     assert r.exit_code == 2 and "exists" in r.stderr
+
+
+def test_fit_network_then_simulate_from_external_inputs(tmp_path):
+    data = tmp_path / "wt.csv"
+    runner.invoke(app, ["example-data", "windtunnel-110kPa", "-o", str(data)])
+    net = tmp_path / "net.json"
+    r = runner.invoke(
+        app,
+        [
+            "fit-network",
+            str(data),
+            "--time-column",
+            "t",
+            "--estimation",
+            "0:1200",
+            "-s",
+            "S1: u1 -> v1 | arx na=1 nb=1 nk=1 method=rls",
+            "-s",
+            "S2: u2 -> v2 | backlash na=2 nb=1 nk=1",
+            "-s",
+            "S3: v1,v2 -> y1,y2 | arx na=2 nb=2 nk=1 center=true",
+            "-o",
+            str(net),
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    model = load_model(net)
+    assert model.inputs == ("u1", "u2") and model.outputs == ("v1", "v2", "y1", "y2")
+    assert model["S2"].parameters["c_left"] == pytest.approx(0.8, rel=0.05)
+    r = runner.invoke(
+        app,
+        ["simulate", str(net), str(data), "--time-column", "t", "--range", "1200:2400", "--json"],
+    )
+    doc = json.loads(r.stdout)
+    assert doc["metrics"]["fit_percent"]["v2"] > 99 and doc["metrics"]["fit_percent"]["y2"] > 60
+    r = runner.invoke(app, ["fit-network", str(data), "-s", "S1 u1 v1", "--json"])
+    assert r.exit_code == 2 and "expected 'NAME: IN" in r.stderr

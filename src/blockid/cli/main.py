@@ -321,6 +321,81 @@ def _run_model(
         stdout.print(f"model output written to {out}")
 
 
+@app.command("fit-network")
+@cli_errors
+def fit_network_cmd(
+    data_paths: DataPaths,
+    subsystems: Annotated[
+        list[str],
+        typer.Option(
+            "--subsystem",
+            "-s",
+            help="'NAME: IN[,IN] -> OUT[,OUT] | STRUCTURE key=value ...', e.g. "
+            "'S1: u1 -> v1 | arx na=1 nb=1 nk=1 method=rls'. Repeat, upstream first.",
+        ),
+    ],
+    estimation: Annotated[
+        str | None, typer.Option(help="Estimation samples START:STOP (0-based, stop excluded).")
+    ] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Model file to write.")] = None,
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    experiment_column: ExperimentColumn = None,
+    force: Force = False,
+    json_out: Json = False,
+) -> None:
+    """Identify a network of subsystems, each from its own measured signals (paper A).
+
+    The data must hold every signal the subsystems name (internal ones measured too).
+    The network model simulates all subsystem outputs from the external inputs alone;
+    use it with 'blockid simulate' and 'blockid predict' like any model.
+    """
+    from blockid.errors import ParameterError
+    from blockid.fitting import fit_network, parse_subsystem
+    from blockid.models import model_document, save_model
+
+    if out is None and not json_out:
+        raise ParameterError("nothing to do: give -o MODEL.json to save the model, or --json")
+    if out is not None and out.exists() and not force:
+        raise ParameterError(f"{out} exists; pass --force to replace it")
+    specs = [parse_subsystem(text) for text in subsystems]
+    external = []
+    produced = {o for spec in specs for o in spec.outputs}
+    for spec in specs:
+        external += [i for i in spec.inputs if i not in produced and i not in external]
+    data = _load(
+        data_paths,
+        external,
+        sorted(produced, key=[o for sp in specs for o in sp.outputs].index),
+        ts,
+        time_column,
+        experiment_column,
+        estimation,
+        "--estimation",
+    )
+    result = fit_network(data, specs)
+    record = result.estimation_record()
+    if out is not None:
+        save_model(result.model, out, record, overwrite=force)
+    if json_out:
+        print_json(model_document(result.model, record))
+        return
+    for name, sub in result.model.subsystems:
+        stdout.print(
+            f"[bold]{name}[/]: {', '.join(sub.inputs)} -> {', '.join(sub.outputs)} "
+            f"({sub.structure}, {record['settings']['subsystems'][name]['method']})"
+        )
+        _print_model(sub)
+    stdout.print(
+        metrics_table(
+            "free-run simulation of the network on the estimation data",
+            [("network", result.estimation_metrics)],
+        )
+    )
+    if out is not None:
+        stdout.print(f"model written to {out}")
+
+
 @app.command()
 @cli_errors
 def compare(

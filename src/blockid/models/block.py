@@ -49,6 +49,9 @@ __all__ = [
     "BLOCK_STRUCTURES",
 ]
 
+#: Blocks whose extrapolation beyond the fitted range is unreliable.
+_POLYNOMIAL_KINDS = ("polynomial", "two-segment-polynomial")
+
 #: SPEC names of the input-block parameters, by block kind (others keep their own names).
 _SPEC_NAMES = {"polynomial": {"coefficients": "f"}}
 
@@ -340,7 +343,10 @@ class BlockModel(Model):
         if not self.ranges:
             return notes
         u_rel = self._u(u)
-        checks = [("u", u_rel, f"input {self.inputs[0]!r}")]
+        checks = []
+        kind = getattr(self.input_block, "kind", "")
+        if kind in _POLYNOMIAL_KINDS:  # piecewise-linear blocks extrapolate by construction
+            checks.append(("u", u_rel, f"input {self.inputs[0]!r}"))
         if "x" in self.ranges:
             x = self.linear.simulate(self.internal(u)[:, None])[:, 0]
             checks.append(("x", x, "the linear block's output x (input of the output block)"))
