@@ -66,3 +66,21 @@ def weighted_least_squares(Phi, Y, weights, prior_weight=0.0, theta0=0.0):
     A = Phi.T @ (weights[:, None] * Phi) + prior_weight * np.eye(n)
     b = Phi.T @ (weights[:, None] * Y) + prior_weight * theta0
     return np.linalg.solve(A, b)
+
+
+def tito_arx(inputs=("v1", "v2"), outputs=("y1", "y2"), **kwargs):
+    """The stable two-input two-output ARX used across the tests (paper A's flow-field
+    orders: na = 2 own and cross lags, nb = 2, nk = 1)."""
+    from blockid.models import ARX
+
+    (i1, i2), (o1, o2) = inputs, outputs
+    return ARX(
+        list(inputs),
+        list(outputs),
+        na=2,
+        nb=2,
+        nk=1,
+        a={o1: {o1: [-1.2, 0.4], o2: [0.1, 0.0]}, o2: {o1: [0.05, 0.02], o2: [-0.9, 0.2]}},
+        b={o1: {i1: [0.5, 0.2], i2: [0.1, -0.05]}, o2: {i1: [0.0, 0.03], i2: [0.4, 0.1]}},
+        **kwargs,
+    )

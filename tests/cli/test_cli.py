@@ -8,28 +8,16 @@ import pytest
 from typer.testing import CliRunner
 
 from blockid.cli.main import app
-from blockid.models import ARX, load_model
+from blockid.models import load_model
+
+import reference
 
 runner = CliRunner()
 
 
 @pytest.fixture
 def tito_csv(tmp_path, rng):
-    plant = ARX(
-        ["u1", "u2"],
-        ["y1", "y2"],
-        na=2,
-        nb=2,
-        nk=1,
-        a={
-            "y1": {"y1": [-1.2, 0.4], "y2": [0.1, 0.0]},
-            "y2": {"y1": [0.05, 0.02], "y2": [-0.9, 0.2]},
-        },
-        b={
-            "y1": {"u1": [0.5, 0.2], "u2": [0.1, -0.05]},
-            "y2": {"u1": [0.0, 0.03], "u2": [0.4, 0.1]},
-        },
-    )
+    plant = reference.tito_arx(inputs=("u1", "u2"))
     u = rng.standard_normal((1200, 2))
     y = plant.simulate(u) + 0.001 * rng.standard_normal((1200, 2))
     path = tmp_path / "tito.csv"

@@ -4,25 +4,12 @@ import pytest
 from blockid import errors
 from blockid.data import Dataset
 from blockid.fitting import fit_arx
-from blockid.models import ARX
+
+import reference
 
 
 def tito_plant():
-    return ARX(
-        ["v1", "v2"],
-        ["y1", "y2"],
-        na=2,
-        nb=2,
-        nk=1,
-        a={
-            "y1": {"y1": [-1.2, 0.4], "y2": [0.1, 0.0]},
-            "y2": {"y1": [0.05, 0.02], "y2": [-0.9, 0.2]},
-        },
-        b={
-            "y1": {"v1": [0.5, 0.2], "v2": [0.1, -0.05]},
-            "y2": {"v1": [0.0, 0.03], "v2": [0.4, 0.1]},
-        },
-    )
+    return reference.tito_arx()
 
 
 def tito_data(rng, N, noise=0.0, offsets=(0.0, 0.0)):

@@ -7,25 +7,12 @@ from scipy.signal import lfilter
 from blockid import errors
 from blockid.models import ARX, model_from_dict
 
+import reference
+
 
 def tito(**kw):
     """A stable two-input two-output ARX like paper A's flow field (na=2, nb=2, nk=1)."""
-    return ARX(
-        ["v1", "v2"],
-        ["y1", "y2"],
-        na=2,
-        nb=2,
-        nk=1,
-        a={
-            "y1": {"y1": [-1.2, 0.4], "y2": [0.1, 0.0]},
-            "y2": {"y1": [0.05, 0.02], "y2": [-0.9, 0.2]},
-        },
-        b={
-            "y1": {"v1": [0.5, 0.2], "v2": [0.1, -0.05]},
-            "y2": {"v1": [0.0, 0.03], "v2": [0.4, 0.1]},
-        },
-        **kw,
-    )
+    return reference.tito_arx(**kw)
 
 
 def simulate_reference(model, u, y0):

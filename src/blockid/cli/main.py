@@ -475,7 +475,9 @@ def compare(
             )
 
 
-ModelPath = Annotated[Path, typer.Argument(help="Model file written by 'blockid fit'.")]
+ModelPath = Annotated[
+    Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
+]
 Range = Annotated[
     str | None, typer.Option("--range", help="Samples START:STOP to use (default: all).")
 ]
@@ -484,60 +486,48 @@ OutCsv = Annotated[
 ]
 
 
-@app.command()
-@cli_errors
-def simulate(
-    model_path: ModelPath,
-    data_paths: DataPaths,
-    rng: Range = None,
-    out: OutCsv = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
-    force: Force = False,
-    json_out: Json = False,
-) -> None:
-    """Free-run simulation of a model on the inputs in DATA (outputs used for metrics)."""
-    _run_model(
-        "simulation",
-        model_path,
-        data_paths,
-        rng,
-        out,
-        ts,
-        time_column,
-        experiment_column,
-        force,
-        json_out,
-    )
+def _model_command(mode: str, name: str, doc: str) -> None:
+    """Register ``simulate`` / ``predict``: the same options, another mode."""
+
+    @cli_errors
+    def command(
+        model_path: ModelPath,
+        data_paths: DataPaths,
+        rng: Range = None,
+        out: OutCsv = None,
+        ts: SamplingTime = None,
+        time_column: TimeColumn = None,
+        experiment_column: ExperimentColumn = None,
+        force: Force = False,
+        json_out: Json = False,
+    ) -> None:
+        _run_model(
+            mode,
+            model_path,
+            data_paths,
+            rng,
+            out,
+            ts,
+            time_column,
+            experiment_column,
+            force,
+            json_out,
+        )
+
+    command.__doc__ = doc
+    app.command(name)(command)
 
 
-@app.command()
-@cli_errors
-def predict(
-    model_path: ModelPath,
-    data_paths: DataPaths,
-    rng: Range = None,
-    out: OutCsv = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
-    force: Force = False,
-    json_out: Json = False,
-) -> None:
-    """One-step-ahead prediction of a model on DATA (measured past outputs fed in)."""
-    _run_model(
-        "one-step",
-        model_path,
-        data_paths,
-        rng,
-        out,
-        ts,
-        time_column,
-        experiment_column,
-        force,
-        json_out,
-    )
+_model_command(
+    "simulation",
+    "simulate",
+    "Free-run simulation of a model on the inputs in DATA (outputs used for metrics).",
+)
+_model_command(
+    "one-step",
+    "predict",
+    "One-step-ahead prediction of a model on DATA (measured past outputs fed in).",
+)
 
 
 @app.command()
