@@ -121,6 +121,7 @@ PlotDir = Annotated[Path | None, typer.Option("--plot", help="Write PNG figures 
 
 def _fit_options(
     structure,
+    method,
     na,
     nb,
     nk,
@@ -147,12 +148,22 @@ def _fit_options(
         "eps1": eps1,
         "eps2": eps2,
     }
+    from blockid.errors import ParameterError
+
     if structure == "arx":
-        opts.update(
-            center=center or None,
-            allow_unstable=allow_unstable or None,
-            max_mse_ratio=None if not convergence_check else 2.0,
-        )
+        opts.update(center=center or None, allow_unstable=allow_unstable or None)
+        if not convergence_check:
+            if method in (None, "batch"):
+                raise ParameterError(
+                    "--no-convergence-check applies to the recursive ARX methods (rls, aw-rls, "
+                    "hierarchical-rls), not to batch least squares"
+                )
+            opts["max_mse_ratio"] = float("inf")  # check switched off
+    else:
+        if allow_unstable or not convergence_check:
+            flag = "--allow-unstable" if allow_unstable else "--no-convergence-check"
+            raise ParameterError(f"{flag} applies to ARX models only, not {structure}")
+        opts["center"] = True if center else None
     return opts
 
 
@@ -210,6 +221,7 @@ def fit(
     )
     options = _fit_options(
         structure,
+        method,
         na,
         nb,
         nk,

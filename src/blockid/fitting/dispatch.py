@@ -32,7 +32,7 @@ from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import ParameterError
 from blockid.fitting.result import FitResult
 
-__all__ = ["STRUCTURES", "METHODS", "DEFAULT_METHOD", "fit_model"]
+__all__ = ["STRUCTURES", "METHODS", "DEFAULT_METHOD", "accepted_options", "fit_model"]
 
 METHODS: dict[str, tuple[str, ...]] = {
     "arx": ("batch", "rls", "aw-rls", "hierarchical-rls"),
@@ -63,17 +63,35 @@ def _function(structure: str, method: str) -> Callable[..., FitResult]:
     return fit_backlash_aw_rls
 
 
-def _accepted(structure: str, method: str) -> set[str]:
+#: Options of fit_arx that only some ARX methods use.
+_ARX_METHOD_OPTIONS = {
+    "batch": set(),
+    "rls": {"forgetting", "initial_covariance", "passes", "max_mse_ratio"},
+    "aw-rls": {"eps1", "eps2", "initial_covariance", "passes", "max_mse_ratio"},
+    "hierarchical-rls": {"forgetting", "initial_covariance", "passes", "max_mse_ratio"},
+}
+_ARX_COMMON = {"na", "nb", "nk", "center", "allow_unstable"}
+#: Block-degree options that a structure without that block cannot use.
+_NO_BLOCK_OPTION = {
+    "hammerstein": {"r2"},
+    "wiener": {"r1"},
+    "backlash": {"r1", "r2"},
+}
+
+
+def accepted_options(structure: str, method: str) -> set[str]:
+    """Options (orders and settings) that ``structure`` fitted by ``method`` uses."""
     if structure == "arx":
-        from blockid.fitting.arx import fit_arx as fn
-    elif method == "simulation-error":
+        return _ARX_COMMON | _ARX_METHOD_OPTIONS[method]
+    if method == "simulation-error":
         from blockid.fitting.simulation_error import fit_simulation_error as fn
     elif method == "key-term-rls":
         from blockid.fitting.key_term import fit_key_term_rls as fn
     else:
         from blockid.fitting.backlash import fit_backlash_aw_rls as fn
     params = inspect.signature(fn).parameters
-    return {n for n, p in params.items() if p.kind == p.KEYWORD_ONLY or n in ("na", "nb", "nk")}
+    names = {n for n, p in params.items() if p.kind == p.KEYWORD_ONLY or n in ("na", "nb", "nk")}
+    return names - _NO_BLOCK_OPTION.get(structure, set())
 
 
 def fit_model(
@@ -122,7 +140,7 @@ def fit_model(
             options["center"] = center
     elif center if center is not None else structure == "wiener":
         return _centered(data, structure, method, refine, options)
-    accepted = _accepted(structure, method)
+    accepted = accepted_options(structure, method)
     unused = sorted(set(options) - accepted)
     if unused:
         shown = ", ".join("--" + u.replace("_", "-") for u in unused)

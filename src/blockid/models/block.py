@@ -36,7 +36,7 @@ import numpy as np
 
 from blockid.blocks import Backlash, Polynomial
 from blockid.blocks.base import Block, DynamicBlock, StaticBlock, block_from_dict
-from blockid.errors import EstimationError, ModelFileError, OrderError
+from blockid.errors import BlockidError, EstimationError, ModelFileError, OrderError
 from blockid.models.arx import ARX
 from blockid.models.base import Model
 
@@ -234,19 +234,46 @@ class BlockModel(Model):
     def _backlash_rest(block: Backlash, u0: float) -> float:
         return 0.5 * (block.m_left * (u0 + block.c_left) + block.m_right * (u0 - block.c_right))
 
+    def monotone_branch(self) -> tuple[float, float]:
+        """The interval around ``x = 0`` on which the output polynomial is monotone.
+
+        ``q_1 = 1`` makes it increasing at 0; the branch runs to the nearest stationary
+        points on either side (infinite where there is none).
+        """
+        coeffs = np.concatenate(([0.0], self.output_block.coefficients))
+        crit = np.polynomial.polynomial.polyroots(np.polynomial.polynomial.polyder(coeffs))
+        real = crit[np.abs(crit.imag) < 1e-12].real if crit.size else np.zeros(0)
+        lo = max((r for r in real if r < 0), default=-np.inf)
+        hi = min((r for r in real if r > 0), default=np.inf)
+        return float(lo), float(hi)
+
     def _x_from_y(self, y: np.ndarray) -> np.ndarray:
-        """``x = N_2^{-1}(y)`` (``y`` relative to the offset)."""
+        """``x = N_2^{-1}(y)`` (``y`` relative to the offset) on the monotone branch.
+
+        The polynomial need only be monotone over the values the model works with: the
+        branch around 0 must contain the range of ``x`` seen in estimation (when
+        recorded). Outputs beyond the branch's reach map to its ends.
+        """
         if self.output_block is None:
             return y
-        lo, hi = float(np.min(y)), float(np.max(y))
+        lo, hi = self.monotone_branch()
+        seen = self.ranges.get("x")
+        if seen is not None and (seen[0] < lo or seen[1] > hi):
+            raise EstimationError(
+                f"the output block {self.output_block.coefficients.tolist()} is not monotone "
+                f"over the range of x it was fitted on [{seen[0]:.4g}, {seen[1]:.4g}] (it turns "
+                f"at {lo if seen[0] < lo else hi:.4g}), so past x cannot be recovered from the "
+                "measured y; one-step prediction is not defined. Use free-run simulation"
+            )
+        scale = 1.0 + float(np.max(np.abs(y), initial=0.0))
+        big = 1e6 * scale
+        rng = (max(lo, -big), min(hi, big))
         try:
-            return self.output_block.inverse(y)
-        except Exception as exc:  # noqa: BLE001 - any failure means: not invertible here
+            return self.output_block.inverse(y, u_range=rng, clip=True)
+        except BlockidError as exc:
             raise EstimationError(
                 f"the output block {self.output_block.coefficients.tolist()} cannot be inverted "
-                f"over the measured outputs [{lo:.4g}, {hi:.4g}] ({exc}); one-step prediction "
-                "of a model with an output block needs it monotone there. Use free-run "
-                "simulation instead"
+                f"on its monotone branch {rng} ({exc}); one-step prediction is not defined"
             ) from None
 
     def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
@@ -263,7 +290,7 @@ class BlockModel(Model):
             y0 = y0[: self.max_lag, 0] - self.output_offset
             try:
                 x_init = self._x_from_y(y0)[:, None]
-            except EstimationError:
+            except BlockidError:
                 x_init = None
         x = self.linear.simulate(w[:, None], x_init)[:, 0]
         y = x if self.output_block is None else self.output_block(x)

@@ -9,7 +9,7 @@ from typing import Any
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError
 from blockid.evaluation.validate import ModelOutput, evaluate
-from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, fit_model
+from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, accepted_options, fit_model
 from blockid.fitting.result import FitResult
 
 __all__ = ["ModelScore", "CompareResult", "compare_structures"]
@@ -85,7 +85,7 @@ def compare_structures(
     result = CompareResult()
     for structure in structures:
         m = method if method in METHODS.get(structure, ()) else DEFAULT_METHOD.get(structure)
-        opts = _options_for(structure, options)
+        opts = _options_for(structure, m, options)
         try:
             fit = fit_model(estimation, structure, method=m, **opts)
         except EstimationError as exc:
@@ -101,17 +101,10 @@ def compare_structures(
     return result
 
 
-_BLOCK_ONLY = {"r1", "r2", "refine"}
-
-
-def _options_for(structure: str, options: dict[str, Any]) -> dict[str, Any]:
-    """Drop options that a structure cannot use (``r1`` for ARX, ``r2`` without output block)."""
-    opts = dict(options)
+def _options_for(structure: str, method: str, options: dict[str, Any]) -> dict[str, Any]:
+    """The shared options this structure and method use (``r1`` is not for ARX, ...)."""
+    keep = accepted_options(structure, method) | {"refine", "center"}
+    opts = {k: v for k, v in options.items() if k in keep}
     if structure == "arx":
-        for k in _BLOCK_ONLY:
-            opts.pop(k, None)
-    if structure in ("hammerstein", "backlash"):
-        opts.pop("r2", None)
-    if structure in ("wiener", "backlash"):
-        opts.pop("r1", None)
+        opts.pop("refine", None)
     return opts

@@ -52,7 +52,7 @@ ESTIMATORS: dict[str, list[SubsystemSpec]] = {
                 "center": True,
                 "forgetting": 0.98,
                 "passes": 3,
-                },
+            },
         ),
     ],
     "default (LS, simulation error, LS)": [
