@@ -500,7 +500,6 @@ class Group:
     title: str
     vary: tuple[str, ...]
     cells: list[dict] = field(default_factory=list)
-    short: str = ""  # prefix of the cell labels in the figures (structure, if fixed)
 
 
 KT_BASE = dict(
@@ -536,7 +535,6 @@ def groups(quick: bool) -> list[Group]:
             "paper's forgetting)",
             ("input", "plant"),
             _cells(KT_BASE, *({"input": i, "plant": p} for i in kt_inputs for p in kt_plants)),
-            "H-W",
         ),
         Group(
             "key-term",
@@ -552,7 +550,6 @@ def groups(quick: bool) -> list[Group]:
                 ),
             )
             + _cells(KT_BASE, *({"input": i, "forgetting": "0.999"} for i in kt_inputs[1:])),
-            "H-W",
         ),
         Group(
             "key-term",
@@ -572,7 +569,6 @@ def groups(quick: bool) -> list[Group]:
                 {"plant": "slow resonant", "init": "truth"},
                 {"init": "truth"},
             )[: 2 if quick else 7],
-            "H-W",
         ),
         Group(
             "key-term",
@@ -584,7 +580,6 @@ def groups(quick: bool) -> list[Group]:
                 KT_BASE,
                 *({"plant": p, "nl": x} for p in ("fast", "resonant") for x in (0.25, 1.0, 3.0)),
             )[: 3 if quick else 6],
-            "H-W",
         ),
         Group(
             "key-term",
@@ -676,7 +671,9 @@ def _fmt_factor(name: str, value: Any) -> str:
     if name in ("nl", "band"):
         return f"×{value:g}"
     if name == "forgetting":
-        return f"{value}" + (" (paper)" if value == "0.98:200,1" else "")
+        return "0.98:200,1 (paper)" if value == "0.98:200,1" else f"λ = {float(value):g}"
+    if name == "structure":
+        return {"hammerstein-wiener": "H-W"}.get(value, value.capitalize())
     if name == "samples":
         return f"{value:,}"
     if isinstance(value, float):
@@ -935,6 +932,26 @@ def _pyplot():
     return plt
 
 
+#: Per study: the factors every figure label shows, and the base the others differ from.
+LABELS = {
+    "key-term": (("structure", "input", "plant"), KT_BASE),
+    "aw-rls": (("input", "noise"), AW_BASE),
+    "h-rls": (("input", "noise", "forgetting"), HRLS_BASE),
+}
+
+
+def _label(study: str, cell: dict) -> str:
+    """``white, fast; noise 40 dB`` — the always-shown factors, then those off the base."""
+    always, base = LABELS[study]
+    head = ", ".join(_fmt_factor(k, cell[k]) for k in always)
+    extra = [
+        f"{_header(k)} {_fmt_factor(k, v)}"
+        for k, v in cell.items()
+        if k not in always and v != base.get(k)
+    ]
+    return "; ".join([head, *extra])
+
+
 def figure_outcomes(all_groups, results, study: str, path: Path, title: str) -> None:
     """Stacked bars of the outcome counts, paper's method beside the default, per cell."""
     plt = _pyplot()
@@ -943,8 +960,7 @@ def figure_outcomes(all_groups, results, study: str, path: Path, title: str) -> 
         if g.study != study:
             continue
         for cell, res in zip(g.cells, results[g.key], strict=True):
-            label = ", ".join(_fmt_factor(v, cell[v]) for v in g.vary)
-            rows.append((f"{g.short}: {label}" if g.short else label, res))
+            rows.append((_label(study, cell), res))
     n = len(rows)
     fig, axes = plt.subplots(1, 2, figsize=(12, 0.26 * n + 2.0), sharey=True)
     for ax, who, name in zip(
