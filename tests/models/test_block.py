@@ -96,11 +96,34 @@ def test_normalisation_and_structure_errors():
         Wiener("u", "y", output_block=Polynomial([0.0, 1.0]))
 
 
+def test_output_block_monotone_over_the_data_is_enough_for_one_step(rng):
+    # y = x + 0.1 x^2 turns at x = -5, far outside the data: prediction is exact
+    model = Wiener(
+        "u",
+        "y",
+        output_block=Polynomial([1.0, 0.1], constant=False),
+        na=1,
+        nb=1,
+        nk=1,
+        a=[-0.5],
+        b=[0.4],
+    )
+    u = rng.uniform(-1, 1, 300)
+    y = model.simulate(u)
+    model.record_ranges([(u, y)])
+    np.testing.assert_allclose(model.predict(u, y), y, atol=1e-12)
+
+
 def test_non_invertible_output_block_refuses_one_step_prediction(rng):
-    model = Wiener("u", "y", output_block=Polynomial([1.0, -2.0], constant=False), na=1, a=[-0.5])
+    # y = x - 2 x^2 turns at x = 0.25, inside the range the model works on
+    model = Wiener(
+        "u", "y", output_block=Polynomial([1.0, -2.0], constant=False), na=1, a=[-0.5], b=[1.0]
+    )
     u = rng.uniform(-2, 2, 100)
-    with pytest.raises(errors.EstimationError, match="cannot be inverted"):
-        model.predict(u, model.simulate(u))
+    y = model.simulate(u)
+    model.record_ranges([(u, y)])
+    with pytest.raises(errors.EstimationError, match="not monotone over the range of x"):
+        model.predict(u, y)
 
 
 def test_extrapolation_is_flagged_outside_the_recorded_ranges(rng, tmp_path):
@@ -112,3 +135,12 @@ def test_extrapolation_is_flagged_outside_the_recorded_ranges(rng, tmp_path):
     assert len(notes) >= 1 and "input 'u' leaves the range seen in estimation" in notes[0]
     again = load_model(save_model(model, tmp_path / "m.json"))  # ranges travel with the file
     assert again.ranges == model.ranges
+
+
+def test_polynomial_input_block_without_constant_round_trips(rng, tmp_path):
+    model = Hammerstein(
+        "u", "y", input_block=Polynomial([1.0, 0.5], constant=False), na=1, nb=1, nk=1, a=[-0.5]
+    )
+    again = load_model(save_model(model, tmp_path / "m.json"))
+    u = rng.uniform(-1, 1, 50)
+    assert np.array_equal(again.simulate(u), model.simulate(u))

@@ -76,3 +76,15 @@ def test_parse_subsystem_and_subset(rng):
     np.testing.assert_array_equal(sub.experiments[0].u[:, 0], data.experiments[0].y[:, 0])
     with pytest.raises(errors.DataError, match=r"\['nope'\] are not in the data"):
         subset(data, ["nope"], ["y1"])
+
+
+def test_bad_option_values_are_reported_per_subsystem(rng):
+    from blockid.fitting import fit_network
+
+    data = Dataset.from_arrays(
+        rng.standard_normal(200), rng.standard_normal(200), inputs=["u1"], outputs=["v1"]
+    )
+    spec = parse_subsystem("S1: u1 -> v1 | arx na=1 nb=1 nk=1 method=rls passes=abc")
+    with pytest.raises(errors.ParameterError, match="subsystem S1"):
+        fit_network(data, [spec])
+    assert parse_subsystem("S1: u1 -> v1 | arx forgetting=none").options == {"forgetting": None}

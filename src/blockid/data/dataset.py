@@ -690,7 +690,9 @@ def _sampling_step(t: np.ndarray, rows: np.ndarray, name: str, where: _Where) ->
             f"median step is {_num(step)} (more than 1 % apart); blockid needs a constant "
             "sampling time: resample the record, or split it into experiments at the gap"
         )
-    return step
+    # the mean step over the record is exact up to the rounding of the time stamps; 12
+    # significant digits give 0.05 back for t = k * 0.05 written as text
+    return float(f"{(t[-1] - t[0]) / (t.size - 1):.12g}")
 
 
 def _agreeing_sampling_time(steps: Sequence[tuple[str, float]], what: str) -> float | None:

@@ -72,6 +72,15 @@ def make_estimator(
     )
 
 
+def _advice(method: str) -> str:
+    if method == "hierarchical-rls":
+        return (
+            "H-RLS needs a forgetting factor below 1 (e.g. 0.98) and possibly more passes, "
+            "see docs/convergence.md; or use method batch or rls"
+        )
+    return "use more data or more passes, forgetting 1 (no forgetting), or method batch"
+
+
 def _check_converged(
     Phi: np.ndarray, target: np.ndarray, theta: np.ndarray, method: str, name: str, ratio: float
 ) -> None:
@@ -84,9 +93,8 @@ def _check_converged(
         raise EstimationError(
             f"output {name!r}: {method} did not converge: its one-step MSE on the estimation "
             f"data, {mse:.4g}, is {mse / max(mse_best, floor):.3g} times the least-squares "
-            f"optimum {mse_best:.4g}. Use more data or more passes, a forgetting factor "
-            "below 1 (H-RLS needs one, see docs/convergence.md), or method batch/rls; for a "
-            "plant that really varies in time, switch this check off"
+            f"optimum {mse_best:.4g}. {_advice(method)}; for a plant that really varies in "
+            "time, switch this check off (--no-convergence-check)"
         )
 
 

@@ -102,11 +102,17 @@ def check_model(
         if base is not None:
             base_mse = simulation_mse(base, data)
             if mse > max_mse_ratio * base_mse:
+                advice = (
+                    "the structure or orders may not suit these data: try others, or "
+                    "compare structures with 'blockid compare'"
+                    if method.startswith("simulation-error")
+                    else "use the default method (simulation-error), add --refine, or see "
+                    "docs/convergence.md"
+                )
                 raise EstimationError(
                     f"{method} did not converge to a useful model: its free-run MSE on the "
                     f"estimation data, {mse:.4g}, is {mse / base_mse:.3g} times that of a "
-                    f"linear ARX of the same orders ({base_mse:.4g}). Use the default method "
-                    "(simulation-error), add --refine, or see docs/convergence.md"
+                    f"linear ARX of the same orders ({base_mse:.4g}); {advice}"
                 )
     y = np.vstack([e.y[model.max_lag :] for e in data.experiments])
     y_sim = np.vstack(

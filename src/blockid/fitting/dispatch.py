@@ -152,6 +152,15 @@ def fit_model(
         refined = refine_fit(result.model, data)
         refined.settings = {"started_from": result.method, **result.settings, **refined.settings}
         refined.method = f"{result.method}+refine"
+        if "theta" in result.history:  # keep the recursive method's trajectories
+            refined.history = {
+                **refined.history,
+                **{
+                    k: result.history[k]
+                    for k in ("theta", "names", "update")
+                    if k in result.history
+                },
+            }
         result = refined
     if hasattr(result.model, "record_ranges"):
         result.model.record_ranges([(e.u, e.y) for e in data.experiments])

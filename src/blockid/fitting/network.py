@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset, Experiment
-from blockid.errors import DataError, EstimationError, ParameterError
+from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.dispatch import fit_model
 from blockid.fitting.result import FitResult
@@ -40,13 +40,17 @@ _SPEC = re.compile(r"^\s*([\w.-]+)\s*:\s*([^>|]+?)\s*->\s*([^|]+?)\s*\|\s*(\S+)\
 
 
 def _value(text: str) -> Any:
+    """``key=value`` text to a Python value: int, float, true/false, none, or text."""
     for conv in (int, float):
         try:
             return conv(text)
         except ValueError:
             pass
-    if text.lower() in ("true", "false"):
-        return text.lower() == "true"
+    low = text.lower()
+    if low in ("true", "false"):
+        return low == "true"
+    if low in ("none", "null"):
+        return None
     return text
 
 
@@ -101,8 +105,13 @@ def fit_network(data: Dataset, specs: list[SubsystemSpec]) -> FitResult:
         sub = subset(data, spec.inputs, spec.outputs)
         try:
             res = fit_model(sub, spec.structure, method=spec.method, **spec.options)
-        except EstimationError as exc:
-            raise EstimationError(f"subsystem {spec.name}: {exc}") from None
+        except BlockidError as exc:
+            raise type(exc)(f"subsystem {spec.name}: {exc}") from None
+        except (TypeError, ValueError) as exc:
+            shown = " ".join(f"{k}={v}" for k, v in spec.options.items())
+            raise ParameterError(
+                f"subsystem {spec.name}: an option value does not fit ({shown}): {exc}"
+            ) from None
         subsystems.append((spec.name, res.model))
         settings[spec.name] = {"structure": spec.structure, "method": res.method, **res.settings}
         metrics[spec.name] = res.estimation_metrics

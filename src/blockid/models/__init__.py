@@ -11,7 +11,12 @@ from blockid.models.block import (
     Wiener,
 )
 from blockid.models.network import Network
-from blockid.models.serialization import load_model, model_document, save_model
+from blockid.models.serialization import (
+    load_model,
+    model_document,
+    model_from_document,
+    save_model,
+)
 
 __all__ = [
     "Network",
@@ -27,5 +32,6 @@ __all__ = [
     "load_model",
     "model_document",
     "model_from_dict",
+    "model_from_document",
     "save_model",
 ]

@@ -200,8 +200,8 @@ class BlockModel(Model):
         if self.input_block is not None:
             rename = _SPEC_NAMES.get(self.input_block.kind, {})
             for key, value in self.input_block.parameters.items():
-                if key == "constant":
-                    continue
+                if key == "constant" and value is True:
+                    continue  # the usual case; kept only when there is no constant term
                 out[rename.get(key, key)] = value
         out["a"] = self.a.tolist()
         out["b"] = self.b.tolist()
@@ -379,6 +379,12 @@ class BlockModel(Model):
             checks.append(("x", x, "the linear block's output x (input of the output block)"))
         for key, values, what in checks:
             lo, hi = self.ranges[key]
+            if key == "u":  # report in the user's units, not relative to the offset
+                lo, hi, values = (
+                    lo + self.input_offset,
+                    hi + self.input_offset,
+                    (values + self.input_offset),
+                )
             span = max(hi - lo, 1e-300)
             out = (values < lo - 0.02 * span) | (values > hi + 0.02 * span)
             if out.any():
@@ -442,7 +448,7 @@ class BlockModel(Model):
                 back.get(k, k): v for k, v in params.items() if k not in ("a", "b", "q")
             }
             if kind == "polynomial":
-                block_params["constant"] = True
+                block_params.setdefault("constant", True)
             input_block = block_from_dict({"kind": kind, **block_params})
         output_block = None
         if kinds.get("output"):

@@ -89,7 +89,7 @@ def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> A
 
 
 def plot_parameter_history(
-    history: dict[str, Any], truth: dict[str, float] | None = None, max_panels: int = 12
+    history: dict[str, Any], truth: dict[str, float] | None = None, max_panels: int = 30
 ) -> Any:
     """Parameter estimates of a recursive method over the samples (as in the papers).
 
