@@ -24,14 +24,15 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, {date.today()}"
 
 
-def write_section(name: str, markdown: str) -> None:
-    """Replace the text between ``<!-- name:start -->`` and ``<!-- name:end -->``."""
+def write_section(name: str, markdown: str, doc: Path = DOC) -> None:
+    """Replace the text between ``<!-- name:start -->`` and ``<!-- name:end -->`` in
+    ``doc`` (default docs/performance.md), appending the section if it is new."""
     start, end = f"<!-- {name}:start -->", f"<!-- {name}:end -->"
-    text = DOC.read_text() if DOC.exists() else "# Performance\n"
+    text = doc.read_text() if doc.exists() else "# Performance\n"
     block = f"{start}\n{markdown.strip()}\n{end}"
     pattern = re.compile(re.escape(start) + ".*?" + re.escape(end), re.S)
     if pattern.search(text):
         text = pattern.sub(lambda _: block, text)
     else:
         text = text + "\n" + block + "\n"
-    DOC.write_text(text)
+    doc.write_text(text)

@@ -1157,13 +1157,11 @@ def figure_free_run(path: Path, seed: int) -> dict:
 
 # ============================================================================ doc
 def write_section(doc: Path, name: str, markdown: str) -> None:
-    """Replace the text between ``<!-- name:start -->`` and ``<!-- name:end -->``."""
-    start, end = f"<!-- {name}:start -->", f"<!-- {name}:end -->"
-    text = doc.read_text() if doc.exists() else "# Convergence\n"
-    block = f"{start}\n{markdown.strip()}\n{end}"
-    pattern = re.compile(re.escape(start) + ".*?" + re.escape(end), re.S)
-    text = pattern.sub(lambda _: block, text) if pattern.search(text) else f"{text}\n{block}\n"
-    doc.write_text(text)
+    """Write a generated section of ``doc`` (the shared helper of the benchmarks)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from _report import write_section as _write
+
+    _write(name, markdown, doc=doc)
 
 
 def main(argv: list[str] | None = None) -> int:
