@@ -19,6 +19,7 @@ import argparse
 import time
 
 import numpy as np
+from _report import machine, write_section
 
 from blockid._kernels.backlash_awrls import backlash_aw_rls_run
 from blockid._kernels.key_term import key_term_run
@@ -164,7 +165,7 @@ def main() -> None:
         "",
         f"`python benchmarks/bench_key_term.py` — one pass over {N:,} samples, kernel time "
         f"after compilation, best of {args.repeats} (NumPy loop: first {M:,} samples, once). "
-        f"Machine: {benchmark_machine()}.",
+        f"Machine: {machine()}.",
         "",
         "| algorithm | pass over the record | ns/sample | speed-up over NumPy loop |",
         "|---|---:|---:|---:|",
@@ -181,18 +182,6 @@ def main() -> None:
     print(report)
     if args.write_docs:
         write_section("bench-key-term", report)
-
-
-def benchmark_machine() -> str:
-    from _report import machine
-
-    return machine()
-
-
-def write_section(name: str, text: str) -> None:
-    from _report import write_section as _write
-
-    _write(name, text)
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ import argparse
 import time
 
 import numpy as np
+from _report import machine, write_section
 
 from blockid import HierarchicalRLS, RecursiveLeastSquares
 from blockid._kernels import rls as kernels
@@ -94,7 +95,7 @@ def main() -> None:
         "## Recursive least squares (issue: core)",
         "",
         f"`python benchmarks/bench_rls.py` — 10 parameters, lambda = 0.99, {N:,} samples "
-        f"(NumPy loop: first {M:,}), best of {args.repeats}. Machine: {benchmark_machine()}.",
+        f"(NumPy loop: first {M:,}), best of {args.repeats}. Machine: {machine()}.",
         "",
         "| implementation | ns/sample | speed-up over NumPy loop |",
         "|---|---:|---:|",
@@ -110,18 +111,6 @@ def main() -> None:
     print(report)
     if args.write_docs:
         write_section("bench-rls", report)
-
-
-def benchmark_machine() -> str:
-    from _report import machine
-
-    return machine()
-
-
-def write_section(name: str, text: str) -> None:
-    from _report import write_section as _write
-
-    _write(name, text)
 
 
 if __name__ == "__main__":

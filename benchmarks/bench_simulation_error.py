@@ -22,6 +22,7 @@ import argparse
 import time
 
 import numpy as np
+from _report import machine, write_section
 
 from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
 from blockid.data.dataset import Dataset
@@ -104,7 +105,7 @@ def main() -> None:
         "",
         f"`python benchmarks/bench_simulation_error.py` — {N:,} samples, 40 dB output SNR, "
         f"default settings, best of {args.repeats} after a warm-up. Machine: "
-        f"{benchmark_machine()}.",
+        f"{machine()}.",
         "",
         "| plant | total s | initial estimate s | refinement s | iterations | "
         "residual evaluations | max relative parameter error | early stop |",
@@ -134,18 +135,6 @@ def main() -> None:
     print(report)
     if args.write_docs:
         write_section("bench-simulation-error", report)
-
-
-def benchmark_machine() -> str:
-    from _report import machine
-
-    return machine()
-
-
-def write_section(name: str, text: str) -> None:
-    from _report import write_section as _write
-
-    _write(name, text)
 
 
 if __name__ == "__main__":
