@@ -184,3 +184,10 @@ def test_bad_order_text(tito_csv):
         app, [*FIT[:1], str(tito_csv), *FIT[1:3], "-y", "y1", "--na", "two", "--json"]
     )
     assert r.exit_code == 2 and "--na 'two'" in r.stderr
+
+
+def test_version():
+    from blockid import __version__
+
+    r = runner.invoke(app, ["--version"])
+    assert r.exit_code == 0 and r.stdout.strip() == f"blockid {__version__}"

@@ -33,6 +33,26 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
+
+def _version(value: bool) -> None:
+    if value:
+        from blockid import __version__
+
+        stdout.print(f"blockid {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """Identify block-oriented nonlinear models (Hammerstein, Wiener, Hammerstein-Wiener,
+    backlash, networks) from input/output data."""
+
+
 DataPaths = Annotated[
     list[Path],
     typer.Argument(metavar="DATA...", help="Data file(s): .csv, .tsv, .txt, .parquet or .mat."),
