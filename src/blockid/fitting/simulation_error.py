@@ -220,11 +220,9 @@ def simulate_with_sensitivities(
 
 
 def _invert(model: BlockModel, y0: np.ndarray) -> np.ndarray | None:
-    """``N_2^{-1}(y0)`` as :meth:`BlockModel.simulate` does it, or None."""
-    if model.output_block is None:
-        return y0
+    """``N_2^{-1}(y0)`` exactly as :meth:`BlockModel.simulate` does it, or None."""
     try:
-        return model.output_block.inverse(y0)
+        return model.x_from_y(y0)
     except BlockidError:
         return None
 

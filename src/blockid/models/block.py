@@ -247,7 +247,7 @@ class BlockModel(Model):
         hi = min((r for r in real if r > 0), default=np.inf)
         return float(lo), float(hi)
 
-    def _x_from_y(self, y: np.ndarray) -> np.ndarray:
+    def x_from_y(self, y: np.ndarray) -> np.ndarray:
         """``x = N_2^{-1}(y)`` (``y`` relative to the offset) on the monotone branch.
 
         The polynomial need only be monotone over the values the model works with: the
@@ -289,7 +289,7 @@ class BlockModel(Model):
             _, y0 = self._check_signals(np.zeros((len(np.atleast_1d(y_initial)), 1)), y_initial)
             y0 = y0[: self.max_lag, 0] - self.output_offset
             try:
-                x_init = self._x_from_y(y0)[:, None]
+                x_init = self.x_from_y(y0)[:, None]
             except BlockidError:
                 x_init = None
         x = self.linear.simulate(w[:, None], x_init)[:, 0]
@@ -300,7 +300,7 @@ class BlockModel(Model):
         """One-step-ahead prediction: past ``x`` recovered from the measured ``y``."""
         u_arr, y_arr = self._check_signals(u, y)
         y_rel = y_arr[:, 0] - self.output_offset
-        x_meas = self._x_from_y(y_rel)
+        x_meas = self.x_from_y(y_rel)
         w = self.internal(u_arr)
         x_hat = self.linear.predict(w[:, None], x_meas[:, None])[:, 0]
         y_hat = x_hat if self.output_block is None else self.output_block(x_hat)
