@@ -173,7 +173,7 @@ def test_unused_option_is_an_error(hw_csv):
             "--json",
         ],
     )
-    assert r.exit_code == 2 and "--eps1 not used by hammerstein" in r.stderr
+    assert r.exit_code == 2 and "--eps1 (eps1=) not used by hammerstein" in r.stderr
 
 
 def test_example_data_gives_the_ranges_it_prints(tmp_path):

@@ -125,7 +125,8 @@ Passes = Annotated[int | None, typer.Option(help="Passes of a recursive method o
 Eps1 = Annotated[float | None, typer.Option(help="AW-RLS weight eps1 (A8).")]
 Eps2 = Annotated[float | None, typer.Option(help="AW-RLS weight eps2 (A8).")]
 Center = Annotated[
-    bool, typer.Option(help="ARX: fit around the mean operating point (offsets kept).")
+    bool,
+    typer.Option(help="Fit around the mean operating point (offsets kept in the model)."),
 ]
 AllowUnstable = Annotated[
     bool, typer.Option(help="ARX: keep a model with poles outside the unit circle.")

@@ -143,7 +143,7 @@ def fit_model(
     accepted = accepted_options(structure, method)
     unused = sorted(set(options) - accepted)
     if unused:
-        shown = ", ".join("--" + u.replace("_", "-") for u in unused)
+        shown = ", ".join(f"--{u.replace('_', '-')} ({u}=)" for u in unused)
         raise ParameterError(f"{shown} not used by {structure} with method {method}")
     result = _function(structure, method)(data, **options)
     if refine and structure != "arx" and method != "simulation-error":
