@@ -121,7 +121,9 @@ def test_compare_ranks_hw_first_and_prints_json(hw_csv):
         assert set(m["simulation"]) == {"mse", "rmse", "mae", "max_abs_error", "fit_percent"}
 
 
-def test_paper_method_records_trajectories_or_reports_failure(hw_csv, tmp_path):
+def test_paper_method_records_parameter_trajectories(hw_csv, tmp_path):
+    """Key-term RLS converges for a Hammerstein model on white input (docs/convergence.md);
+    --plot then draws its parameter trajectories and the file keeps the method."""
     path, _ = hw_csv
     r = runner.invoke(
         app,
@@ -149,10 +151,62 @@ def test_paper_method_records_trajectories_or_reports_failure(hw_csv, tmp_path):
             str(tmp_path / "figs"),
         ],
     )
-    if r.exit_code == 0:
-        assert (tmp_path / "figs" / "parameters.png").exists()
-    else:  # the paper's algorithm may fail on these data; it must say so in one line
-        assert r.exit_code == 2 and r.stderr.startswith("error:") and r.stdout == ""
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["estimation"]["method"] == "key-term-rls"
+    assert {p.name for p in (tmp_path / "figs").iterdir()} == {
+        "simulation.png",
+        "blocks.png",
+        "parameters.png",
+    }
+
+
+def test_paper_method_failure_is_one_line(tmp_path):
+    """Key-term RLS on a held (piecewise-constant) command: reported, no model file."""
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 100), 40)
+    true = HammersteinWiener(
+        "u",
+        "y",
+        input_block=TwoSegmentPolynomial([0.0, 1.0, 0.3, -0.1], [0.0, -0.4, 0.2, 0.05]),
+        output_block=Polynomial([1.0, 0.2, 0.1], constant=False),
+        na=2,
+        nb=2,
+        nk=1,
+        a=[-1.6, 0.64],
+        b=[1.0, 0.4],
+    )
+    path = tmp_path / "held.csv"
+    pd.DataFrame({"u": u, "y": true.simulate(u)[:, 0]}).to_csv(path, index=False)
+    out = tmp_path / "m.json"
+    r = runner.invoke(
+        app,
+        [
+            "fit",
+            str(path),
+            "-u",
+            "u",
+            "-y",
+            "y",
+            "--structure",
+            "hammerstein-wiener",
+            "--method",
+            "key-term-rls",
+            "--na",
+            "2",
+            "--nb",
+            "2",
+            "--nk",
+            "1",
+            "--r1",
+            "3",
+            "--r2",
+            "3",
+            "-o",
+            str(out),
+        ],
+    )
+    assert r.exit_code == 2 and r.stderr.startswith("error: key-term RLS"), r.output
+    assert len(r.stderr.strip().splitlines()) == 1 and not out.exists()
 
 
 def test_unused_option_is_an_error(hw_csv):

@@ -140,37 +140,22 @@ ConvergenceCheck = Annotated[
 PlotDir = Annotated[Path | None, typer.Option("--plot", help="Write PNG figures to this folder.")]
 
 
+#: Fit options passed through from the command line as they are (None: method default).
+_PASS_THROUGH = ("r1", "r2", "forgetting", "initial_covariance", "passes", "eps1", "eps2")
+
+
 def _fit_options(
-    structure,
-    method,
-    na,
-    nb,
-    nk,
-    r1,
-    r2,
-    forgetting,
-    initial_covariance,
-    passes,
-    eps1,
-    eps2,
-    center,
-    allow_unstable,
-    convergence_check,
+    structure: str,
+    method: str | None,
+    values: dict,
+    center: bool,
+    allow_unstable: bool,
+    convergence_check: bool,
 ) -> dict:
-    opts = {
-        "na": parse_order(na, "na"),
-        "nb": parse_order(nb, "nb"),
-        "nk": parse_order(nk, "nk"),
-        "r1": r1,
-        "r2": r2,
-        "forgetting": forgetting,
-        "initial_covariance": initial_covariance,
-        "passes": passes,
-        "eps1": eps1,
-        "eps2": eps2,
-    }
     from blockid.errors import ParameterError
 
+    opts = {name: parse_order(values[name], name) for name in ("na", "nb", "nk")}
+    opts.update({name: values[name] for name in _PASS_THROUGH})
     if structure == "arx":
         opts.update(center=center or None, allow_unstable=allow_unstable or None)
         if not convergence_check:
@@ -240,23 +225,8 @@ def fit(
         estimation,
         "--estimation",
     )
-    options = _fit_options(
-        structure,
-        method,
-        na,
-        nb,
-        nk,
-        r1,
-        r2,
-        forgetting,
-        initial_covariance,
-        passes,
-        eps1,
-        eps2,
-        center,
-        allow_unstable,
-        convergence_check,
-    )
+    values = {k: v for k, v in locals().items() if k in ("na", "nb", "nk", *_PASS_THROUGH)}
+    options = _fit_options(structure, method, values, center, allow_unstable, convergence_check)
     from blockid.fitting import DEFAULT_METHOD
 
     chosen = method or DEFAULT_METHOD.get(structure)
