@@ -14,9 +14,8 @@ from blockid.models import HammersteinWiener, load_model
 runner = CliRunner()
 
 
-@pytest.fixture
-def hw_csv(tmp_path):
-    true = HammersteinWiener(
+def hw_plant(a=(-1.2, 0.5)):
+    return HammersteinWiener(
         "u",
         "y",
         input_block=TwoSegmentPolynomial([0.0, 1.0, 0.3, -0.1], [0.0, -0.4, 0.2, 0.05]),
@@ -24,9 +23,14 @@ def hw_csv(tmp_path):
         na=2,
         nb=2,
         nk=1,
-        a=[-1.2, 0.5],
+        a=list(a),
         b=[1.0, 0.4],
     )
+
+
+@pytest.fixture
+def hw_csv(tmp_path):
+    true = hw_plant()
     rng = np.random.default_rng(5)
     u = rng.uniform(-1.5, 1.5, 4000)
     y = true.simulate(u)[:, 0]
@@ -164,17 +168,7 @@ def test_paper_method_failure_is_one_line(tmp_path):
     """Key-term RLS on a held (piecewise-constant) command: reported, no model file."""
     rng = np.random.default_rng(0)
     u = np.repeat(rng.uniform(-1, 1, 100), 40)
-    true = HammersteinWiener(
-        "u",
-        "y",
-        input_block=TwoSegmentPolynomial([0.0, 1.0, 0.3, -0.1], [0.0, -0.4, 0.2, 0.05]),
-        output_block=Polynomial([1.0, 0.2, 0.1], constant=False),
-        na=2,
-        nb=2,
-        nk=1,
-        a=[-1.6, 0.64],
-        b=[1.0, 0.4],
-    )
+    true = hw_plant(a=(-1.6, 0.64))
     path = tmp_path / "held.csv"
     pd.DataFrame({"u": u, "y": true.simulate(u)[:, 0]}).to_csv(path, index=False)
     out = tmp_path / "m.json"
