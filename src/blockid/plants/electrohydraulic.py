@@ -41,6 +41,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
+from scipy.signal import butter, filtfilt
 
 from blockid._kernels import electrohydraulic as _k
 from blockid.errors import ParameterError
@@ -600,6 +601,7 @@ def general_trajectory_current(
     duration: float = 55.0,
     sample_time: float = 0.05,
     seed: int | np.random.Generator | None = None,
+    bandwidth: float | None = 0.5,
 ) -> np.ndarray:
     """A validation command unlike the multisine: an operator's point-to-point moves.
 
@@ -608,9 +610,12 @@ def general_trajectory_current(
     needed direction) for the time the default plant's static characteristic
     (:func:`electrohydraulic_static_velocity`) needs to cover the distance, followed
     by a random pause (0.2-1.5 s). A 0.2 s first-order filter rounds the edges and
-    band-limited noise (0.1-1.5 Hz, 0.05 A rms) imitates the operator's hand; the
-    command stays within the multisine's +-0.9 A, so that validation does not ask the
-    models to extrapolate.
+    band-limited noise (0.1-1.5 Hz, 0.05 A rms) imitates the operator's hand. With a
+    ``bandwidth``, the command is then low-pass filtered there (second-order
+    Butterworth run forwards and backwards: zero phase, -6 dB at ``bandwidth``), so that
+    it stays in the band the multisine identified (paper B's top component is 0.5 Hz);
+    ``None`` keeps the step-like moves, whose content above 0.5 Hz asks the models to
+    extrapolate in frequency. The command stays within +-0.9 A.
 
     Parameters
     ----------
@@ -620,6 +625,9 @@ def general_trajectory_current(
         Sampling period [s].
     seed : int or numpy.random.Generator, optional
         Seed of the random moves.
+    bandwidth : float or None, default 0.5
+        Corner frequency [Hz] of the final low-pass filter, below the Nyquist
+        frequency; None for no filter.
 
     Returns
     -------
@@ -633,6 +641,11 @@ def general_trajectory_current(
     ((1100,), True)
     """
     n = _n_samples(duration, sample_time)
+    nyquist = 0.5 / sample_time
+    if bandwidth is not None and not (np.isfinite(bandwidth) and 0 < bandwidth < nyquist):
+        raise ParameterError(
+            f"bandwidth must be a frequency in (0, {nyquist:g}) Hz or None, got {bandwidth!r}."
+        )
     rng = np.random.default_rng(seed)
     plant = ElectrohydraulicParameters()
     stroke = plant.stroke
@@ -663,7 +676,11 @@ def general_trajectory_current(
     spectrum[(freqs < 0.1) | (freqs > 1.5)] = 0.0
     jitter = np.fft.irfft(spectrum, n)
     jitter *= 0.05 / jitter.std()
-    return np.clip(smooth + jitter, -0.9, 0.9)
+    command = smooth + jitter
+    if bandwidth is not None:
+        b, a = butter(2, bandwidth / nyquist)
+        command = filtfilt(b, a, command)
+    return np.clip(command, -0.9, 0.9)
 
 
 def electrohydraulic_static_spool(
@@ -825,6 +842,7 @@ def electrohydraulic_experiment(
     seed: int | None = None,
     n_repeats: int = 10,
     params: ElectrohydraulicParameters | None = None,
+    validation_bandwidth: float | None = 0.5,
 ) -> dict[str, pd.DataFrame]:
     """Paper B's data: an averaged multisine estimation record and a validation record.
 
@@ -836,7 +854,10 @@ def electrohydraulic_experiment(
     :func:`general_trajectory_current`. Before each, the current offset is trimmed so
     that the arm does not creep, and the start position is chosen so that the motion
     is centred in the stroke (see ``docs/plants/electrohydraulic.md``); both are
-    stored in ``DataFrame.attrs`` (``"offset"``, ``"initial_position"``).
+    stored in ``DataFrame.attrs`` (``"offset"``, ``"initial_position"``). The trimmed
+    validation command is clipped to the current range of the estimation record, and
+    by default band-limited to the multisine's top frequency: validation stays where
+    the models were identified, in amplitude and in frequency.
 
     Parameters
     ----------
@@ -846,6 +867,10 @@ def electrohydraulic_experiment(
         Number of repeated estimation runs (paper B: 10).
     params : ElectrohydraulicParameters, optional
         Plant parameters; defaults when omitted.
+    validation_bandwidth : float or None, default 0.5
+        ``bandwidth`` of the validation command [Hz] (see
+        :func:`general_trajectory_current`); None for the step-like moves that
+        extrapolate in frequency.
 
     Returns
     -------
@@ -864,6 +889,7 @@ def electrohydraulic_experiment(
     params = _resolve_params(params)
     seeds = np.random.SeedSequence(seed).spawn(n_repeats + 3)
     records = {}
+    span = (-np.inf, np.inf)
     for name, raw, noise_seeds in (
         (
             "estimation",
@@ -872,11 +898,17 @@ def electrohydraulic_experiment(
         ),
         (
             "validation",
-            general_trajectory_current(seed=np.random.default_rng(seeds[1])),
+            general_trajectory_current(
+                seed=np.random.default_rng(seeds[1]), bandwidth=validation_bandwidth
+            ),
             seeds[2:3],
         ),
     ):
         current, offset, run_params = _trim_experiment(raw, params)
+        # The two trims differ, so the trimmed validation command could leave the
+        # current range of the estimation record (which comes first): keep it inside.
+        current = np.clip(current, *span)
+        span = (float(current.min()), float(current.max()))
         runs = [
             simulate_electrohydraulic(current, params=run_params, seed=np.random.default_rng(s))
             for s in noise_seeds
