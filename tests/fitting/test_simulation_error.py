@@ -34,6 +34,7 @@ from blockid.fitting.simulation_error import (
     _Problem,
     _segments,
     _Tracker,
+    NESTED_START,
     fit_simulation_error,
     refine,
     simulate_with_sensitivities,
@@ -393,7 +394,7 @@ def test_settings_record_what_the_refinement_did():
         assert key in s
     assert s["function_evaluations"] >= s["iterations"] + 1
     assert s["final_simulation_mse"] == pytest.approx(simulation_mse(result.model, data))
-    assert s["initial"] == "initial estimate"
+    assert s["initial"] in s["starts"]
     assert result.method == "simulation-error"
     assert result.metrics_mode == "simulation"
     assert set(result.estimation_metrics) >= {"rmse", "mse"}
@@ -485,3 +486,31 @@ def test_several_experiments_each_start_from_their_own_measurements():
     np.testing.assert_allclose(result.model.free_parameters(), true.free_parameters(), atol=1e-6)
     assert result.n_samples == 2400
     assert result.settings["initial_tail_mse"] > 0 and result.settings["tail_mse"] < 1e-12
+
+
+def test_hammerstein_wiener_keeps_the_better_of_its_two_starts():
+    # A Hammerstein plant: H-W contains it (q = identity), so the H-W fit must not end
+    # worse on the estimation data than the Hammerstein fit, whichever start wins.
+    true = Hammerstein(
+        "u1",
+        "y1",
+        input_block=TwoSegmentPolynomial([0.2, 1.0, 0.8, -0.6], [-0.3, -0.5, 1.2, 0.8]),
+        na=3,
+        nb=3,
+        nk=2,
+        a=A3,
+        b=[1.0, -0.3, 0.2],
+    )
+    rng = np.random.default_rng(11)
+    data = record(true, rng.uniform(-1, 1, 1500), rng, snr_db=30.0)
+    hw = fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=2)
+    ham = fit_simulation_error(data, "hammerstein", na=3, nb=3, nk=2)
+    starts = hw.settings["starts"]
+    assert set(starts) == {"initial estimate", NESTED_START}
+    mses = {k: v["final_simulation_mse"] for k, v in starts.items()}
+    assert hw.settings["initial"] == min(mses, key=mses.get)
+    assert hw.settings["final_simulation_mse"] == min(mses.values())
+    assert hw.settings["final_simulation_mse"] <= ham.settings["final_simulation_mse"] * 1.001
+    assert "starts" not in ham.settings
+    given = fit_simulation_error(data, "hammerstein-wiener", initial=hw.model)
+    assert given.settings["initial"] == "given model" and "starts" not in given.settings
