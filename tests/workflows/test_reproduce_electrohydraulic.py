@@ -1,4 +1,4 @@
-"""Paper B's ranking on the simulated arm (issue: reproduction). The 10-seed picture,
+"""Paper B's ranking on the simulated arm (issue: reproduction). The 30-seed picture,
 including the seeds where it does not hold, is in docs/reproduction.md and
 benchmarks/electrohydraulic_ranking.py; here the first five seeds guard against
 regressions."""
@@ -11,20 +11,17 @@ from blockid.cli.main import app
 from blockid.workflows.reproduce_electrohydraulic import reproduce_electrohydraulic
 
 
-def test_ranking_over_seeds_0_to_4():
-    """Median over the first five seeds: H-W at least 10 % below Hammerstein; on every
-    seed the better two-segment model below half of Wiener's and ARX's error. (The
-    stricter per-seed claim holds on 7 of 10 seeds only: docs/reproduction.md.)"""
-    import numpy as np
-
-    ratios = []
+def test_paper_b_ordering_on_seeds_0_to_4():
+    """On every seed (best estimator per structure): H-W lowest and at least 10 % below
+    Hammerstein; both two-segment models below half of Wiener's and ARX's error.
+    (Seeds 0-9: 9 of 10 hold; seeds 10-29: 17 of 20, docs/reproduction.md.)"""
     for seed in range(5):
         mse = {s: b["mse"]["velocity"] for s, b in reproduce_electrohydraulic(seed).best.items()}
         assert set(mse) == {"hammerstein-wiener", "hammerstein", "wiener", "arx"}
-        ratios.append(mse["hammerstein-wiener"] / mse["hammerstein"])
-        best_two_segment = min(mse["hammerstein-wiener"], mse["hammerstein"])
-        assert best_two_segment < 0.5 * min(mse["wiener"], mse["arx"]), seed
-    assert np.median(ratios) <= 0.9
+        hw, ham = mse["hammerstein-wiener"], mse["hammerstein"]
+        assert hw < min(ham, mse["wiener"], mse["arx"]), seed
+        assert hw <= 0.9 * ham, seed
+        assert max(hw, ham) <= 0.5 * min(mse["wiener"], mse["arx"]), seed
 
 
 def test_every_row_names_its_estimator_and_failures_are_explained():
