@@ -31,10 +31,10 @@ from blockid.fitting.arx import fit_arx
 from blockid.fitting.checks import simulation_mse
 from blockid.fitting.dispatch import fit_model
 from blockid.fitting.simulation_error import (
+    NESTED_START,
     _Problem,
     _segments,
     _Tracker,
-    NESTED_START,
     fit_simulation_error,
     refine,
     simulate_with_sensitivities,
@@ -514,3 +514,22 @@ def test_hammerstein_wiener_keeps_the_better_of_its_two_starts():
     assert "starts" not in ham.settings
     given = fit_simulation_error(data, "hammerstein-wiener", initial=hw.model)
     assert given.settings["initial"] == "given model" and "starts" not in given.settings
+
+
+def test_reported_mse_is_what_evaluate_gives_for_a_non_monotone_output_block():
+    # Paper B's arm, seed 2: the fitted cubic output block turns inside the range of x
+    # it was fitted on, so the returned model simulates from rest (no N_2^{-1} of the
+    # measured outputs). The MSE in settings, which also chooses between the two
+    # starts, must be that model's, not the one before its ranges were recorded.
+    from blockid.evaluation.validate import evaluate
+    from blockid.plants.electrohydraulic import electrohydraulic_experiment
+
+    frame = electrohydraulic_experiment(seed=2)["estimation"]
+    data = Dataset.from_frame(frame, ["current"], ["velocity"], time_column="t")
+    fit = fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=8, r1=3, r2=3)
+    lo, hi = fit.model.monotone_branch()
+    x_lo, x_hi = fit.model.ranges["x"]
+    assert x_lo < lo or x_hi > hi  # the case this test is about
+    mse = evaluate(fit.model, data, "simulation").metrics["mse"]["velocity"]
+    assert fit.settings["final_simulation_mse"] == pytest.approx(mse, rel=1e-12)
+    assert fit.estimation_metrics["mse"]["velocity"] == pytest.approx(mse, rel=1e-12)

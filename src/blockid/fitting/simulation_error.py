@@ -493,6 +493,10 @@ def refine(
     if problem.has_tail and tracker.best_theta is not None:
         theta = tracker.best_theta
     fitted = model.with_free_parameters(theta)
+    # The estimation ranges decide whether a simulation may start from N_2^{-1} of the
+    # measured outputs; record them first, so that every MSE reported here (and the
+    # choice between starts) is the one evaluate() gives for the returned model.
+    fitted.record_ranges([(e.u, e.y) for e in data.experiments])
     elapsed = time.perf_counter() - t_start
     metrics = check_model(fitted, data, METHOD)
     settings: dict[str, Any] = {
