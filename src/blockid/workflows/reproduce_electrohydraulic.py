@@ -3,7 +3,10 @@ Hammerstein–Wiener, Hammerstein, Wiener and ARX models with the paper's orders
 compare their free-run simulation error on a different, general trajectory (Table 2).
 
 * Estimation data: the paper's multisine (0.05, 0.1, 0.2, 0.4, 0.5 Hz; 20 Hz sampling;
-  55 s), ten runs averaged. Validation data: one run of a general trajectory.
+  55 s), ten runs averaged. Validation data: one run of a general trajectory (an
+  operator's point-to-point moves, low-passed at the multisine's top frequency 0.5 Hz
+  and kept within the estimation record's current range: see
+  :func:`blockid.plants.electrohydraulic.electrohydraulic_experiment`).
 * Orders (SPEC conventions): na = 3, nb = 3 (b_0 = 1 fixed), nk = 8, two-segment cubic
   input block (r1 = 3), cubic output block without constant (r2 = 3).
 * Two estimators per structure: the **paper's** key-term RLS with internal-variable
