@@ -49,3 +49,23 @@ def test_cli_json(tmp_path):
         "q",
     }
     assert (tmp_path / "electrohydraulic_validation.png").exists()
+
+
+def test_cli_validation_bandwidth(tmp_path):
+    runner = CliRunner()
+    steps = runner.invoke(
+        app,
+        ["reproduce", "electrohydraulic", "--figures", str(tmp_path), "--json"]
+        + ["--validation-bandwidth", "none"],
+    )
+    assert steps.exit_code == 0, steps.output
+    doc = json.loads(steps.stdout)
+    assert doc["validation_bandwidth"] is None
+    default = reproduce_electrohydraulic(seed=0)
+    assert default.validation_bandwidth == 0.5
+    # The step-like command is a different validation record: different errors.
+    assert doc["best"]["hammerstein"]["mse"] != default.best["hammerstein"]["mse"]
+    for bad in ("12", "0", "abc"):
+        r = runner.invoke(app, ["reproduce", "electrohydraulic", "--validation-bandwidth", bad])
+        assert r.exit_code == 2
+        assert "--validation-bandwidth must be a frequency" in r.output
