@@ -40,5 +40,10 @@ class ModelFileError(BlockidError):
 class EstimationError(BlockidError):
     """An estimator failed: it diverged, produced non-finite values or an unstable model.
 
-    Raised instead of returning a model that should not be trusted.
+    Raised instead of returning a model that should not be trusted. A recursive fit asked
+    to ``record_history`` attaches what it recorded up to the failure as ``history``
+    (same keys as ``FitResult.history``: ``"theta"`` rows, ``"names"``, ``"update"``), so
+    that the failure can be looked at; otherwise ``history`` is None.
     """
+
+    history: dict | None = None

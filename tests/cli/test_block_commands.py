@@ -172,35 +172,41 @@ def test_paper_method_failure_is_one_line(tmp_path):
     path = tmp_path / "held.csv"
     pd.DataFrame({"u": u, "y": true.simulate(u)[:, 0]}).to_csv(path, index=False)
     out = tmp_path / "m.json"
-    r = runner.invoke(
-        app,
-        [
-            "fit",
-            str(path),
-            "-u",
-            "u",
-            "-y",
-            "y",
-            "--structure",
-            "hammerstein-wiener",
-            "--method",
-            "key-term-rls",
-            "--na",
-            "2",
-            "--nb",
-            "2",
-            "--nk",
-            "1",
-            "--r1",
-            "3",
-            "--r2",
-            "3",
-            "-o",
-            str(out),
-        ],
-    )
+    args = [
+        "fit",
+        str(path),
+        "-u",
+        "u",
+        "-y",
+        "y",
+        "--structure",
+        "hammerstein-wiener",
+        "--method",
+        "key-term-rls",
+        "--na",
+        "2",
+        "--nb",
+        "2",
+        "--nk",
+        "1",
+        "--r1",
+        "3",
+        "--r2",
+        "3",
+        "-o",
+        str(out),
+    ]
+    r = runner.invoke(app, args)
     assert r.exit_code == 2 and r.stderr.startswith("error: key-term RLS"), r.output
     assert len(r.stderr.strip().splitlines()) == 1 and not out.exists()
+    # With --plot the trajectory up to the failure is drawn; still no model file.
+    figs = tmp_path / "figs"
+    r = runner.invoke(app, [*args, "--plot", str(figs)])
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.strip().splitlines()
+    assert lines[0] == f"parameter trajectories up to the failure written to {figs}/parameters.png"
+    assert lines[1].startswith("error: key-term RLS") and len(lines) == 2
+    assert [p.name for p in figs.iterdir()] == ["parameters.png"] and not out.exists()
 
 
 def test_unused_option_is_an_error(hw_csv):

@@ -1,5 +1,7 @@
 """AW-RLS for paper A's backlash model (A6–A8): what it recovers and when it fails."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -122,6 +124,21 @@ def test_held_command_ends_with_negative_dead_band_and_it_raises():
     u = SLOW["random level held 5 samples"](5000)
     with pytest.raises(EstimationError, match=r"negative dead-band half-width"):
         fit_backlash_aw_rls(_data(u))
+
+
+def test_a_refused_backlash_carries_its_whole_history_in_data_units():
+    # The recursion ran to the end; the check of its result refused it. The error holds
+    # the trajectory, unscaled like a returned one: its last row is the refused theta.
+    u = SLOW["random level held 5 samples"](5000) * 10.0
+    with pytest.raises(EstimationError, match=r"negative dead-band half-width") as info:
+        fit_backlash_aw_rls(_data(u), record_history=True)
+    history = info.value.history
+    assert history["names"][:4] == ["m_left", "m_left*c_left", "m_right", "m_right*c_right"]
+    assert history["theta"].shape == (4998, 6)  # one row per update, one pass
+    m_left, mc_left, m_right, mc_right = history["theta"][-1, :4]
+    assert min(mc_left / m_left, mc_right / m_right) < 0  # the negative half-width
+    c_reported = [float(v) for v in re.findall(r"c_\w+ = (-?[\d.]+)", str(info.value))]
+    np.testing.assert_allclose(c_reported, [mc_left / m_left, mc_right / m_right], atol=0.01)
 
 
 def test_slopes_that_end_negative_are_reported():

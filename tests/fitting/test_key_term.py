@@ -1,5 +1,7 @@
 """Paper B's key-term RLS (B4, B5): when it converges, and that it says so when it does not."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -158,6 +160,35 @@ def test_history_records_the_trajectory_in_data_units():
     np.testing.assert_array_equal(hist["update"], 2 * np.arange(1, n_rows + 1))
     np.testing.assert_allclose(hist["theta"][-1, :8], N1.to_vector(), atol=1e-6)
     assert abs(hist["theta"][0, 1] - N1.f[1]) > 0.05  # it starts far away
+
+
+def test_a_failed_fit_carries_the_history_it_recorded():
+    # Paper B's multisine to the H-W plant: 3 passes do not settle. The error carries
+    # the trajectory in data units; its first pass is exactly the 1-pass fit's history.
+    data = _data(_hw(), _multisine(1500))
+    with pytest.raises(EstimationError, match="did not converge in 3 passes") as info:
+        fit_key_term_rls(data, "hammerstein-wiener", passes=3, record_history=True)
+    failed = info.value.history
+    n = 1500 - 10  # updates per pass (max lag 10)
+    assert failed["theta"].shape == (3 * n, 15) and np.all(np.isfinite(failed["theta"]))
+    np.testing.assert_array_equal(failed["update"], np.arange(1, 3 * n + 1))
+    one = fit_key_term_rls(data, "hammerstein-wiener", passes=1, record_history=True).history
+    assert failed["names"] == one["names"]
+    np.testing.assert_allclose(failed["theta"][:n], one["theta"], rtol=1e-12, atol=1e-12)
+    with pytest.raises(EstimationError) as plain:
+        fit_key_term_rls(data, "hammerstein-wiener", passes=3)
+    assert plain.value.history is None  # nothing recorded unless asked
+
+
+def test_a_diverged_fit_keeps_the_rows_before_the_failing_sample():
+    plant = _hw(n1=TwoSegmentPolynomial(N1.f / 100.0 ** np.arange(4), N1.p / 100.0 ** np.arange(4)))
+    data = _data(plant, 100.0 * _white())
+    with pytest.raises(EstimationError, match=r"at sample (\d+)") as info:
+        fit_key_term_rls(data, "hammerstein-wiener", normalize=False, record_history=True, passes=1)
+    sample = int(re.search(r"at sample (\d+)", str(info.value)).group(1))
+    history = info.value.history
+    assert history["theta"].shape[0] == sample - 10  # one row per update before it
+    assert np.all(np.isfinite(history["theta"]))
 
 
 # ---------------------------------------------------------------------- failures

@@ -21,6 +21,7 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
+from blockid.errors import EstimationError
 
 __all__ = ["app", "main"]
 
@@ -232,7 +233,15 @@ def fit(
     chosen = method or DEFAULT_METHOD.get(structure)
     if plot is not None and chosen in ("key-term-rls", "aw-rls") and structure != "arx":
         options["record_history"] = True  # parameter trajectories for the figure
-    result = fit_model(data, structure, method=method, refine=refine, **options)
+    try:
+        result = fit_model(data, structure, method=method, refine=refine, **options)
+    except EstimationError as exc:
+        if plot is not None and exc.history is not None and len(exc.history["theta"]):
+            path = _failed_history_figure(exc.history, plot)
+            stderr.print(
+                f"parameter trajectories up to the failure written to {path}", markup=False
+            )
+        raise
     record = result.estimation_record()
     if out is not None:
         save_model(result.model, out, record, overwrite=force)
@@ -682,6 +691,22 @@ def reproduce_electrohydraulic_cmd(
         return
     _print_electrohydraulic(result)
     stdout.print(f"figures written to {figures}/")
+
+
+def _failed_history_figure(history: dict, folder: Path) -> Path:
+    """``parameters.png`` in ``folder`` from the history a failed recursive fit recorded."""
+    import matplotlib.pyplot as plt
+
+    from blockid.plotting.figures import plot_parameter_history
+
+    folder.mkdir(parents=True, exist_ok=True)
+    fig = plot_parameter_history(history)
+    fig.suptitle("parameter estimates up to the failure (no model was returned)", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
+    path = folder / "parameters.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def _bandwidth(text: str) -> float | None:

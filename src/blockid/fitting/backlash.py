@@ -38,6 +38,7 @@ from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.checks import check_model
 from blockid.fitting.key_term import (
     check_siso,
+    history_on_failure,
     initial_vector,
     int_at_least,
     one_step_metrics,
@@ -256,42 +257,46 @@ def fit_backlash_aw_rls(
         "where the dead-band edges of (A7) are undefined",
     }
     ia = 4 + nb - 1
-    n_passes, converged, hist_theta, hist_at = run_passes(
-        run,
-        theta,
-        records,
-        n0=n0,
-        passes=passes,
-        tol=tol,
-        record=record_history,
-        method=method,
-        reasons=reasons,
-        poles=lambda th: poles_of(th[ia : ia + na]),
-    )
-    theta = _to_data_units(theta, u_map, v_map, nb)
-    if not np.all(np.isfinite(theta)):
-        raise EstimationError(
-            "AW-RLS: the linear block's static gain B(1) is 0, so the backlash offset cannot "
-            "be recovered from the centred signals; use normalize=False. See "
-            "docs/convergence.md"
+    with history_on_failure(
+        record_history, names, lambda rows: _to_data_units(rows, u_map, v_map, nb)
+    ) as state:
+        n_passes, converged, hist_theta, hist_at = run_passes(
+            run,
+            theta,
+            records,
+            n0=n0,
+            passes=passes,
+            tol=tol,
+            record=record_history,
+            method=method,
+            reasons=reasons,
+            poles=lambda th: poles_of(th[ia : ia + na]),
         )
-    _check_branches_excited(switching)
-    try:
-        block = _read_backlash(theta)
-        model = BacklashModel(
-            data.inputs[0],
-            data.outputs[0],
-            input_block=block,
-            na=na,
-            nb=nb,
-            nk=nk,
-            a=theta[ia : ia + na],
-            b=np.concatenate(([1.0], theta[4:ia])),
-            sampling_time=data.sampling_time,
-        )
-    except ParameterError as exc:  # pragma: no cover - _read_backlash checks first
-        raise EstimationError(f"AW-RLS returned an invalid backlash: {exc}") from None
-    check_model(model, data, method)
+        state["raw"] = {"theta": hist_theta, "update": hist_at}
+        theta = _to_data_units(theta, u_map, v_map, nb)
+        if not np.all(np.isfinite(theta)):
+            raise EstimationError(
+                "AW-RLS: the linear block's static gain B(1) is 0, so the backlash offset cannot "
+                "be recovered from the centred signals; use normalize=False. See "
+                "docs/convergence.md"
+            )
+        _check_branches_excited(switching)
+        try:
+            block = _read_backlash(theta)
+            model = BacklashModel(
+                data.inputs[0],
+                data.outputs[0],
+                input_block=block,
+                na=na,
+                nb=nb,
+                nk=nk,
+                a=theta[ia : ia + na],
+                b=np.concatenate(([1.0], theta[4:ia])),
+                sampling_time=data.sampling_time,
+            )
+        except ParameterError as exc:  # pragma: no cover - _read_backlash checks first
+            raise EstimationError(f"AW-RLS returned an invalid backlash: {exc}") from None
+        check_model(model, data, method)
 
     settings: dict[str, Any] = {
         "na": na,

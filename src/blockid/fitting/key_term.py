@@ -43,8 +43,9 @@ Choices (SPEC leaves them open):
 
 from __future__ import annotations
 
+import contextlib
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -198,6 +199,16 @@ def run_passes(
     count = 0
     converged: bool | None = None
     change = np.inf
+
+    def failure(message: str) -> EstimationError:
+        exc = EstimationError(message)
+        if record:  # in the recursion's units; the caller converts (see recorded_history)
+            exc.history = {
+                "theta": np.vstack(rows) if rows else np.zeros((0, theta.size)),
+                "update": np.concatenate(at) if at else np.zeros(0),
+            }
+        return exc
+
     for p in range(1, passes + 1):
         before = theta.copy()
         in_pass = 0
@@ -205,25 +216,27 @@ def run_passes(
             m = (u.size - n0) // stride if record else 0
             hist = np.zeros((m, theta.size))
             status, reason, detail = run(u, y, in_pass, hist, stride)
+            if record:
+                # Rows the kernel wrote before a failure at sample `status`.
+                kept = m if status == OK else min(m, max(0, (status - n0) // stride))
+                rows.append(hist[:kept])
+                at.append(count + stride * np.arange(1, kept + 1))
             if status != OK:
-                raise EstimationError(
+                raise failure(
                     f"{method} diverged in pass {p}, experiment '{name}', at sample "
                     f"{status}: {reasons[reason]}{detail}. No model is returned; try other "
                     f"orders, more exciting data or another method. {_CONVERGENCE_DOC}"
                 )
-            if record:
-                rows.append(hist)
-                at.append(count + stride * np.arange(1, m + 1))
             count += u.size - n0
             in_pass += u.size - n0
         if not np.all(np.isfinite(theta)):
-            raise EstimationError(
+            raise failure(
                 f"{method} diverged in pass {p}: the parameter estimates are not finite. "
                 f"{_CONVERGENCE_DOC}"
             )
         rho = float(np.max(np.abs(poles(theta)), initial=0.0))
         if not rho < 1.0:
-            raise EstimationError(
+            raise failure(
                 f"{method} diverged: after pass {p} the linear block is unstable (largest "
                 f"pole magnitude {rho:.4g}), so its internal signals grow without bound. "
                 f"No model is returned. {_CONVERGENCE_DOC}"
@@ -235,7 +248,7 @@ def run_passes(
                 break
     else:
         if passes > 1:
-            raise EstimationError(
+            raise failure(
                 f"{method} did not converge in {passes} passes: the parameters still "
                 f"changed by up to {change:.3g} (relative) in the last pass, tolerance "
                 f"{tol:g}. Raise passes, or the internal-variable iteration has no stable "
@@ -244,6 +257,30 @@ def run_passes(
     hist_theta = np.vstack(rows) if record else None
     hist_at = np.concatenate(at) if record else None
     return p, converged, hist_theta, hist_at
+
+
+@contextlib.contextmanager
+def history_on_failure(
+    record: bool, names: list[str], to_data_units: Callable[[np.ndarray], np.ndarray]
+) -> Iterator[dict[str, Any]]:
+    """Give an :class:`EstimationError` raised inside the recorded history, in data units.
+
+    :func:`run_passes` attaches the rows recorded up to its own failures; for a failure
+    after it (a check of the result), put its history in the yielded dict under
+    ``"raw"`` (``{"theta", "update"}`` in the recursion's units).
+    """
+    state: dict[str, Any] = {}
+    try:
+        yield state
+    except EstimationError as exc:
+        raw = exc.history if exc.history is not None else state.get("raw")
+        if record and raw is not None and "names" not in raw:
+            exc.history = {
+                "theta": to_data_units(raw["theta"]),
+                "names": names,
+                "update": raw["update"],
+            }
+        raise
 
 
 def poles_of(a: np.ndarray) -> np.ndarray:
@@ -473,22 +510,24 @@ def fit_key_term_rls(
         _k.REASON_EXPLODED: "the estimated internal signal x exceeded 1e6 (1 + max|y|): "
         "the estimated linear block drives it unstable",
     }
-    n_passes, converged, hist_theta, hist_at = run_passes(
-        run,
-        theta,
-        records,
-        n0=n0,
-        passes=passes,
-        tol=tol,
-        record=record_history,
-        method=method,
-        reasons=reasons,
-        poles=lambda th: poles_of(th[ia : ia + na]),
-    )
-    theta = theta * factors
-    model = _model(structure, theta, data, na, nb, nk, r1)
-    checked = model if structure != "arx" else _block_twin(model, na, nb, nk)
-    check_model(checked, data, method)
+    with history_on_failure(record_history, names, lambda rows: rows * factors) as state:
+        n_passes, converged, hist_theta, hist_at = run_passes(
+            run,
+            theta,
+            records,
+            n0=n0,
+            passes=passes,
+            tol=tol,
+            record=record_history,
+            method=method,
+            reasons=reasons,
+            poles=lambda th: poles_of(th[ia : ia + na]),
+        )
+        state["raw"] = {"theta": hist_theta, "update": hist_at}
+        theta = theta * factors
+        model = _model(structure, theta, data, na, nb, nk, r1)
+        checked = model if structure != "arx" else _block_twin(model, na, nb, nk)
+        check_model(checked, data, method)
 
     settings: dict[str, Any] = {
         "structure": structure,
