@@ -76,7 +76,11 @@ def main() -> None:
     parser.add_argument("--split", type=float, default=0.55, help="band split [Hz]")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     args = parser.parse_args()
-    bandwidth = None if args.validation_bandwidth == "none" else float(args.validation_bandwidth)
+    value = args.validation_bandwidth.strip().lower()
+    try:
+        bandwidth = None if value == "none" else float(value)
+    except ValueError:
+        parser.error(f"--validation-bandwidth: expected Hz or 'none', got {value!r}")
     rows = [run_seed(seed, bandwidth, args.split) for seed in range(args.seeds)]
     if args.json:
         print(json.dumps(rows, indent=2))

@@ -110,7 +110,11 @@ def main() -> None:
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     args = parser.parse_args()
     params = parse_overrides(args.set)
-    bandwidth = None if args.validation_bandwidth == "none" else float(args.validation_bandwidth)
+    value = args.validation_bandwidth.strip().lower()
+    try:
+        bandwidth = None if value == "none" else float(value)
+    except ValueError:
+        parser.error(f"--validation-bandwidth: expected Hz or 'none', got {value!r}")
 
     rows = []
     start = time.perf_counter()

@@ -533,3 +533,43 @@ def test_reported_mse_is_what_evaluate_gives_for_a_non_monotone_output_block():
     mse = evaluate(fit.model, data, "simulation").metrics["mse"]["velocity"]
     assert fit.settings["final_simulation_mse"] == pytest.approx(mse, rel=1e-12)
     assert fit.estimation_metrics["mse"]["velocity"] == pytest.approx(mse, rel=1e-12)
+
+
+def test_a_failed_start_is_recorded_and_both_failing_is_one_clear_error(monkeypatch):
+    import blockid.fitting.simulation_error as se
+
+    true = hw_plant()
+    rng = np.random.default_rng(5)
+    data = record(true, rng.uniform(-1, 1, 1500), rng)
+    original = se.refine
+    calls = []
+
+    def first_fails(model, data, **kw):  # the first refinement is H-W's own start
+        calls.append(type(model).__name__)
+        if len(calls) == 1:
+            raise EstimationError("forced failure")
+        return original(model, data, **kw)
+
+    monkeypatch.setattr(se, "refine", first_fails)
+    fit = fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=2)
+    assert calls == ["HammersteinWiener", "Hammerstein", "HammersteinWiener"]
+    assert fit.settings["initial"] == NESTED_START
+    assert fit.settings["starts"]["initial estimate"] == {"error": "forced failure"}
+    assert np.allclose(fit.model.free_parameters(), true.free_parameters(), atol=0.05)
+
+    def hw_fails(model, data, **kw):
+        if isinstance(model, HammersteinWiener):
+            raise EstimationError("forced failure")
+        return original(model, data, **kw)
+
+    monkeypatch.setattr(se, "refine", hw_fails)
+    with pytest.raises(EstimationError, match=r"failed from every start .*Try other orders"):
+        fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=2)
+
+
+def test_with_a_linear_output_block_there_is_one_start():
+    true = hw_plant()
+    rng = np.random.default_rng(5)
+    data = record(true, rng.uniform(-1, 1, 1500), rng)
+    fit = fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=2, r2=1)
+    assert set(fit.settings["starts"]) == {"initial estimate"}

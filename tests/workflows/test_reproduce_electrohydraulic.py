@@ -65,6 +65,15 @@ def test_cli_validation_bandwidth(tmp_path):
     assert default.validation_bandwidth == 0.5
     # The step-like command is a different validation record: different errors.
     assert doc["best"]["hammerstein"]["mse"] != default.best["hammerstein"]["mse"]
+    narrow = runner.invoke(
+        app,
+        ["reproduce", "electrohydraulic", "--figures", str(tmp_path), "--json"]
+        + ["--validation-bandwidth", "0.3"],
+    )
+    assert narrow.exit_code == 0, narrow.output
+    doc = json.loads(narrow.stdout)
+    assert doc["validation_bandwidth"] == 0.3
+    assert doc["best"]["hammerstein"]["mse"] != default.best["hammerstein"]["mse"]
     for bad in ("12", "0", "abc"):
         r = runner.invoke(app, ["reproduce", "electrohydraulic", "--validation-bandwidth", bad])
         assert r.exit_code == 2

@@ -582,9 +582,9 @@ def fit_simulation_error(
         ``history["initial_seconds"]`` the time the initial estimate took. A
         Hammerstein-Wiener fit without ``initial`` is refined from two starts (the
         initial estimate and the refined Hammerstein model with the identity output
-        block, :data:`NESTED_START`) and keeps the one with the smaller free-run MSE
-        on the estimation data; ``settings["starts"]`` gives both MSEs (or the error
-        of a start that failed).
+        block, :data:`NESTED_START`; not with ``r2 = 1``, where the two models are the
+        same) and keeps the one with the smaller free-run MSE on the estimation data;
+        ``settings["starts"]`` gives both MSEs (or the error of a start that failed).
 
     Examples
     --------
@@ -671,27 +671,35 @@ def _best_hammerstein_wiener(
         results["initial estimate"] = refine(start, data, **options)
     except EstimationError as exc:
         failures["initial estimate"] = str(exc)
-    try:
-        nested = fit_simulation_error(
-            data,
-            "hammerstein",
-            na=start.na,
-            nb=start.nb,
-            nk=start.nk,
-            r1=r1,
-            input_block=input_block,
-            **options,
-        ).model
-        degree = start.output_block.degree
-        identity = Polynomial([1.0] + [0.0] * (degree - 1), constant=False)
-        nested_start = _build(start, nested.input_block, identity, nested.a, nested.b)
-        results[NESTED_START] = refine(nested_start, data, **options)
-    except BlockidError as exc:  # e.g. an input block the Hammerstein class does not take
-        failures[NESTED_START] = str(exc)
+    degree = start.output_block.degree
+    if degree > 1:  # with r2 = 1 the H-W model is the Hammerstein model: one start is enough
+        try:
+            nested = fit_simulation_error(
+                data,
+                "hammerstein",
+                na=start.na,
+                nb=start.nb,
+                nk=start.nk,
+                r1=r1,
+                input_block=input_block,
+                **options,
+            ).model
+        except BlockidError as exc:  # e.g. an input block the Hammerstein class does not take
+            failures[NESTED_START] = f"the Hammerstein fit to start from failed: {exc}"
+        else:
+            identity = Polynomial([1.0] + [0.0] * (degree - 1), constant=False)
+            nested_start = _build(start, nested.input_block, identity, nested.a, nested.b)
+            try:
+                results[NESTED_START] = refine(nested_start, data, **options)
+            except EstimationError as exc:
+                failures[NESTED_START] = str(exc)
     if not results:
         raise EstimationError(
-            "the Hammerstein-Wiener fit failed from both starts: "
+            "the Hammerstein-Wiener fit failed from every start ("
             + "; ".join(f"{k}: {v}" for k, v in failures.items())
+            + "). Try other orders (na, nb, nk, r1, r2), data that excite the plant more "
+            "(the input should cross the whole operating range, both signs for B1), or a "
+            "simpler structure"
         )
     origin = min(results, key=lambda k: results[k].settings["final_simulation_mse"])
     result = results[origin]

@@ -41,12 +41,13 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 import pandas as pd
 from scipy.optimize import brentq
-from scipy.signal import butter, filtfilt
+from scipy.signal import butter, sosfiltfilt
 
 from blockid._kernels import electrohydraulic as _k
 from blockid.errors import ParameterError
 
 __all__ = [
+    "MIN_TRAJECTORY_DURATION",
     "PHASE_TRIALS",
     "ElectrohydraulicParameters",
     "electrohydraulic_equilibrium",
@@ -64,6 +65,9 @@ DEFAULT_STEP = 1.0e-3
 
 #: Random phase sets searched for the lowest-crest-factor multisine of an experiment.
 PHASE_TRIALS = 64
+
+#: Shortest validation trajectory [s] (:func:`general_trajectory_current`).
+MIN_TRAJECTORY_DURATION = 10.0
 
 
 @dataclass(frozen=True)
@@ -620,14 +624,14 @@ def general_trajectory_current(
     Parameters
     ----------
     duration : float
-        Length [s].
+        Length [s], at least :data:`MIN_TRAJECTORY_DURATION`.
     sample_time : float
         Sampling period [s].
     seed : int or numpy.random.Generator, optional
         Seed of the random moves.
     bandwidth : float or None, default 0.5
-        Corner frequency [Hz] of the final low-pass filter, below the Nyquist
-        frequency; None for no filter.
+        Corner frequency [Hz] of the final low-pass filter, from ``2 / duration``
+        (two cycles in the record) to below the Nyquist frequency; None for no filter.
 
     Returns
     -------
@@ -641,11 +645,22 @@ def general_trajectory_current(
     ((1100,), True)
     """
     n = _n_samples(duration, sample_time)
-    nyquist = 0.5 / sample_time
-    if bandwidth is not None and not (np.isfinite(bandwidth) and 0 < bandwidth < nyquist):
+    if duration < MIN_TRAJECTORY_DURATION:
         raise ParameterError(
-            f"bandwidth must be a frequency in (0, {nyquist:g}) Hz or None, got {bandwidth!r}."
+            f"duration must be at least {MIN_TRAJECTORY_DURATION:g} s for point-to-point moves "
+            f"and their pauses, got {duration!r}."
         )
+    nyquist = 0.5 / sample_time
+    if bandwidth is not None:
+        if isinstance(bandwidth, bool) or not isinstance(bandwidth, int | float | np.number):
+            raise ParameterError(f"bandwidth must be a number in Hz or None, got {bandwidth!r}.")
+        lowest = 2.0 / duration  # two cycles over the record: the moves can still happen
+        if not (np.isfinite(bandwidth) and lowest <= bandwidth < nyquist):
+            raise ParameterError(
+                f"bandwidth must be a frequency from {lowest:.3g} Hz (two cycles in the "
+                f"{duration:g} s record) to below the Nyquist frequency {nyquist:g} Hz, or "
+                f"None, got {bandwidth!r}."
+            )
     rng = np.random.default_rng(seed)
     plant = ElectrohydraulicParameters()
     stroke = plant.stroke
@@ -678,8 +693,8 @@ def general_trajectory_current(
     jitter *= 0.05 / jitter.std()
     command = smooth + jitter
     if bandwidth is not None:
-        b, a = butter(2, bandwidth / nyquist)
-        command = filtfilt(b, a, command)
+        sos = butter(2, bandwidth / nyquist, output="sos")
+        command = sosfiltfilt(sos, command)
     return np.clip(command, -0.9, 0.9)
 
 
