@@ -40,33 +40,22 @@ def hw_csv(tmp_path):
     return path, true
 
 
+def fit_args(path, structure: str, options: str) -> list[str]:
+    """``blockid fit PATH -u u -y y --structure STRUCTURE`` and the options (split on spaces)."""
+    return ["fit", str(path), "-u", "u", "-y", "y", "--structure", structure, *options.split()]
+
+
 def test_fit_hw_recovers_parameters_and_writes_figures(hw_csv, tmp_path):
     path, true = hw_csv
     out = tmp_path / "hw.json"
     r = runner.invoke(
         app,
         [
-            "fit",
-            str(path),
-            "-u",
-            "u",
-            "-y",
-            "y",
-            "--structure",
-            "hammerstein-wiener",
-            "--na",
-            "2",
-            "--nb",
-            "2",
-            "--nk",
-            "1",
-            "--r1",
-            "3",
-            "--r2",
-            "3",
-            "--estimation",
-            "0:3000",
-            "-o",
+            *fit_args(
+                str(path),
+                "hammerstein-wiener",
+                "--na 2 --nb 2 --nk 1 --r1 3 --r2 3 --estimation 0:3000 -o",
+            ),
             str(out),
             "--plot",
             str(tmp_path / "figs"),
@@ -132,26 +121,11 @@ def test_paper_method_records_parameter_trajectories(hw_csv, tmp_path):
     r = runner.invoke(
         app,
         [
-            "fit",
-            str(path),
-            "-u",
-            "u",
-            "-y",
-            "y",
-            "--structure",
-            "hammerstein",
-            "--method",
-            "key-term-rls",
-            "--na",
-            "2",
-            "--nb",
-            "2",
-            "--nk",
-            "1",
-            "--r1",
-            "3",
-            "--json",
-            "--plot",
+            *fit_args(
+                str(path),
+                "hammerstein",
+                "--method key-term-rls --na 2 --nb 2 --nk 1 --r1 3 --json --plot",
+            ),
             str(tmp_path / "figs"),
         ],
     )
@@ -173,27 +147,11 @@ def test_paper_method_failure_is_one_line(tmp_path):
     pd.DataFrame({"u": u, "y": true.simulate(u)[:, 0]}).to_csv(path, index=False)
     out = tmp_path / "m.json"
     args = [
-        "fit",
-        str(path),
-        "-u",
-        "u",
-        "-y",
-        "y",
-        "--structure",
-        "hammerstein-wiener",
-        "--method",
-        "key-term-rls",
-        "--na",
-        "2",
-        "--nb",
-        "2",
-        "--nk",
-        "1",
-        "--r1",
-        "3",
-        "--r2",
-        "3",
-        "-o",
+        *fit_args(
+            str(path),
+            "hammerstein-wiener",
+            "--method key-term-rls --na 2 --nb 2 --nk 1 --r1 3 --r2 3 -o",
+        ),
         str(out),
     ]
     r = runner.invoke(app, args)
@@ -211,22 +169,7 @@ def test_paper_method_failure_is_one_line(tmp_path):
 
 def test_unused_option_is_an_error(hw_csv):
     path, _ = hw_csv
-    r = runner.invoke(
-        app,
-        [
-            "fit",
-            str(path),
-            "-u",
-            "u",
-            "-y",
-            "y",
-            "--structure",
-            "hammerstein",
-            "--eps1",
-            "2",
-            "--json",
-        ],
-    )
+    r = runner.invoke(app, fit_args(str(path), "hammerstein", "--eps1 2 --json"))
     assert r.exit_code == 2 and "--eps1 (eps1=) not used by hammerstein" in r.stderr
 
 

@@ -52,29 +52,24 @@ def test_cli_json(tmp_path):
 
 
 def test_cli_validation_bandwidth(tmp_path):
-    runner = CliRunner()
-    steps = runner.invoke(
-        app,
-        ["reproduce", "electrohydraulic", "--figures", str(tmp_path), "--json"]
-        + ["--validation-bandwidth", "none"],
-    )
-    assert steps.exit_code == 0, steps.output
-    doc = json.loads(steps.stdout)
-    assert doc["validation_bandwidth"] is None
+    def run(value):
+        args = ["reproduce", "electrohydraulic", "--figures", str(tmp_path)]
+        return CliRunner().invoke(app, [*args, "--json", "--validation-bandwidth", value])
+
     default = reproduce_electrohydraulic(seed=0)
     assert default.validation_bandwidth == 0.5
-    # The step-like command is a different validation record: different errors.
-    assert doc["best"]["hammerstein"]["mse"] != default.best["hammerstein"]["mse"]
-    narrow = runner.invoke(
-        app,
-        ["reproduce", "electrohydraulic", "--figures", str(tmp_path), "--json"]
-        + ["--validation-bandwidth", "0.3"],
-    )
-    assert narrow.exit_code == 0, narrow.output
-    doc = json.loads(narrow.stdout)
-    assert doc["validation_bandwidth"] == 0.3
-    assert doc["best"]["hammerstein"]["mse"] != default.best["hammerstein"]["mse"]
-    for bad in ("12", "0", "abc"):
-        r = runner.invoke(app, ["reproduce", "electrohydraulic", "--validation-bandwidth", bad])
-        assert r.exit_code == 2
-        assert "--validation-bandwidth must be a frequency" in r.output
+    for value, expected in (("none", None), ("0.3", 0.3)):
+        r = run(value)
+        assert r.exit_code == 0, r.output
+        doc = json.loads(r.stdout)
+        assert doc["validation_bandwidth"] == expected
+        # another validation command is another validation record: other errors
+        assert doc["best"]["hammerstein"]["mse"] != default.best["hammerstein"]["mse"]
+    for bad, message in (
+        ("abc", "--validation-bandwidth must be a frequency in Hz or 'none'"),
+        ("12", "bandwidth must be a frequency from 0.0364 Hz"),  # checked by the plant
+        ("0", "bandwidth must be a frequency from 0.0364 Hz"),
+    ):
+        r = run(bad)
+        assert r.exit_code == 2 and message in r.output, r.output
+        assert len(r.output.strip().splitlines()) == 1

@@ -162,7 +162,8 @@ def fit_model(
                 },
             }
         result = refined
-    if hasattr(result.model, "record_ranges"):
+    if hasattr(result.model, "record_ranges") and not result.model.ranges:
+        # (a refinement on simulation error has already recorded them on these data)
         result.model.record_ranges([(e.u, e.y) for e in data.experiments])
     return result
 

@@ -49,6 +49,7 @@ from blockid.errors import ParameterError
 __all__ = [
     "MIN_TRAJECTORY_DURATION",
     "PHASE_TRIALS",
+    "VALIDATION_BANDWIDTH",
     "ElectrohydraulicParameters",
     "electrohydraulic_equilibrium",
     "electrohydraulic_static_spool",
@@ -65,6 +66,10 @@ DEFAULT_STEP = 1.0e-3
 
 #: Random phase sets searched for the lowest-crest-factor multisine of an experiment.
 PHASE_TRIALS = 64
+
+#: Default corner [Hz] of the validation command's low-pass: the top component of paper
+#: B's multisine, so that validation stays in the band the estimation record excites.
+VALIDATION_BANDWIDTH = 0.5
 
 #: Shortest validation trajectory [s] (:func:`general_trajectory_current`).
 MIN_TRAJECTORY_DURATION = 10.0
@@ -605,7 +610,7 @@ def general_trajectory_current(
     duration: float = 55.0,
     sample_time: float = 0.05,
     seed: int | np.random.Generator | None = None,
-    bandwidth: float | None = 0.5,
+    bandwidth: float | None = VALIDATION_BANDWIDTH,
 ) -> np.ndarray:
     """A validation command unlike the multisine: an operator's point-to-point moves.
 
@@ -857,7 +862,7 @@ def electrohydraulic_experiment(
     seed: int | None = None,
     n_repeats: int = 10,
     params: ElectrohydraulicParameters | None = None,
-    validation_bandwidth: float | None = 0.5,
+    validation_bandwidth: float | None = VALIDATION_BANDWIDTH,
 ) -> dict[str, pd.DataFrame]:
     """Paper B's data: an averaged multisine estimation record and a validation record.
 

@@ -12,7 +12,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["plot_model_output", "plot_blocks", "plot_parameter_history", "fit_figures"]
+__all__ = [
+    "plot_model_output",
+    "plot_blocks",
+    "plot_parameter_history",
+    "fit_figures",
+    "failed_fit_figures",
+]
 
 _MODE_TITLE = {"simulation": "free-run simulation", "one-step": "one-step prediction"}
 
@@ -145,6 +151,23 @@ def fit_figures(result: Any, data: Any, folder: str | Path, truth: Any = None) -
         written.append(_save(plot_parameter_history(result.history), folder / "parameters.png"))
     plt.close("all")
     return written
+
+
+def failed_fit_figures(history: dict[str, Any], folder: str | Path) -> list[Path]:
+    """:func:`fit_figures` for a recursive fit that raised: ``parameters.png`` from the
+    history attached to its :class:`~blockid.errors.EstimationError` (none if empty)."""
+    import matplotlib.pyplot as plt
+
+    if history is None or not len(history.get("theta", ())):
+        return []
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    fig = plot_parameter_history(history)
+    fig.suptitle("parameter estimates up to the failure (no model was returned)", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
+    path = _save(fig, folder / "parameters.png")
+    plt.close(fig)
+    return [path]
 
 
 def _save(fig: Any, path: Path) -> Path:

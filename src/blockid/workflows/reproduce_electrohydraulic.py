@@ -85,7 +85,7 @@ class ElectrohydraulicReproduction:
         }
 
 
-def _datasets(seed: int, validation_bandwidth: float | None = 0.5) -> dict[str, Dataset]:
+def _datasets(seed: int, validation_bandwidth: float | None) -> dict[str, Dataset]:
     from blockid.plants.electrohydraulic import electrohydraulic_experiment
 
     exp = electrohydraulic_experiment(seed=seed, validation_bandwidth=validation_bandwidth)
