@@ -18,7 +18,15 @@ __all__ = [
 
 
 class BlockidError(ValueError):
-    """Base class of every error blockid raises for bad input or a failed estimate."""
+    """Base class of every error blockid raises for bad input or a failed estimate.
+
+    ``parameter`` names the Python parameter at fault when there is one (e.g.
+    ``"forgetting"``), so that the command line can name its own flag for it.
+    """
+
+    def __init__(self, message: str = "", *, parameter: str | None = None) -> None:
+        super().__init__(message)
+        self.parameter = parameter
 
 
 class DataError(BlockidError):

@@ -28,10 +28,14 @@ from typing import Any, ClassVar
 import numpy as np
 
 from blockid._kernels.backlash import backlash_run
+from blockid._kernels.simulation import backlash_sensitivity
 from blockid.blocks.base import DynamicBlock
 from blockid.errors import DataError, ParameterError
 
 __all__ = ["Backlash"]
+
+#: Dead-band half-widths tried by the initial estimate, as fractions of the input span.
+_GRID = (0.0, 0.0025, 0.005, 0.01, 0.02, 0.035, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3)
 
 
 class Backlash(DynamicBlock):
@@ -83,6 +87,59 @@ class Backlash(DynamicBlock):
     def to_vector(self) -> np.ndarray:
         """``[m_left, c_left, m_right, c_right]`` as a float array."""
         return np.array([self.m_left, self.c_left, self.m_right, self.c_right])
+
+    def with_vector(self, theta: Any) -> Backlash:
+        """Backlash with ``[m_left, c_left, m_right, c_right] = theta``."""
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        if theta.size != 4:
+            raise ParameterError(f"a backlash takes 4 parameter values, got {theta.size}")
+        return Backlash(*theta)
+
+    @classmethod
+    def template(cls) -> Backlash:
+        """A backlash to fit: the initial estimate searches its dead band on a grid."""
+        return cls(1.0, 0.0, 1.0, 0.0)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Slopes positive (at least 1e-6 of their current value), dead bands >= 0."""
+        lower = np.array([1e-6 * self.m_left, 0.0, 1e-6 * self.m_right, 0.0])
+        return lower, np.full(4, np.inf)
+
+    def scaled(self, gain: float) -> Backlash:
+        if not gain > 0:
+            raise ParameterError(
+                f"cannot absorb the gain {gain:.4g} into a backlash, whose slopes must be "
+                "positive: the plant's gain from u has the opposite sign. Negate the input "
+                "(or the output) and fit again"
+            )
+        return Backlash(gain * self.m_left, self.c_left, gain * self.m_right, self.c_right)
+
+    def initial_grid(self, u: np.ndarray, around: Any = None) -> list[Any]:
+        """Unit-slope backlashes with ``c_L = c_R = c`` **(choice)**, ``c`` on a grid of
+        fractions of the input's span; with ``around`` (the best of them) a finer grid
+        of 9 between its two neighbours."""
+        span = float(np.ptp(u)) or 1.0
+        grid = [span * g for g in _GRID]
+        if around is None:
+            return [Backlash(1.0, c, 1.0, c) for c in grid]
+        k = int(np.argmin([abs(c - around.c_left) for c in grid]))
+        fine = np.linspace(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)], 9)
+        return [Backlash(1.0, c, 1.0, c) for c in fine]
+
+    def rest_state(self, u0: float) -> float:
+        """The middle of the dead band at the first input, so that no start-up jump is
+        simulated."""
+        return 0.5 * (self.m_left * (u0 + self.c_left) + self.m_right * (u0 - self.c_right))
+
+    def sensitivity(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Output from :meth:`rest_state` and its exact derivative with respect to
+        ``[m_left, c_left, m_right, c_right]`` (branch derivatives, held in the band)."""
+        u = np.ascontiguousarray(np.asarray(u, dtype=float))
+        mL, cL, mR, cR = self.to_vector()
+        u0 = u[0]
+        x0 = self.rest_state(float(u0))
+        dx0 = np.array([0.5 * (u0 + cL), 0.5 * mL, 0.5 * (u0 - cR), -0.5 * mR])
+        return backlash_sensitivity(u, self.to_vector(), x0, dx0)
 
     def to_theta(self) -> np.ndarray:
         """Backlash part of the key-term-separated parameter vector of (A6).

@@ -1,48 +1,177 @@
-"""Common interface of the nonlinear blocks.
+"""Common interface of the blocks a block-oriented model is built from.
 
 A *static* block maps each input sample to an output sample, ``w = N(u)``. A
 *dynamic* (hysteretic) block such as backlash has memory: its output depends on its
-own previous output as well. Blocks evaluate on NumPy arrays, expose their parameters
-by name (as the model files and JSON output name them, see SPEC.md "Conventions"),
-serialise to plain dictionaries, and can plot their input-output curve.
+own previous output as well. The linear dynamic block is
+:class:`blockid.blocks.linear.LinearBlock`.
+
+Every block owns its mathematics, so that models, estimators and the command line
+work with any block without knowing its kind:
+
+* evaluation (``__call__`` / :meth:`DynamicBlock.simulate`);
+* parameters: named (:attr:`Block.parameters`, as model files name them), as one vector
+  (:meth:`Block.to_vector` / :meth:`Block.with_vector`), their bounds
+  (:meth:`Block.bounds`) and which of them are fixed by the normalisation of a cascade
+  (:meth:`Block.free_mask`);
+* derivatives: with respect to the parameters (:meth:`StaticBlock.jacobian`,
+  :meth:`DynamicBlock.sensitivity`) and to the input (:meth:`StaticBlock.derivative`),
+  for the simulation-error fit;
+* scaling by a gain (:meth:`Block.scaled`), initial shapes for the initial estimate
+  (:meth:`Block.initial_grid`), a placeholder to fit (:meth:`Block.template`), the rest
+  state (:meth:`DynamicBlock.rest_state`), inversion (:meth:`StaticBlock.invert`);
+* serialisation (:meth:`Block.to_dict` / :meth:`Block.from_dict`).
+
+The defaults here are numerical (central differences, bisection) so that a new block
+needs only ``kind``, ``__init__``, :attr:`~Block.parameters` and ``__call__``; blocks that
+know their derivatives analytically override them. ``docs/extending.md`` shows a
+user-defined block used in every structure.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
-__all__ = ["Block", "StaticBlock", "DynamicBlock", "BLOCK_TYPES", "block_from_dict"]
+from blockid.errors import BlockidError, EstimationError, ModelFileError, ParameterError
+
+__all__ = [
+    "BLOCK_TYPES",
+    "Block",
+    "DynamicBlock",
+    "LinearFamily",
+    "StaticBlock",
+    "block_from_dict",
+    "block_template",
+]
 
 #: Registry ``kind -> class`` filled by :meth:`Block.__init_subclass__`; used to load
-#: blocks back from model files.
+#: blocks back from model files and to choose blocks by name.
 BLOCK_TYPES: dict[str, type[Block]] = {}
+
+#: Relative step of the numerical derivatives.
+_STEP = 1e-6
 
 
 class Block(ABC):
-    """Base class of all nonlinear blocks.
+    """Base class of all blocks.
 
-    Subclasses set the class attribute ``kind`` (the name used in model files, e.g.
-    ``"polynomial"``) and implement :attr:`parameters`, :meth:`to_dict` and
-    :meth:`from_dict`.
+    Subclasses set the class attribute ``kind`` (the name used in model files and on
+    the command line, e.g. ``"polynomial"``) and implement :attr:`parameters`; the
+    constructor must accept the entries of :attr:`parameters` as keywords.
     """
 
     kind: ClassVar[str] = ""
     #: True when the block output is ``regressors(u) @ to_vector()``.
     linear_in_parameters: ClassVar[bool] = False
+    #: True when the block says nothing reliable outside the input range it was fitted
+    #: on (polynomials); models then warn when data leave that range.
+    warn_extrapolation: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
-        if cls.kind:
+        if cls.__dict__.get("kind"):
             BLOCK_TYPES[cls.kind] = cls
 
+    # ------------------------------------------------------------------ parameters
     @property
     @abstractmethod
     def parameters(self) -> dict[str, Any]:
-        """Named parameters, JSON-serialisable (floats or lists of floats)."""
+        """Named parameters, JSON-serialisable (floats, lists of floats, flags)."""
 
+    def to_vector(self) -> np.ndarray:
+        """All numeric parameters as one vector, in the order of :attr:`parameters`."""
+        values = [v for v in self.parameters.values() if not isinstance(v, bool)]
+        if not values:
+            return np.zeros(0)
+        return np.concatenate([np.atleast_1d(np.asarray(v, dtype=float)) for v in values])
+
+    def with_vector(self, theta: Any) -> Block:
+        """A block of the same kind and form with :meth:`to_vector` replaced by ``theta``."""
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        if theta.size != self.to_vector().size:
+            raise ParameterError(
+                f"{self.kind} takes {self.to_vector().size} parameter value(s), got {theta.size}"
+            )
+        params, pos = {}, 0
+        for key, value in self.parameters.items():
+            if isinstance(value, bool):
+                params[key] = value
+                continue
+            size = np.atleast_1d(np.asarray(value)).size
+            chunk = theta[pos : pos + size]
+            params[key] = chunk.tolist() if isinstance(value, list | tuple) else float(chunk[0])
+            pos += size
+        return type(self)(**params)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds of :meth:`to_vector` for the simulation-error fit."""
+        n = self.to_vector().size
+        return np.full(n, -np.inf), np.full(n, np.inf)
+
+    def free_mask(self, after_linear: bool) -> np.ndarray:
+        """Which entries of :meth:`to_vector` an estimator may move.
+
+        A gain between two blocks of a cascade is not identifiable. A linear block that
+        follows a nonlinear one fixes ``b_0 = 1``; a static block that follows a linear
+        block (``after_linear``) must fix its own input gain: by construction (unit
+        slope at the origin, like ``limit * tanh(x / limit)``) or by returning False
+        here for the entry that carries it (the output polynomial fixes ``q_1 = 1``).
+        """
+        return np.ones(self.to_vector().size, dtype=bool)
+
+    def check_normalised(self, after_linear: bool) -> None:  # noqa: B027 - optional hook
+        """Raise :class:`ParameterError` if the fixed entries do not hold their values."""
+
+    # ------------------------------------------------------------------ fitting aids
+    def check_data(self, u: np.ndarray) -> None:  # noqa: B027 - optional hook
+        """Raise :class:`~blockid.errors.EstimationError` when input data ``u`` cannot
+        identify this block (default: any data can)."""
+
+    @classmethod
+    def template(cls, **options: Any) -> Block:
+        """A block of this kind with placeholder parameters, to be fitted.
+
+        ``options`` fix its form (e.g. ``degree`` of a polynomial, ``knots`` of a
+        piecewise-linear map); see :func:`block_template`.
+        """
+        raise ParameterError(
+            f"the {cls.kind} block has no default form; construct one with its parameters "
+            "and pass it as the starting block"
+        )
+
+    def adapted(self, u: np.ndarray) -> Block:
+        """The template adapted to the data's input range (default: unchanged)."""
+        return self
+
+    def scaled(self, gain: float) -> Block:
+        """The block followed by a gain: ``gain * N(u)`` as a block of the same kind.
+
+        Used to move a gain from the linear block into this block (``b_0 = 1``).
+        """
+        if self.linear_in_parameters:
+            return self.with_vector(gain * self.to_vector())
+        raise ParameterError(
+            f"the {self.kind} block cannot absorb a gain; implement {type(self).__name__}."
+            "scaled(gain) to use it before a linear block"
+        )
+
+    def initial_grid(self, u: np.ndarray, around: Any = None) -> list[Any]:
+        """Shapes tried by the initial estimate, for input data ``u``.
+
+        Each entry is either a block with unit gain (the linear block that follows is
+        fitted by least squares and its ``b_0`` moved into the block with
+        :meth:`scaled`) or a :class:`LinearFamily` (a sub-family linear in some
+        parameters, fitted by the Hammerstein regression). With ``around`` (the best
+        candidate of the first grid) a block may return a finer second grid. Blocks
+        linear in their parameters need no grid.
+        """
+        return []
+
+    # ------------------------------------------------------------------ files
     def to_dict(self) -> dict[str, Any]:
         """Plain-dict form ``{"kind": ..., **parameters}`` for model files."""
         return {"kind": self.kind, **self.parameters}
@@ -65,21 +194,230 @@ class StaticBlock(Block):
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Evaluate the block on an array of inputs (any shape)."""
 
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """``dN(u_k)/dθ``, shape ``(N, n)`` for ``N = u.size`` and ``θ = to_vector()``.
+
+        Blocks linear in their parameters return their regressors; the default is
+        central differences.
+        """
+        u = np.asarray(u, dtype=float).ravel()
+        if self.linear_in_parameters:
+            return np.asarray(self.regressors(u), dtype=float)  # type: ignore[attr-defined]
+        theta = self.to_vector()
+        G = np.zeros((u.size, theta.size))
+        for k in range(theta.size):
+            h = _STEP * max(1.0, abs(theta[k]))
+            values = []
+            for step in (h, -h):
+                t = theta.copy()
+                t[k] += step
+                try:
+                    values.append((step, np.asarray(self.with_vector(t)(u), dtype=float)))
+                except BlockidError:  # a parameter at its bound: one-sided difference
+                    values.append((0.0, np.asarray(self(u), dtype=float)))
+            (s1, w1), (s2, w2) = values
+            if s1 != s2:
+                G[:, k] = (w1 - w2) / (s1 - s2)
+        return G
+
+    def derivative(self, u: np.ndarray) -> np.ndarray:
+        """``dN/du`` element-wise (default: central differences)."""
+        u = np.asarray(u, dtype=float)
+        h = _STEP * np.maximum(1.0, np.abs(u))
+        return (np.asarray(self(u + h), dtype=float) - np.asarray(self(u - h), dtype=float)) / (
+            2.0 * h
+        )
+
+    def forward(
+        self, u: np.ndarray, S_in: np.ndarray, own: np.ndarray, init: Any = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Output and its sensitivities to every parameter of a model (chain rule).
+
+        ``S_in`` (N, n) holds ``du/dθ`` for the model's free parameters, ``own`` the model
+        column of each entry of :meth:`to_vector` (-1 where fixed). Returns ``w = N(u)``
+        and ``dw/dθ = N'(u) du/dθ``, plus ``dN/dθ_own`` in the block's own columns (added,
+        so that sensitivities carried in from an initial state are kept).
+        """
+        w = np.asarray(self(u), dtype=float)
+        S = self.derivative(u)[:, None] * S_in
+        free = own >= 0
+        if free.any():
+            S[:, own[free]] += self.jacobian(u)[:, free]
+        return w, S
+
+    def inverse_on(self, w: np.ndarray, u_range: tuple[float, float]) -> np.ndarray:
+        """``u = N^{-1}(w)`` on the finite interval ``u_range``, where the block must be
+        strictly monotone; outputs beyond the interval's image map to its ends.
+
+        The default bisects (to machine precision); raises
+        :class:`~blockid.errors.EstimationError` where the block is not monotone.
+        """
+        lo, hi = float(u_range[0]), float(u_range[1])
+        grid = np.linspace(lo, hi, 513)
+        values = np.asarray(self(grid), dtype=float)
+        steps = np.diff(values)
+        if not (np.all(steps > 0) or np.all(steps < 0)):
+            raise EstimationError(
+                f"the {self.kind} block is not strictly monotone over [{lo:.4g}, {hi:.4g}], "
+                "so its input cannot be recovered from its output"
+            )
+        sign = 1.0 if steps[0] > 0 else -1.0
+        w = np.asarray(w, dtype=float)
+        a = np.full(w.shape, lo)
+        b = np.full(w.shape, hi)
+        target = sign * np.clip(w, values.min(), values.max())
+        for _ in range(80):
+            mid = 0.5 * (a + b)
+            below = sign * np.asarray(self(mid), dtype=float) < target
+            a = np.where(below, mid, a)
+            b = np.where(below, b, mid)
+        return 0.5 * (a + b)
+
+    def invert(self, w: np.ndarray, seen: tuple[float, float] | None = None) -> np.ndarray:
+        """``u = N^{-1}(w)`` for one-step prediction and for starting a simulation from
+        measured outputs.
+
+        ``seen`` is the input range the block was fitted on; the default inverts on it,
+        widened by half its width (:meth:`inverse_on`). Raises
+        :class:`~blockid.errors.EstimationError` where the block is not invertible.
+        """
+        if seen is None:
+            raise EstimationError(
+                f"the {self.kind} block cannot be inverted without the input range it was fitted on"
+            )
+        lo, hi = float(seen[0]), float(seen[1])
+        pad = 0.5 * (hi - lo) + 1e-12
+        return self.inverse_on(w, (lo - pad, hi + pad))
+
+    def identity(self) -> StaticBlock | None:
+        """The block of this form that passes its input through, if there is one (the
+        output polynomial ``q = [1, 0, ..]``); a second start for fits with it."""
+        return None
+
+    def normalised_input(self) -> tuple[StaticBlock, float] | None:
+        """``(N', g)`` with ``N(x) = N'(g x)`` and ``N'`` of unit input gain, or None.
+
+        The initial estimate fits an output block freely by least squares (blocks linear
+        in their parameters), then moves its input gain ``g`` into the linear block in
+        front. Blocks that cannot say return None (their template is used as the start).
+        """
+        return None
+
 
 class DynamicBlock(Block):
-    """A nonlinearity with memory (e.g. backlash): ``x(k) = N(u(k), x(k-1))``."""
+    """A nonlinearity with memory (e.g. backlash): ``x(k) = N(u(k), x(k-1))``.
+
+    A dynamic block acts on the measured input: in a model it comes first.
+    """
 
     @abstractmethod
     def simulate(self, u: np.ndarray, x0: float = 0.0) -> np.ndarray:
         """Run the block over the input sequence ``u`` from the initial output ``x0``."""
 
+    def rest_state(self, u0: float) -> float:
+        """The output before the first sample when the block starts at rest at ``u0``."""
+        return 0.0
+
+    def sensitivity(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Output from :meth:`rest_state` and its derivative with respect to
+        :meth:`to_vector`, shape ``(N, n)`` (default: central differences)."""
+        u = np.asarray(u, dtype=float)
+        x = self.simulate(u, self.rest_state(float(u[0])))
+        theta = self.to_vector()
+        G = np.zeros((u.size, theta.size))
+        for k in range(theta.size):
+            h = _STEP * max(1.0, abs(theta[k]))
+            t = theta.copy()
+            t[k] += h
+            try:
+                moved = self.with_vector(t)
+            except BlockidError:
+                continue
+            G[:, k] = (moved.simulate(u, moved.rest_state(float(u[0]))) - x) / h
+        return x, G
+
+    def forward(
+        self, u: np.ndarray, S_in: np.ndarray, own: np.ndarray, init: Any = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Output from rest and its sensitivities (see :meth:`StaticBlock.forward`); the
+        input is the measured one, so only the block's own columns are non-zero."""
+        x, G = self.sensitivity(u)
+        S = np.zeros_like(S_in)
+        free = own >= 0
+        S[:, own[free]] = G[:, free]
+        return x, S
+
+
+@dataclass(frozen=True)
+class LinearFamily:
+    """A family of blocks linear in some parameters, for the initial estimate.
+
+    ``regressors(u)`` gives the basis (N, n) and ``build(vector)`` the block whose
+    output is ``regressors(u) @ vector``; e.g. a dead zone with fixed edges is linear in
+    its two slopes.
+    """
+
+    regressors: Callable[[np.ndarray], np.ndarray]
+    build: Callable[[np.ndarray], Block]
+
 
 def block_from_dict(data: dict[str, Any]) -> Block:
     """Rebuild a block from :meth:`Block.to_dict` output."""
-    from blockid.errors import ModelFileError
-
     kind = data.get("kind") if isinstance(data, dict) else None
     if kind not in BLOCK_TYPES:
         known = ", ".join(sorted(BLOCK_TYPES)) or "none loaded"
         raise ModelFileError(f"unknown block kind {kind!r}; known kinds: {known}")
-    return BLOCK_TYPES[kind].from_dict(data)
+    try:
+        return BLOCK_TYPES[kind].from_dict(data)
+    except (TypeError, ValueError, BlockidError) as exc:
+        raise ModelFileError(f"the {kind} block is damaged ({exc})") from None
+
+
+def _option_value(text: str) -> Any:
+    parts = [p for p in text.split(",") if p.strip()]
+    try:
+        numbers = [float(p) for p in parts]
+    except ValueError:
+        low = text.strip().lower()
+        if low in ("true", "false"):
+            return low == "true"
+        return text.strip()
+    numbers = [
+        int(v) if v.is_integer() and "." not in p else v
+        for v, p in zip(numbers, parts, strict=True)
+    ]
+    return numbers[0] if len(numbers) == 1 else numbers
+
+
+def block_template(spec: str) -> Block:
+    """A block to fit, from its name and form: ``"KIND[:key=value[;key=value..]]"``.
+
+    ``KIND`` is a block's ``kind`` (``dead-zone``, ``saturation``, ``polynomial``,
+    ``piecewise-linear``, ``two-segment-polynomial``, ``backlash`` or a user block's);
+    the options go to its :meth:`Block.template`. Lists are comma separated.
+
+    >>> block_template("polynomial:degree=2")
+    Polynomial(coefficients=[0.0, 0.0, 0.0], constant=True)
+    >>> block_template("dead-zone")
+    DeadZone(lower=0.0, upper=0.0, slope_left=1.0, slope_right=1.0)
+    """
+    kind, _, rest = spec.strip().partition(":")
+    kind = kind.strip().lower().replace("_", "-")
+    aliases = {"deadzone": "dead-zone", "pwl": "piecewise-linear", "two-segment": None}
+    kind = aliases.get(kind, kind) or "two-segment-polynomial"
+    if kind not in BLOCK_TYPES or kind == "linear":
+        known = ", ".join(sorted(k for k in BLOCK_TYPES if k != "linear"))
+        raise ParameterError(f"unknown block {spec.strip()!r}; choose one of {known}")
+    options: dict[str, Any] = {}
+    for item in rest.split(";") if rest.strip() else []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ParameterError(
+                f"block option {item.strip()!r} of {kind!r} must be key=value, e.g. "
+                "'polynomial:degree=3' or 'piecewise-linear:knots=7'"
+            )
+        options[key.strip().replace("-", "_")] = _option_value(value)
+    try:
+        return BLOCK_TYPES[kind].template(**options)
+    except TypeError as exc:
+        raise ParameterError(f"block {kind!r}: {exc}") from None

@@ -95,6 +95,7 @@ class Polynomial(_PlottableStaticBlock):
 
     kind = "polynomial"
     linear_in_parameters = True
+    warn_extrapolation = True
 
     def __init__(self, coefficients: Sequence[float], constant: bool = True) -> None:
         self.coefficients = _float_vector("coefficients", coefficients)
@@ -105,6 +106,93 @@ class Polynomial(_PlottableStaticBlock):
     @property
     def parameters(self) -> dict[str, Any]:
         return {"coefficients": self.coefficients.tolist(), "constant": self.constant}
+
+    @classmethod
+    def template(cls, degree: int = 3, constant: bool = True) -> Polynomial:
+        """A polynomial of the given degree to fit (the identity when without constant:
+        ``q = [1, 0, ..]``, as the output block of a cascade starts)."""
+        if isinstance(degree, bool) or not isinstance(degree, int | np.integer) or degree < 1:
+            raise ParameterError(f"degree must be a whole number >= 1, got {degree!r}")
+        if constant:
+            return cls(np.zeros(int(degree) + 1), constant=True)
+        return cls([1.0] + [0.0] * (int(degree) - 1), constant=False)
+
+    def free_mask(self, after_linear: bool) -> np.ndarray:
+        """After a linear block a polynomial without constant fixes ``q_1 = 1`` (B3)."""
+        mask = np.ones(self.coefficients.size, dtype=bool)
+        if after_linear and not self.constant:
+            mask[0] = False
+        return mask
+
+    def check_normalised(self, after_linear: bool) -> None:
+        if after_linear and self.constant:
+            raise ParameterError(
+                "a polynomial after a linear block has no constant term (B3): "
+                "use Polynomial(q, constant=False)"
+            )
+        if after_linear and self.coefficients[0] != 1.0:
+            raise ParameterError(
+                f"q_1 is fixed to 1 (normalisation B3); got {self.coefficients[0]}"
+            )
+
+    def identity(self) -> Polynomial | None:
+        """Without constant: ``q = [1, 0, .., 0]`` of the same degree."""
+        return None if self.constant else Polynomial.template(self.degree, constant=False)
+
+    def normalised_input(self) -> tuple[Polynomial, float] | None:
+        """Without constant: ``g = q_1`` and ``q'_m = q_m / g^m``, so ``N(x) = N'(g x)``."""
+        if self.constant:
+            return None
+        g = float(self.coefficients[0])
+        if g == 0:
+            return None
+        n = self.coefficients.size
+        return Polynomial(self.coefficients / g ** np.arange(1, n + 1), constant=False), g
+
+    def inverse_on(self, w: np.ndarray, u_range: tuple[float, float]) -> np.ndarray:
+        """:meth:`inverse` on ``u_range``, clipping outputs beyond its image."""
+        try:
+            return self.inverse(w, u_range=u_range, clip=True)
+        except ParameterError as exc:
+            raise EstimationError(str(exc)) from None
+
+    def monotone_branch(self) -> tuple[float, float]:
+        """The interval around ``u = 0`` on which the polynomial is monotone.
+
+        It runs to the nearest stationary points on either side (infinite where there
+        is none).
+        """
+        crit = npoly.polyroots(npoly.polyder(self._powers))
+        real = crit[np.abs(crit.imag) < 1e-12].real if crit.size else np.zeros(0)
+        lo = max((r for r in real if r < 0), default=-np.inf)
+        hi = min((r for r in real if r > 0), default=np.inf)
+        return float(lo), float(hi)
+
+    def invert(self, w: np.ndarray, seen: tuple[float, float] | None = None) -> np.ndarray:
+        """``u = N^{-1}(w)`` on the monotone branch around 0.
+
+        The branch must contain the input range ``seen`` the block was fitted on (when
+        known); outputs beyond the branch's reach map to its ends.
+        """
+        lo, hi = self.monotone_branch()
+        if seen is not None and (seen[0] < lo or seen[1] > hi):
+            raise EstimationError(
+                f"the output block {self.coefficients.tolist()} is not monotone over the range "
+                f"of x it was fitted on [{seen[0]:.4g}, {seen[1]:.4g}] (it turns at "
+                f"{lo if seen[0] < lo else hi:.4g}), so past x cannot be recovered from the "
+                "measured y; one-step prediction is not defined. Use free-run simulation"
+            )
+        w = np.asarray(w, dtype=float)
+        scale = 1.0 + float(np.max(np.abs(w), initial=0.0))
+        big = 1e6 * scale
+        rng = (max(lo, -big), min(hi, big))
+        try:
+            return self.inverse(w, u_range=rng, clip=True)
+        except (ParameterError, EstimationError) as exc:
+            raise EstimationError(
+                f"the output block {self.coefficients.tolist()} cannot be inverted on its "
+                f"monotone branch {rng} ({exc}); one-step prediction is not defined"
+            ) from None
 
     @property
     def degree(self) -> int:
@@ -124,6 +212,12 @@ class Polynomial(_PlottableStaticBlock):
     def derivative(self, u: np.ndarray) -> np.ndarray:
         r""":math:`dw/du = \sum_l l\, c_l\, u^{l-1}`, element-wise (same shape as ``u``)."""
         return npoly.polyval(_as_input(u), npoly.polyder(self._powers))
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """``dN/dc_l = u^l``, shape ``(N, n)`` (the powers, each computed directly)."""
+        u = _as_input(u).ravel()
+        first = 0 if self.constant else 1
+        return np.column_stack([u**k for k in range(first, self.degree + 1)])
 
     def regressors(self, u: np.ndarray) -> np.ndarray:
         """Powers ``[u^l0 .. u^r]``, shape ``(N, n)`` for ``N = u.size`` (``u`` flattened)."""
@@ -315,6 +409,7 @@ class TwoSegmentPolynomial(_PlottableStaticBlock):
 
     kind = "two-segment-polynomial"
     linear_in_parameters = True
+    warn_extrapolation = True
 
     def __init__(self, f: Sequence[float], p: Sequence[float]) -> None:
         self.f = _float_vector("f", f)
@@ -324,6 +419,28 @@ class TwoSegmentPolynomial(_PlottableStaticBlock):
                 f"f and p must have the same length r1 + 1, got {self.f.size} and {self.p.size}; "
                 "pad the shorter one with zeros"
             )
+
+    @classmethod
+    def template(cls, degree: int = 3) -> TwoSegmentPolynomial:
+        """A two-segment polynomial of order ``degree`` (r1) to fit."""
+        if isinstance(degree, bool) or not isinstance(degree, int | np.integer) or degree < 1:
+            raise ParameterError(f"degree (r1) must be a whole number >= 1, got {degree!r}")
+        return cls(np.zeros(int(degree) + 1), np.zeros(int(degree) + 1))
+
+    def check_data(self, u: np.ndarray) -> None:
+        """Both segments need inputs: ``u`` must take both signs."""
+        if not (np.any(u < 0) and np.any(u >= 0)):
+            raise EstimationError(
+                "the input never changes sign, so the two polynomials of the two-segment "
+                "input block (B1) cannot both be identified; use data that span both signs "
+                "of u, or a Polynomial input block"
+            )
+
+    def derivative(self, u: np.ndarray) -> np.ndarray:
+        u = _as_input(u)
+        return npoly.polyval(u, npoly.polyder(self.f)) + (u < 0) * npoly.polyval(
+            u, npoly.polyder(self.p)
+        )
 
     @classmethod
     def from_segments(

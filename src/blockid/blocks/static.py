@@ -16,13 +16,18 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from blockid.blocks.base import StaticBlock
+from blockid.blocks.base import LinearFamily, StaticBlock
 from blockid.errors import DataError, ParameterError
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 __all__ = ["DeadZone", "Saturation", "PiecewiseLinear"]
+
+#: Initial-estimate grids (fractions of the largest input magnitude). The grids hold
+#: ``u = 0`` in the dead band and between the knees; the refinement moves them on.
+_DEAD_ZONE_GRID = (0.0, 0.05, 0.1, 0.2, 0.3, 0.45, 0.6)
+_SATURATION_GRID = (0.2, 0.35, 0.5, 0.65, 0.8, 1.0)
 
 
 # --------------------------------------------------------------------------- helpers
@@ -165,6 +170,44 @@ class DeadZone(_PlottableStaticBlock):
             u - self.upper, 0.0
         )
 
+    @classmethod
+    def template(cls) -> DeadZone:
+        """A dead zone to fit: the initial estimate searches its edges on a grid."""
+        return cls(0.0, 0.0)
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """``dw/d[lower, upper, slope_left, slope_right]``, shape ``(N, 4)``."""
+        u = _as_input(u).ravel()
+        left, right = np.minimum(u - self.lower, 0.0), np.maximum(u - self.upper, 0.0)
+        return np.column_stack(
+            (-self.slope_left * (u < self.lower), -self.slope_right * (u > self.upper), left, right)
+        )
+
+    def derivative(self, u: np.ndarray) -> np.ndarray:
+        u = _as_input(u)
+        return self.slope_left * (u < self.lower) + self.slope_right * (u > self.upper)
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Slopes stay positive (at least 1e-6 of their current value)."""
+        lower = np.full(4, -np.inf)
+        lower[[2, 3]] = 1e-6 * np.array([self.slope_left, self.slope_right])
+        return lower, np.full(4, np.inf)
+
+    def scaled(self, gain: float) -> DeadZone:
+        return DeadZone(self.lower, self.upper, gain * self.slope_left, gain * self.slope_right)
+
+    def initial_grid(self, u: np.ndarray, around: Any = None) -> list[Any]:
+        """Edges ``[-f_1 U, f_2 U]`` (``U = max |u|``) on a 7 x 7 grid; for fixed edges
+        the dead zone is linear in its two slopes (:class:`LinearFamily`)."""
+        if around is not None:
+            return []
+        peak = float(np.max(np.abs(u))) or 1.0
+        return [
+            _dead_zone_family(-peak * f1, peak * f2)
+            for f1 in _DEAD_ZONE_GRID
+            for f2 in _DEAD_ZONE_GRID
+        ]
+
     def default_u_range(self) -> tuple[float, float]:
         width = self.upper - self.lower
         margin = width if width > 0 else max(abs(self.lower), abs(self.upper), 1.0)
@@ -208,6 +251,40 @@ class Saturation(_PlottableStaticBlock):
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         return np.clip(self.slope * _as_input(u), self.lower, self.upper)
+
+    @classmethod
+    def template(cls) -> Saturation:
+        """A saturation to fit: the initial estimate searches its knees on a grid."""
+        return cls(-1.0, 1.0)
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """``dw/d[lower, upper, slope]``, shape ``(N, 3)``."""
+        u = _as_input(u).ravel()
+        v = self.slope * u
+        inside = (v >= self.lower) & (v <= self.upper)
+        return np.column_stack((v < self.lower, v > self.upper, u * inside)).astype(float)
+
+    def derivative(self, u: np.ndarray) -> np.ndarray:
+        v = self.slope * _as_input(u)
+        return self.slope * ((v >= self.lower) & (v <= self.upper))
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The slope stays positive (at least 1e-6 of its current value)."""
+        lower = np.full(3, -np.inf)
+        lower[2] = 1e-6 * self.slope
+        return lower, np.full(3, np.inf)
+
+    def scaled(self, gain: float) -> Saturation:
+        return Saturation(gain * self.lower, gain * self.upper, gain * self.slope)
+
+    def initial_grid(self, u: np.ndarray, around: Any = None) -> list[Any]:
+        """Unit-slope saturations with knees at ``-f_1 U`` and ``f_2 U`` (6 x 6 grid)."""
+        if around is not None:
+            return []
+        peak = float(np.max(np.abs(u))) or 1.0
+        return [
+            Saturation(-peak * f1, peak * f2) for f1 in _SATURATION_GRID for f2 in _SATURATION_GRID
+        ]
 
     def default_u_range(self) -> tuple[float, float]:
         knee_lo, knee_hi = self.lower / self.slope, self.upper / self.slope
@@ -303,7 +380,43 @@ class PiecewiseLinear(_PlottableStaticBlock):
         values = _check_theta(theta, self.breakpoints.size, "one value per breakpoint")
         return PiecewiseLinear(self.breakpoints, values)
 
+    @classmethod
+    def template(
+        cls, knots: int = 7, breakpoints: Sequence[float] | None = None
+    ) -> PiecewiseLinear:
+        """A map to fit: given ``breakpoints``, or ``knots`` of them spread over the
+        estimation input's range when fitting (:meth:`adapted`)."""
+        if breakpoints is not None:
+            bp = _float_vector("breakpoints", breakpoints, min_length=2)
+            return cls(bp, np.zeros(bp.size))
+        if isinstance(knots, bool) or not isinstance(knots, int | np.integer) or knots < 2:
+            raise ParameterError(f"knots must be a whole number >= 2, got {knots!r}")
+        block = cls(np.linspace(-1.0, 1.0, int(knots)), np.zeros(int(knots)))
+        block._spread = True
+        return block
+
+    def adapted(self, u: np.ndarray) -> PiecewiseLinear:
+        """With ``knots``: breakpoints evenly spaced between the input's extremes."""
+        if not getattr(self, "_spread", False):
+            return self
+        lo, hi = float(np.min(u)), float(np.max(u))
+        if not hi > lo:
+            raise ParameterError(
+                "the input is constant, so a piecewise-linear block cannot be placed on it"
+            )
+        n = self.breakpoints.size
+        return PiecewiseLinear(np.linspace(lo, hi, n), np.zeros(n))
+
     def default_u_range(self) -> tuple[float, float]:
         lo, hi = float(self.breakpoints[0]), float(self.breakpoints[-1])
         margin = 0.1 * (hi - lo)
         return (lo - margin, hi + margin)
+
+
+def _dead_zone_family(lower: float, upper: float) -> LinearFamily:
+    """Dead zones with fixed edges: linear in ``[slope_left, slope_right]``."""
+
+    def basis(v: np.ndarray) -> np.ndarray:
+        return np.column_stack((np.minimum(v - lower, 0.0), np.maximum(v - upper, 0.0)))
+
+    return LinearFamily(basis, lambda slopes: DeadZone(lower, upper, *slopes))

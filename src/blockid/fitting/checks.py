@@ -71,8 +71,9 @@ def check_model(
 
     Parameters
     ----------
-    model : Model
-        A block-oriented model (with ``free_parameters``, ``is_stable``, ``na`` ...).
+    model : ChainModel
+        A block-oriented model (``free_parameters``, ``is_stable``, ``poles``,
+        ``linear_orders``; the baseline ARX has the orders of its linear part).
     data : Dataset
         The estimation data.
     method : str
@@ -84,7 +85,7 @@ def check_model(
     if not np.all(np.isfinite(theta)):
         raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
     if not model.is_stable(STABILITY_MARGIN):
-        rho = float(np.max(np.abs(model.linear.poles())))
+        rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
             f"{method} returned a linear block that is unstable or on the edge of stability "
             f"(largest pole magnitude {rho:.6g}, limit {1 - STABILITY_MARGIN:g}); its "
@@ -98,7 +99,7 @@ def check_model(
             "data; no model is returned. See docs/convergence.md"
         )
     if max_mse_ratio is not None:
-        base = linear_baseline(data, model.na, model.nb, model.nk)
+        base = linear_baseline(data, *model.linear_orders())
         if base is not None:
             base_mse = simulation_mse(base, data)
             if mse > max_mse_ratio * base_mse:

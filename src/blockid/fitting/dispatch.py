@@ -1,14 +1,9 @@
 """One entry point from (structure, method, options) to a checked :class:`FitResult`.
 
-=====================  ==========================================  ==================
-structure              methods                                     default
-=====================  ==========================================  ==================
-arx                    batch, rls, aw-rls, hierarchical-rls        batch
-hammerstein            simulation-error, key-term-rls              simulation-error
-wiener                 simulation-error, key-term-rls              simulation-error
-hammerstein-wiener     simulation-error, key-term-rls              simulation-error
-backlash               simulation-error, aw-rls                    simulation-error
-=====================  ==========================================  ==================
+The structures, their methods and every option are declared once, in
+:mod:`blockid.fitting.registry`; :func:`fit_model` resolves them there, converts and
+checks every option value (text from the command line or a network spec, or Python
+values) and runs the method.
 
 ``refine=True`` follows any method of a block-oriented structure with the refinement on
 free-run simulation error, started from that method's estimate.
@@ -22,76 +17,56 @@ the input. (ARX handles ``center`` itself.)
 
 from __future__ import annotations
 
-import inspect
-from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import ParameterError
+from blockid.fitting.registry import OPTIONS, STRUCTURES, Structure, get_structure
 from blockid.fitting.result import FitResult
 
-__all__ = ["STRUCTURES", "METHODS", "DEFAULT_METHOD", "accepted_options", "fit_model"]
+__all__ = [
+    "STRUCTURES",
+    "METHODS",
+    "DEFAULT_METHOD",
+    "accepted_options",
+    "fit_model",
+    "resolve_options",
+]
 
-METHODS: dict[str, tuple[str, ...]] = {
-    "arx": ("batch", "rls", "aw-rls", "hierarchical-rls"),
-    "hammerstein": ("simulation-error", "key-term-rls"),
-    "wiener": ("simulation-error", "key-term-rls"),
-    "hammerstein-wiener": ("simulation-error", "key-term-rls"),
-    "backlash": ("simulation-error", "aw-rls"),
-}
-STRUCTURES = tuple(METHODS)
-DEFAULT_METHOD = {s: m[0] for s, m in METHODS.items()}
-
-
-def _function(structure: str, method: str) -> Callable[..., FitResult]:
-    if structure == "arx":
-        from blockid.fitting.arx import fit_arx
-
-        return lambda data, **kw: fit_arx(data, method=method, **kw)
-    if method == "simulation-error":
-        from blockid.fitting.simulation_error import fit_simulation_error
-
-        return lambda data, **kw: fit_simulation_error(data, structure, **kw)
-    if method == "key-term-rls":
-        from blockid.fitting.key_term import fit_key_term_rls
-
-        return lambda data, **kw: fit_key_term_rls(data, structure, **kw)
-    from blockid.fitting.backlash import fit_backlash_aw_rls
-
-    return fit_backlash_aw_rls
+#: ``structure -> method names`` (default first), generated from the registry.
+METHODS: dict[str, tuple[str, ...]] = {s.name: s.method_names for s in STRUCTURES.values()}
+DEFAULT_METHOD = {s.name: s.default_method.name for s in STRUCTURES.values()}
 
 
-#: Options of fit_arx that only some ARX methods use.
-_ARX_METHOD_OPTIONS = {
-    "batch": set(),
-    "rls": {"forgetting", "initial_covariance", "passes", "max_mse_ratio"},
-    "aw-rls": {"eps1", "eps2", "initial_covariance", "passes", "max_mse_ratio"},
-    "hierarchical-rls": {"forgetting", "initial_covariance", "passes", "max_mse_ratio"},
-}
-_ARX_COMMON = {"na", "nb", "nk", "center", "allow_unstable"}
-#: Block-degree options that a structure without that block cannot use.
-_NO_BLOCK_OPTION = {
-    "hammerstein": {"r2"},
-    "wiener": {"r1"},
-    "backlash": {"r1", "r2"},
-}
-
-
-def accepted_options(structure: str, method: str) -> set[str]:
+def accepted_options(structure: str, method: str | None) -> set[str]:
     """Options (orders and settings) that ``structure`` fitted by ``method`` uses."""
-    if structure == "arx":
-        return _ARX_COMMON | _ARX_METHOD_OPTIONS[method]
-    if method == "simulation-error":
-        from blockid.fitting.simulation_error import fit_simulation_error as fn
-    elif method == "key-term-rls":
-        from blockid.fitting.key_term import fit_key_term_rls as fn
-    else:
-        from blockid.fitting.backlash import fit_backlash_aw_rls as fn
-    params = inspect.signature(fn).parameters
-    names = {n for n, p in params.items() if p.kind == p.KEYWORD_ONLY or n in ("na", "nb", "nk")}
-    return names - _NO_BLOCK_OPTION.get(structure, set())
+    return set(get_structure(structure).accepted(method))
+
+
+def resolve_options(
+    structure: str, method: str | None, options: dict[str, Any]
+) -> tuple[Structure, str, dict[str, Any]]:
+    """Check ``options`` against the registry and convert their values.
+
+    Returns the structure, the method name and the typed options (``None`` values
+    dropped: the method's default applies). An option the method does not use is an
+    error that lists the ones it does.
+    """
+    decl = get_structure(structure)
+    chosen = decl.method(method)
+    given = {k: v for k, v in options.items() if v is not None}
+    accepted = decl.accepted(chosen.name)
+    unused = [k for k in given if k not in accepted]
+    if unused:
+        raise ParameterError(
+            f"{', '.join(unused)} not used by {structure} with method {chosen.name}; it takes "
+            f"{', '.join(accepted)}",
+            parameter=unused[0],
+        )
+    return decl, chosen.name, {k: OPTIONS[k].convert(v) for k, v in given.items()}
 
 
 def fit_model(
@@ -99,8 +74,6 @@ def fit_model(
     structure: str,
     *,
     method: str | None = None,
-    refine: bool = False,
-    center: bool | None = None,
     **options: Any,
 ) -> FitResult:
     """Identify a model of the given structure with the given method.
@@ -113,65 +86,63 @@ def fit_model(
         One of :data:`STRUCTURES`.
     method : str, optional
         One of ``METHODS[structure]``; the default is the converging one.
-    refine : bool
-        Refine the estimate on free-run simulation error afterwards (block-oriented
-        structures).
-    center : bool, optional
-        Fit around the mean operating point (default: True for Wiener and ARX-free
-        structures as described in the module docstring, False otherwise).
     **options
-        Orders (``na``, ``nb``, ``nk``, ``r1``, ``r2``) and method settings; an option
-        the method does not use is an error, not silently ignored. ``None`` values are
-        dropped (the method's default applies).
+        Orders (``na``, ``nb``, ``nk``, ``r1``, ``r2``), blocks (``input_block``,
+        ``output_block``: a block or its name), ``center``, ``refine`` and method
+        settings, as declared in :mod:`blockid.fitting.registry`; values may be text.
+        An option the method does not use is an error, not silently ignored. ``None``
+        values are dropped (the method's default applies).
     """
-    if structure not in METHODS:
-        raise ParameterError(
-            f"unknown structure {structure!r}; choose one of {', '.join(STRUCTURES)}"
-        )
-    method = method or DEFAULT_METHOD[structure]
-    if method not in METHODS[structure]:
-        raise ParameterError(
-            f"method {method!r} does not apply to {structure}; choose one of "
-            f"{', '.join(METHODS[structure])}"
-        )
-    options = {k: v for k, v in options.items() if v is not None}
-    if structure == "arx":
-        if center is not None:
-            options["center"] = center
-    elif center if center is not None else structure == "wiener":
-        return _centered(data, structure, method, refine, options)
-    accepted = accepted_options(structure, method)
-    unused = sorted(set(options) - accepted)
-    if unused:
-        shown = ", ".join(f"--{u.replace('_', '-')} ({u}=)" for u in unused)
-        raise ParameterError(f"{shown} not used by {structure} with method {method}")
-    result = _function(structure, method)(data, **options)
-    if refine and structure != "arx" and method != "simulation-error":
-        from blockid.fitting.simulation_error import refine as refine_fit
-
-        refined = refine_fit(result.model, data)
-        refined.settings = {"started_from": result.method, **result.settings, **refined.settings}
-        refined.method = f"{result.method}+refine"
-        if "theta" in result.history:  # keep the recursive method's trajectories
-            refined.history = {
-                **refined.history,
-                **{
-                    k: result.history[k]
-                    for k in ("theta", "names", "update")
-                    if k in result.history
-                },
-            }
-        result = refined
-    if hasattr(result.model, "record_ranges") and not result.model.ranges:
-        # (a refinement on simulation error has already recorded them on these data)
-        result.model.record_ranges([(e.u, e.y) for e in data.experiments])
+    decl, method, options = resolve_options(structure, method, options)
+    refine = bool(options.pop("refine", False))
+    if not decl.block_oriented:
+        return _run(decl, method, data, options)
+    center = options.pop("center", None)
+    if center if center is not None else decl.center_default:
+        result = _centered(data, decl, method, refine, options)
+    else:
+        result = _fit_block(data, decl, method, refine, options)
+    if not result.model.ranges:  # the one place ranges are recorded for every method
+        model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
+        result = replace(result, model=model)
     return result
 
 
-def _centered(
-    data: Dataset, structure: str, method: str, refine: bool, options: dict[str, Any]
+def _run(decl: Structure, method: str, data: Dataset, options: dict[str, Any]) -> FitResult:
+    if options.pop("convergence_check", True) is False:
+        options["max_mse_ratio"] = None  # the check switched off
+    return decl.method(method).run(data, decl.name, options)
+
+
+def _fit_block(
+    data: Dataset, decl: Structure, method: str, refine: bool, options: dict[str, Any]
 ) -> FitResult:
-    """Fit on mean-removed signals; keep the means as the model's offsets."""
+    result = _run(decl, method, data, options)
+    if not refine or method == "simulation-error":
+        return result
+    from blockid.fitting.simulation_error import refine as refine_fit
+
+    refined = refine_fit(result.model, data)
+    history = dict(refined.history)
+    for key in ("theta", "names", "update"):  # keep the recursive method's trajectories
+        if key in result.history:
+            history[key] = result.history[key]
+    return replace(
+        refined,
+        method=f"{result.method}+refine",
+        settings={"started_from": result.method, **result.settings, **refined.settings},
+        history=history,
+    )
+
+
+def _centered(
+    data: Dataset, decl: Structure, method: str, refine: bool, options: dict[str, Any]
+) -> FitResult:
+    """Fit on mean-removed signals; keep the means as the model's offsets.
+
+    The estimation ranges are relative to the offsets, so those recorded on the shifted
+    data hold for the model with offsets unchanged.
+    """
     u_off = float(np.mean(np.concatenate([e.u[:, 0] for e in data.experiments])))
     y_off = float(np.mean(np.concatenate([e.y[:, 0] for e in data.experiments])))
     shifted = Dataset(
@@ -181,8 +152,9 @@ def _centered(
         [Experiment(e.name, e.u - u_off, e.y - y_off) for e in data.experiments],
         data.source,
     )
-    result = fit_model(shifted, structure, method=method, refine=refine, center=False, **options)
-    result.model = result.model._replace(input_offset=u_off, output_offset=y_off)
-    result.model.record_ranges([(e.u, e.y) for e in data.experiments])
-    result.settings = {**result.settings, "center": True}
-    return result
+    result = _fit_block(shifted, decl, method, refine, options)
+    model = result.model
+    if not model.ranges:
+        model = model.with_ranges([(e.u, e.y) for e in shifted.experiments])
+    model = model.replace(input_offset=u_off, output_offset=y_off, ranges=model.ranges)
+    return replace(result, model=model, settings={**result.settings, "center": True})

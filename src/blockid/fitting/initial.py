@@ -65,101 +65,78 @@ from typing import Any
 
 import numpy as np
 
-from blockid.blocks import (
-    Backlash,
-    DeadZone,
-    Polynomial,
-    Saturation,
-    TwoSegmentPolynomial,
-)
-from blockid.blocks.base import Block, StaticBlock
+from blockid.blocks.base import Block, LinearFamily
+from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
 from blockid.fitting.checks import STABILITY_MARGIN, simulation_mse
-from blockid.models.block import (
-    BLOCK_STRUCTURES,
-    BacklashModel,
-    BlockModel,
-    Hammerstein,
-    HammersteinWiener,
-)
+from blockid.fitting.registry import STRUCTURES
+from blockid.models.block import BlockModel, ChainModel
 
 __all__ = ["initial_estimate", "resolve_structure", "scaled_block"]
-
-#: Unit-slope shapes tried by the grid search, as fractions of the input scale.
-_BACKLASH_GRID = (0.0, 0.0025, 0.005, 0.01, 0.02, 0.035, 0.05, 0.075, 0.1, 0.15, 0.2, 0.3)
-_DEAD_ZONE_GRID = (0.0, 0.05, 0.1, 0.2, 0.3, 0.45, 0.6)
-_SATURATION_GRID = (0.2, 0.35, 0.5, 0.65, 0.8, 1.0)
 
 #: Rounds of the alternating scheme for models with an output block.
 _ROUNDS = 3
 
 
 def resolve_structure(structure: str | type[BlockModel]) -> type[BlockModel]:
-    """The model class of a structure name (``"hammerstein-wiener"``) or class."""
+    """The model class of a block-oriented structure name (``"hammerstein-wiener"``,
+    from the registry :mod:`blockid.fitting.registry`) or class."""
+    known = [s.name for s in STRUCTURES.values() if s.block_oriented]
     if isinstance(structure, type) and issubclass(structure, BlockModel):
-        if structure.structure not in BLOCK_STRUCTURES:
+        if structure.structure not in known:
             raise ParameterError(f"{structure.__name__} is not a block-oriented structure")
         return structure
-    if structure not in BLOCK_STRUCTURES:
-        known = ", ".join(BLOCK_STRUCTURES)
+    if structure not in known:
         raise ParameterError(
-            f"structure={structure!r} is not a block-oriented structure; choose one of {known}"
+            f"structure={structure!r} is not a block-oriented structure; choose one of "
+            f"{', '.join(known)}"
         )
-    return BLOCK_STRUCTURES[structure]
+    return STRUCTURES[structure].model_class()
 
 
 def scaled_block(block: Block, gain: float) -> Block:
-    """The block followed by a positive ``gain``: ``gain * N(u)`` as a block of its kind.
+    """The block followed by a ``gain``: ``gain * N(u)`` as a block of its kind.
 
     Used to move a gain from the linear block into the input block (normalisation
-    ``b_0 = 1``).
+    ``b_0 = 1``). Blocks with positive slopes take positive gains only.
     """
-    if block.linear_in_parameters:
-        return block.with_vector(gain * block.to_vector())
-    if gain <= 0:
+    if not block.linear_in_parameters and not gain > 0:
         raise EstimationError(
             f"cannot absorb the gain {gain:.4g} into a {block.kind} block, whose slopes must "
             "be positive: the plant's gain from u has the opposite sign. Negate the input "
             "(or the output) and fit again"
         )
-    if isinstance(block, Backlash):
-        return Backlash(gain * block.m_left, block.c_left, gain * block.m_right, block.c_right)
-    if isinstance(block, DeadZone):
-        return DeadZone(block.lower, block.upper, gain * block.slope_left, gain * block.slope_right)
-    if isinstance(block, Saturation):
-        return Saturation(gain * block.lower, gain * block.upper, gain * block.slope)
-    raise ParameterError(
-        f"no initial estimate for a {block.kind} input block; pass a starting model "
-        "(initial=...) to the simulation-error fit"
-    )
+    return block.scaled(gain)
 
 
 # ----------------------------------------------------------------------------- helpers
-def _cascade_class(block: Block) -> type[BlockModel]:
-    """The structure without output block that has ``block`` as input block."""
-    return BacklashModel if isinstance(block, Backlash) else Hammerstein
-
-
 def _build(
     like: BlockModel,
     input_block: Block | None,
-    output_block: Polynomial | None = None,
+    output_block: Block | None = None,
     a: np.ndarray | None = None,
     b: np.ndarray | None = None,
-    cls: type[BlockModel] | None = None,
 ) -> BlockModel:
-    """A model with the names, orders and sampling time of ``like`` (class ``cls``)."""
-    cls = cls or type(like)
-    kwargs: dict[str, Any] = dict(
-        na=like.na, nb=like.nb, nk=like.nk, a=a, b=b, sampling_time=like.sampling_time
+    """A model like ``like`` (class, names, orders, sampling time) with these blocks and
+    linear coefficients; a missing block of ``like`` stays missing."""
+    g = like.linear
+    blocks: list[Block] = []
+    if like.input_block is not None:
+        blocks.append(input_block)
+    blocks.append(LinearBlock(g.na, g.nb, g.nk, a, b, unit_b0=like.input_block is not None))
+    if like.output_block is not None:
+        blocks.append(output_block)
+    return like.with_blocks(blocks, ranges=None)  # type: ignore[return-value]
+
+
+def _cascade(like: BlockModel, block: Block) -> ChainModel:
+    """``block`` then the linear block of ``like``: to fit an input block on its own."""
+    g = like.linear
+    return ChainModel(
+        like.inputs, like.outputs, [block, LinearBlock(g.na, g.nb, g.nk, unit_b0=True)]
     )
-    if cls.requires_input_block:
-        kwargs["input_block"] = input_block
-    if cls.requires_output_block:
-        kwargs["output_block"] = output_block
-    return cls(like.inputs[0], like.outputs[0], **kwargs)
 
 
 def _signals(data: Dataset) -> tuple[list[np.ndarray], list[np.ndarray]]:
@@ -283,21 +260,14 @@ def _rank_one_fit(
 
 
 def _hammerstein_ls(
-    u: Sequence[np.ndarray], z: Sequence[np.ndarray], block: StaticBlock, template: BlockModel
-) -> tuple[StaticBlock, np.ndarray, np.ndarray]:
+    u: Sequence[np.ndarray], z: Sequence[np.ndarray], block: Block, template: BlockModel
+) -> tuple[Block, np.ndarray, np.ndarray]:
     """Input block linear in its parameters and linear block, by :func:`_rank_one_fit`."""
-    if isinstance(block, TwoSegmentPolynomial):
-        u_all = np.concatenate(u)
-        if not (np.any(u_all < 0) and np.any(u_all >= 0)):
-            raise EstimationError(
-                "the input never changes sign, so the two polynomials of the two-segment "
-                "input block (B1) cannot both be identified; use data that span both signs "
-                "of u, or a Polynomial input block"
-            )
+    block.check_data(np.concatenate(u))
     vector, a, b = _rank_one_fit(
         u,
         z,
-        block.regressors,
+        block.regressors,  # type: ignore[attr-defined]
         template.na,
         template.nb,
         template.nk,
@@ -310,44 +280,43 @@ def _profile_fit(
     unit: Block, u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
 ) -> BlockModel | None:
     """ARX from ``w = unit(u)`` to ``z``, its ``b_0`` moved into the block (None if <= 0)."""
-    probe = _build(template, unit, None, None, None, cls=_cascade_class(unit))
+    probe = _cascade(template, unit)
     w = [probe.internal(ui) for ui in u]
     a, b = _arx_fit(w, z, template.na, template.nb, template.nk)
     if not b[0] > 1e-12 * max(np.max(np.abs(b)), 1e-300):
         return None
-    return _build(probe, scaled_block(unit, b[0]), None, a, b / b[0])
+    return _build(template, scaled_block(unit, b[0]), None, a, b / b[0])
 
 
-def _dead_zone_fit(
-    lower: float,
-    upper: float,
-    u: Sequence[np.ndarray],
-    z: Sequence[np.ndarray],
-    template: BlockModel,
+def _family_fit(
+    family: LinearFamily, u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
 ) -> BlockModel | None:
-    """For fixed edges a dead zone is linear in its two slopes: rank-one fit of those."""
-
-    def basis(v: np.ndarray) -> np.ndarray:
-        return np.column_stack((np.minimum(v - lower, 0.0), np.maximum(v - upper, 0.0)))
-
+    """Rank-one fit of a block family linear in some parameters (None if it fails)."""
     try:
-        slopes, a, b = _rank_one_fit(
-            u, z, basis, template.na, template.nb, template.nk, "dead zone"
+        vector, a, b = _rank_one_fit(
+            u, z, family.regressors, template.na, template.nb, template.nk, "block family"
         )
-    except EstimationError:  # an edge beyond the data: a slope is not excited
+        block = family.build(vector)
+    except (EstimationError, ParameterError):  # e.g. an edge beyond the data, a slope <= 0
         return None
-    if np.any(slopes <= 0):
-        return None
-    return _build(template, DeadZone(lower, upper, *slopes), None, a, b, cls=Hammerstein)
+    return _build(template, block, None, a, b)
+
+
+def _candidate(
+    shape: Any, u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
+) -> BlockModel | None:
+    if isinstance(shape, LinearFamily):
+        return _family_fit(shape, u, z, template)
+    return _profile_fit(shape, u, z, template)
 
 
 def _grid_search(
     u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
 ) -> tuple[Block, np.ndarray, np.ndarray]:
-    """Profile grid search over the block's shape, scored by free-run error on ``z``."""
+    """Profile grid search over the block's shapes (:meth:`Block.initial_grid`), every
+    shape completed by least squares and scored by its free-run error on ``z``."""
     block = template.input_block
     u_all = np.concatenate(u)
-    span, peak = float(np.ptp(u_all)) or 1.0, float(np.max(np.abs(u_all))) or 1.0
     a_lin, b_lin = _arx_fit(u, z, template.na, template.nb, template.nk)
     if np.sum(b_lin) / (1.0 + np.sum(a_lin)) < 0:  # static gain of a linear fit
         raise EstimationError(
@@ -355,33 +324,16 @@ def _grid_search(
             f"{block.kind} block has positive slopes and b_0 = 1. Negate the input (or the "
             "output) and fit again"
         )
-    if isinstance(block, Backlash):  # c_L = c_R = c, equal slopes (choice, see module)
-
-        def backlash(c: float) -> BlockModel | None:
-            return _profile_fit(Backlash(1.0, c, 1.0, c), u, z, template)
-
-        grid = [span * g for g in _BACKLASH_GRID]
-        candidates = [backlash(c) for c in grid]
-        k = int(np.argmin([_sse(m, u, z) for m in candidates]))
-        fine = np.linspace(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)], 9)
-        candidates += [backlash(c) for c in fine]
-    elif isinstance(block, DeadZone):  # edges [-f1 peak, f2 peak], both slopes fitted
-        candidates = [
-            _dead_zone_fit(-peak * f1, peak * f2, u, z, template)
-            for f1 in _DEAD_ZONE_GRID
-            for f2 in _DEAD_ZONE_GRID
-        ]
-    elif isinstance(block, Saturation):  # knees at u = -f1 peak and f2 peak, slope fitted
-        candidates = [
-            _profile_fit(Saturation(-peak * f1, peak * f2), u, z, template)
-            for f1 in _SATURATION_GRID
-            for f2 in _SATURATION_GRID
-        ]
-    else:
+    grid = block.initial_grid(u_all)
+    if not grid:
         raise ParameterError(
             f"no initial estimate for a {block.kind or type(block).__name__} input block; "
             "pass a starting model (initial=...) to the simulation-error fit"
         )
+    candidates = [_candidate(g, u, z, template) for g in grid]
+    k = int(np.argmin([_sse(m, u, z) for m in candidates]))
+    finer = block.initial_grid(u_all, around=grid[k])
+    candidates += [_candidate(g, u, z, template) for g in finer]
     errors = [_sse(m, u, z) for m in candidates]
     best = candidates[int(np.argmin(errors))]
     if best is None:
@@ -417,13 +369,6 @@ def _input_and_linear(
     return _grid_search(u, z, template)
 
 
-def _output_polynomial(x: Sequence[np.ndarray], y: Sequence[np.ndarray], r2: int, n0: int):
-    """Least-squares ``q`` of ``y = sum_m q_m x^m`` (free ``q_1``)."""
-    Phi = np.vstack([np.vander(xi[n0:], r2 + 1, increasing=True)[:, 1:] for xi in x])
-    target = np.concatenate([yi[n0:] for yi in y])
-    return _least_squares(Phi, target, "output polynomial")
-
-
 def _score(model: BlockModel, data: Dataset) -> float:
     try:
         with np.errstate(all="ignore"):
@@ -449,67 +394,73 @@ def _linear_start(
     if not block.linear_in_parameters or not b[0] != 0:
         return None
     u_all = np.concatenate(u)
-    G = np.asarray(block.regressors(u_all), dtype=float)
+    G = np.asarray(block.regressors(u_all), dtype=float)  # type: ignore[attr-defined]
     v, *_ = np.linalg.lstsq(G, u_all, rcond=None)
     if np.max(np.abs(G @ v - u_all)) > 1e-9 * (np.max(np.abs(u_all)) + 1e-300):
         return None
     return block.with_vector(b[0] * v), a, b / b[0]
 
 
-def _with_q(
-    model: BlockModel, u: Sequence[np.ndarray], y: Sequence[np.ndarray], r2: int
+def _with_output_fit(
+    model: BlockModel, u: Sequence[np.ndarray], y: Sequence[np.ndarray]
 ) -> tuple[BlockModel | None, np.ndarray]:
-    """Fit ``q`` from the simulated ``x`` of ``model`` (identity output block) to ``y``.
+    """Fit the output block from the simulated ``x`` of ``model`` (output block at its
+    template) to ``y`` (:meth:`StaticBlock.initial_fit`), its input gain ``g`` moved into
+    the linear part (input block or ``b`` times ``g``).
 
-    Returns the model with that output block, ``q_1`` moved into the linear part
-    (``x' = q_1 x``: ``q'_m = q_m / q_1^m``, input block or ``b`` times ``q_1``), and
-    the simulated ``x'``; None for the model if ``q_1 <= 0``.
+    Returns the model and the simulated ``x' = g x``; None for the model if the block
+    has no such fit or ``g <= 0``.
     """
     n0 = model.max_lag
-    x = [model.simulate(ui)[:, 0] for ui in u]  # y = x with the identity block
-    q = _output_polynomial(x, y, r2, n0)
-    g = float(q[0])
+    x = [model.linear.simulate(model.internal(ui)) for ui in u]
+    start = model.output_block
+    if not start.linear_in_parameters:  # no least-squares fit: the template stays
+        return None, np.concatenate(x)
+    Phi = np.vstack([start.regressors(xi[n0:]) for xi in x])  # type: ignore[union-attr]
+    target = np.concatenate([yi[n0:] for yi in y])
+    theta = _least_squares(Phi, target, f"{start.kind} output block")
+    normalised = start.with_vector(theta).normalised_input()
+    if normalised is None:
+        return None, np.concatenate(x)
+    out_block, g = normalised
     if not g > 0:
         return None, np.concatenate(x)
-    q = q / g ** np.arange(1, r2 + 1)
     block, b = model.input_block, model.b
     if block is None:
         b = g * b
     else:
         block = scaled_block(block, g)
-    return _build(model, block, Polynomial(q, constant=False), model.a, b), g * np.concatenate(x)
+    return _build(model, block, out_block, model.a, b), g * np.concatenate(x)
 
 
-def _with_output_block(data: Dataset, template: BlockModel, r2: int) -> list[BlockModel]:
+def _with_output_block(data: Dataset, template: BlockModel) -> list[BlockModel]:
     """Candidates of the alternating scheme for Wiener and H-W (module docstring)."""
     u, y = _signals(data)
-    identity = Polynomial([1.0] + [0.0] * (r2 - 1), constant=False)
-    candidates: list[BlockModel] = []
+    start = template.output_block
+    fixed = not start.free_mask(True).any()  # e.g. r2 = 1: nothing to alternate with
+    candidates: list[BlockModel | None] = []
     linear = _linear_start(u, y, template)
     if linear is not None and template.input_block is not None:
-        candidates.append(_build(template, linear[0], identity, linear[1], linear[2]))
-        if r2 > 1:
-            candidates.append(_with_q(candidates[-1], u, y, r2)[0])
+        candidates.append(_build(template, linear[0], start, linear[1], linear[2]))
+        if not fixed:
+            candidates.append(_with_output_fit(candidates[-1], u, y)[0])
     z = y
     for _ in range(_ROUNDS):
         block, a, b = _input_and_linear(u, z, template)
-        candidates.append(_build(template, block, identity, a, b))
-        if r2 == 1:
+        candidates.append(_build(template, block, start, a, b))
+        if fixed:
             break
-        model, x = _with_q(candidates[-1], u, y, r2)
+        model, x = _with_output_fit(candidates[-1], u, y)
         if model is None:
             break
         candidates.append(model)
         lo, hi = float(np.min(x)), float(np.max(x))
         margin = 0.25 * (hi - lo) + 1e-12
         try:
-            z = [
-                model.output_block.inverse(yi, u_range=(lo - margin, hi + margin), clip=True)
-                for yi in y
-            ]
+            z = [model.output_block.inverse_on(yi, (lo - margin, hi + margin)) for yi in y]
         except BlockidError:
             break
-    return candidates
+    return candidates  # type: ignore[return-value]
 
 
 # ----------------------------------------------------------------------------- public
@@ -523,6 +474,7 @@ def initial_estimate(
     r1: int = 3,
     r2: int = 3,
     input_block: Block | None = None,
+    output_block: Block | None = None,
 ) -> BlockModel:
     """A cheap, stable starting model of a block-oriented structure (module docstring).
 
@@ -540,17 +492,19 @@ def initial_estimate(
     r1 : int, default 3
         Order of the default two-segment polynomial input block (B1).
     r2 : int, default 3
-        Degree of the output polynomial (B3), ``y = x + q_2 x^2 + .. + q_r2 x^r2``.
-    input_block : Block, optional
-        Template of the input block: its kind and form (order, breakpoints) are used,
-        its parameter values are not. Default: ``TwoSegmentPolynomial`` of order ``r1``
-        (a ``Backlash`` for the backlash structure).
+        Degree of the default output polynomial (B3), ``y = x + q_2 x^2 + .. + q_r2 x^r2``.
+    input_block, output_block : Block, optional
+        Templates of the blocks: their kind and form (order, breakpoints) are used,
+        their parameter values only as a start where the block has no initial fit (a
+        user block's output block). Defaults: ``TwoSegmentPolynomial`` of order ``r1``
+        (a ``Backlash`` for the backlash structure) and the identity polynomial of
+        degree ``r2``.
 
     Returns
     -------
     BlockModel
         A model of the structure with a stable linear block, ``b_0 = 1`` with an input
-        block and ``q_1 = 1`` with an output block.
+        block and the output block's input gain fixed (``q_1 = 1``).
 
     Raises
     ------
@@ -560,11 +514,11 @@ def initial_estimate(
         If the orders, the data's signals or the options are invalid.
     """
     cls = resolve_structure(structure)
-    template = _template(cls, data, na, nb, nk, r1, r2, input_block)
+    template = _template(cls, data, na, nb, nk, r1, r2, input_block, output_block)
     n_par = template.free_parameters().size
     data.check_orders(template.max_lag, n_par, what=f"{cls.structure} na={na}, nb={nb}, nk={nk}")
     if template.output_block is not None:
-        candidates = _with_output_block(data, template, template.output_block.degree)
+        candidates = _with_output_block(data, template)
     else:
         u, y = _signals(data)
         starts = [_input_and_linear(u, y, template), _linear_start(u, y, template)]
@@ -582,6 +536,7 @@ def _template(
     r1: int,
     r2: int,
     input_block: Block | None,
+    output_block: Block | None,
 ) -> BlockModel:
     """A model of the right structure and orders with placeholder parameters."""
     for name, value, low in (("na", na, 0), ("nb", nb, 1), ("nk", nk, 0), ("r1", r1, 1)):
@@ -589,27 +544,34 @@ def _template(
             raise OrderError(f"{name} must be a whole number >= {low}, got {value!r}")
     if not isinstance(r2, int | np.integer) or r2 < 1:
         raise OrderError(f"r2 must be a whole number >= 1, got {r2!r}")
-    kwargs: dict[str, Any] = dict(na=na, nb=nb, nk=nk, sampling_time=data.sampling_time)
-    if cls.requires_input_block:
-        if input_block is None:
-            if cls is BacklashModel:
-                input_block = Backlash(1.0, 0.0, 1.0, 0.0)
-            else:
-                input_block = TwoSegmentPolynomial(np.zeros(r1 + 1), np.zeros(r1 + 1))
-        if not isinstance(input_block, Block):
-            raise ParameterError(
-                f"input_block must be a block (e.g. TwoSegmentPolynomial), got {input_block!r}"
-            )
-        kwargs["input_block"] = input_block
-    elif input_block is not None:
-        raise ParameterError(f"a {cls.structure} model has no input block; drop input_block")
-    if cls.requires_output_block:
-        kwargs["output_block"] = Polynomial([1.0] + [0.0] * (int(r2) - 1), constant=False)
-    if cls in (Hammerstein, HammersteinWiener) and not isinstance(
-        kwargs["input_block"], StaticBlock
+    default_in, default_out = cls.default_blocks(int(r1), int(r2))
+    u_all = np.concatenate([e.u[:, 0] for e in data.experiments])
+    blocks = []
+    for given, default, what in (
+        (input_block, default_in, "input_block"),
+        (output_block, default_out, "output_block"),
     ):
-        raise ParameterError(
-            f"a {cls.structure} model needs a static input block, got {input_block.kind}; "
-            "use the backlash structure for a backlash"
+        if given is not None and default is None:
+            raise ParameterError(
+                f"a {cls.structure} model has no {what.replace('_', ' ')}; drop {what}"
+            )
+        if given is not None and not isinstance(given, Block):
+            raise ParameterError(
+                f"{what} must be a block (e.g. TwoSegmentPolynomial), got {given!r}"
+            )
+        blocks.append(given if given is not None else default)
+    if blocks[0] is not None:
+        blocks[0] = blocks[0].adapted(u_all)
+    try:
+        return cls.cascade(
+            data.inputs,
+            data.outputs,
+            input_block=blocks[0],
+            output_block=blocks[1],
+            na=na,
+            nb=nb,
+            nk=nk,
+            sampling_time=data.sampling_time,
         )
-    return cls(data.inputs, data.outputs, **kwargs)
+    except OrderError as exc:
+        raise ParameterError(str(exc)) from None

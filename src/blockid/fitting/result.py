@@ -8,9 +8,10 @@ from typing import Any
 __all__ = ["FitResult"]
 
 
-@dataclass
+@dataclass(frozen=True)
 class FitResult:
-    """A fitted model with what it took to get it.
+    """A fitted model with what it took to get it (immutable: derive a changed result
+    with :func:`dataclasses.replace`).
 
     Attributes
     ----------

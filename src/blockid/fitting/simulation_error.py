@@ -57,21 +57,19 @@ non-finite or exploding raises :class:`~blockid.errors.EstimationError`.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from blockid._kernels.simulation import allpole_run, backlash_sensitivity
-from blockid.blocks import Backlash, DeadZone, Polynomial, Saturation
 from blockid.blocks.base import Block
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.fitting.checks import STABILITY_MARGIN, check_model, simulation_mse
-from blockid.fitting.initial import _build, initial_estimate, resolve_structure
+from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.result import FitResult
-from blockid.models.block import BlockModel, HammersteinWiener
+from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
 
 __all__ = ["NESTED_START", "fit_simulation_error", "refine", "simulate_with_sensitivities"]
 
@@ -83,71 +81,20 @@ _EXPLODE = 1e6
 
 
 # ----------------------------------------------------------------------------- Jacobian
-def _input_sensitivity(model: BlockModel, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``w = N_1(u)`` and ``dw/dθ_block``, shape (N, n_block); ``u`` offset-corrected."""
-    block = model.input_block
-    if block is None:
-        return u.copy(), np.zeros((u.shape[0], 0))
-    if block.linear_in_parameters:
-        return np.asarray(block(u), dtype=float), np.asarray(block.regressors(u), dtype=float)
-    if isinstance(block, Backlash):
-        mL, cL, mR, cR = block.to_vector()
-        u0 = u[0]
-        x0 = 0.5 * (mL * (u0 + cL) + mR * (u0 - cR))  # rest point, as BlockModel.internal
-        dx0 = np.array([0.5 * (u0 + cL), 0.5 * mL, 0.5 * (u0 - cR), -0.5 * mR])
-        return backlash_sensitivity(np.ascontiguousarray(u), block.to_vector(), x0, dx0)
-    if isinstance(block, DeadZone):
-        lo, hi, sl, sr = block.lower, block.upper, block.slope_left, block.slope_right
-        left, right = np.minimum(u - lo, 0.0), np.maximum(u - hi, 0.0)
-        G = np.column_stack((-sl * (u < lo), -sr * (u > hi), left, right))
-        return np.asarray(block(u), dtype=float), G
-    if isinstance(block, Saturation):
-        v = block.slope * u
-        inside = (v >= block.lower) & (v <= block.upper)
-        G = np.column_stack((v < block.lower, v > block.upper, u * inside)).astype(float)
-        return np.asarray(block(u), dtype=float), G
-    return _numerical_input_sensitivity(model, u)
-
-
-def _numerical_input_sensitivity(model: BlockModel, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Central differences of ``internal`` for blocks without an analytic derivative."""
-    theta = model.free_parameters()
-    n = theta.size - model.na - (model.nb - 1) - _n_q(model)
-    u_abs = u + model.input_offset
-    w = model.internal(u_abs)
-    G = np.empty((u.shape[0], n))
-    for k in range(n):
-        h = 1e-6 * max(1.0, abs(theta[k]))
-        cols = []
-        for step in (h, -h):
-            t = theta.copy()
-            t[k] += step
-            try:
-                cols.append((step, model.with_free_parameters(t).internal(u_abs)))
-            except BlockidError:
-                cols.append((0.0, w))
-        (s1, w1), (s2, w2) = cols
-        G[:, k] = (w1 - w2) / (s1 - s2) if s1 != s2 else 0.0
-    return w, G
-
-
-def _n_q(model: BlockModel) -> int:
-    return 0 if model.output_block is None else model.output_block.coefficients.size - 1
-
-
 def simulate_with_sensitivities(
-    model: BlockModel, u: Any, y_initial: Any = None
+    model: ChainModel, u: Any, y_initial: Any = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Free-run simulation and its derivative with respect to :meth:`free_parameters`.
 
     Parameters
     ----------
-    model : BlockModel
+    model : ChainModel
+        Any chain of blocks.
     u : array_like, shape (N,) or (N, 1)
         Input.
     y_initial : array_like, optional
         Measured outputs whose first ``max_lag`` samples start the simulation, as in
-        :meth:`BlockModel.simulate`.
+        :meth:`ChainModel.simulate`.
 
     Returns
     -------
@@ -158,81 +105,56 @@ def simulate_with_sensitivities(
 
     Notes
     -----
-    With ``x(k) = N_2^{-1}`` of the simulated output, the sensitivities
-    ``s_i = ∂x/∂θ_i`` obey the linear block's recursion with forcing terms
+    The sensitivities travel down the chain with the signal: every block maps its
+    input and the input's sensitivities to its output and the output's sensitivities
+    (``forward`` of each block). A static block multiplies by ``N'(s)`` and adds its own
+    parameter Jacobian; a linear block filters every column through ``z^-nk B/A`` and
+    adds the forcing of its own parameters,
 
     .. math::
 
         A(z^{-1}) s_i(k) = \\begin{cases}
-            z^{-n_k} B(z^{-1})\\, \\partial w(k)/\\partial \\theta_i & \\text{input block} \\\\
+            z^{-n_k} B(z^{-1})\\, \\partial w(k)/\\partial \\theta_i & \\text{upstream} \\\\
             -x(k - j) & \\theta_i = a_j \\\\
             w(k - n_k - j) & \\theta_i = b_j
         \\end{cases}
 
-    (B2), and ``∂y/∂θ_i = N_2'(x) s_i`` plus ``x^m`` for ``θ_i = q_m`` (B3).
+    (B2). When the last linear block starts from ``x = N^{-1}(y)`` of the measured
+    outputs, the dependence of that start on the parameters of the blocks after it is
+    included: ``dx/dθ = -(∂N/∂θ) / N'(x)``.
     """
     u_arr, _ = model._check_signals(u)
-    u_rel = u_arr[:, 0] - model.input_offset
-    N = u_rel.shape[0]
-    na, nb, nk, n0 = model.na, model.nb, model.nk, model.max_lag
-    a, b = model.a, model.b
-    w, G = _input_sensitivity(model, u_rel)
-    nq = _n_q(model)
-    n_block = G.shape[1]
-    b_free = range(1, nb) if model.fixed_b0 else range(nb)
-    n_par = n_block + na + len(b_free) + nq
-
-    # initial conditions, as BlockModel.simulate: x(0..n0-1) = N2^{-1}(y0) when possible
-    start, x = 0, np.zeros(N)
-    S = np.zeros((N, n_par))
-    if y_initial is not None:
-        _, y0 = model._check_signals(np.zeros((len(np.atleast_1d(y_initial)), 1)), y_initial)
-        y0 = y0[:n0, 0] - model.output_offset
-        x_init = _invert(model, y0)
-        if x_init is not None:
-            start = min(n0, y0.shape[0], N)
-            x[:start] = x_init[:start]
-            if nq:  # N2(x_init) = y0  =>  dx/dq_m = -x^m / N2'(x)
-                d2 = model.output_block.derivative(x[:start])
-                for m in range(nq):
-                    S[:start, n_par - nq + m] = -(x[:start] ** (m + 2)) / d2
-
-    # x: A x = z^-nk B w, in the linear block's compiled recursion
-    F = np.zeros((N, n_par))
-    fx = np.zeros((N, 1))
-    for i in range(nb):
-        d = nk + i
-        if d < N:
-            fx[d:, 0] += b[i] * w[: N - d]
-            F[d:, :n_block] += b[i] * G[: N - d]
-    xs = x[:, None].copy()
-    allpole_run(np.ascontiguousarray(a), fx, xs, start)
-    x = xs[:, 0]
-    col = n_block
-    for j in range(1, na + 1):
-        F[j:, col] = -x[: N - j]
-        col += 1
-    for i in b_free:
-        d = nk + i
-        if d < N:
-            F[d:, col] = w[: N - d]
-        col += 1
-    allpole_run(np.ascontiguousarray(a), F, S, start)
-    if model.output_block is None:
-        return x + model.output_offset, S
-    y = model.output_block(x) + model.output_offset
-    S *= model.output_block.derivative(x)[:, None]
-    for m in range(nq):
-        S[:, n_par - nq + m] += x ** (m + 2)
-    return y, S
+    s = np.ascontiguousarray(u_arr[:, 0] - model.input_offset)
+    columns = model.block_columns()
+    n_par = int(sum(int((c >= 0).sum()) for c in columns))
+    S = np.zeros((s.shape[0], n_par))
+    last = model.last_linear_index
+    init = _initial_state(model, columns, y_initial, n_par)
+    for i, block in enumerate(model.blocks):
+        s, S = block.forward(s, S, columns[i], init if i == last else None)
+    return s + model.output_offset, S
 
 
-def _invert(model: BlockModel, y0: np.ndarray) -> np.ndarray | None:
-    """``N_2^{-1}(y0)`` exactly as :meth:`BlockModel.simulate` does it, or None."""
-    try:
-        return model.x_from_y(y0)
-    except BlockidError:
+def _initial_state(
+    model: ChainModel, columns: list[np.ndarray], y_initial: Any, n_par: int
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The last linear block's start from measured outputs, and its sensitivities."""
+    x0 = model.initial_state(y_initial)
+    if x0 is None:
         return None
+    tail = range(model.last_linear_index + 1, len(model.blocks))
+    signals = [x0]
+    for i in tail:  # the signal entering every tail block, from x0 forwards
+        signals.append(np.asarray(model.blocks[i](signals[-1]), dtype=float))
+    S0 = np.zeros((x0.shape[0], n_par))
+    for k in reversed(range(len(tail))):  # x_k = N_k^{-1}(x_{k+1}), chain rule backwards
+        block, x = model.blocks[tail[k]], signals[k]
+        slope = block.derivative(x)
+        own, free = columns[tail[k]], columns[tail[k]] >= 0
+        S0 = S0 / slope[:, None]
+        if free.any():
+            S0[:, own[free]] -= block.jacobian(x)[:, free] / slope[:, None]
+    return x0, S0
 
 
 # ----------------------------------------------------------------------------- problem
@@ -347,6 +269,18 @@ class _Problem:
         return float(np.mean(err**2)) if np.all(np.isfinite(err)) else np.inf
 
 
+def _describe(model: ChainModel) -> dict[str, Any]:
+    """Orders and block kinds of a model, for ``settings``."""
+    out: dict[str, Any] = {}
+    linear = model.linear_blocks
+    for k, g in enumerate(linear, start=1):
+        tag = str(k) if len(linear) > 1 else ""
+        out.update({f"na{tag}": g.na, f"nb{tag}": g.nb, f"nk{tag}": g.nk})
+    out["input_block"] = None if model.input_block is None else model.input_block.kind
+    out["output_block"] = None if model.output_block is None else model.output_block.kind
+    return out
+
+
 def _segments(data: Dataset, n0: int, tail_fraction: float, n_par: int) -> list[_Segment]:
     """Split every experiment into a fitted head and a monitored tail.
 
@@ -360,21 +294,6 @@ def _segments(data: Dataset, n0: int, tail_fraction: float, n_par: int) -> list[
             n_tail = 0
         segments.append(_Segment(np.ascontiguousarray(e.u[:, 0]), e.y[:, 0].copy(), N - n_tail))
     return segments
-
-
-def _bounds(model: BlockModel) -> tuple[np.ndarray, np.ndarray]:
-    """Lower/upper bounds of the free parameters (backlash, dead-zone, saturation slopes)."""
-    theta = model.free_parameters()
-    lower = np.full(theta.size, -np.inf)
-    block = model.input_block
-    if isinstance(block, Backlash):  # [m_left, c_left, m_right, c_right]
-        lower[[0, 2]] = 1e-6 * theta[[0, 2]]
-        lower[[1, 3]] = 0.0
-    elif isinstance(block, DeadZone):  # [lower, upper, slope_left, slope_right]
-        lower[[2, 3]] = 1e-6 * theta[[2, 3]]
-    elif isinstance(block, Saturation):  # [lower, upper, slope]
-        lower[2] = 1e-6 * theta[2]
-    return lower, np.full(theta.size, np.inf)
 
 
 # ----------------------------------------------------------------------------- public
@@ -427,7 +346,7 @@ def refine(
         If the start is unstable, not finite or its simulation explodes, or if the
         result fails :func:`~blockid.fitting.checks.check_model`.
     """
-    if not isinstance(model, BlockModel):
+    if not isinstance(model, ChainModel):
         raise ParameterError(
             f"refinement on simulation error works on block-oriented models, got "
             f"{type(model).__name__}; fit an ARX model with method batch instead"
@@ -450,7 +369,7 @@ def refine(
             "refinement cannot start: the starting model's parameters are not finite"
         )
     if not model.is_stable(STABILITY_MARGIN):
-        rho = float(np.max(np.abs(model.linear.poles())))
+        rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
             "refinement cannot start: the starting model's linear block is unstable "
             f"(largest pole magnitude {rho:.4g}), so its simulation error is not defined. "
@@ -470,7 +389,7 @@ def refine(
     initial_mse = simulation_mse(model, data)
     initial_tail = problem.tail_mse(model) if problem.has_tail else None
 
-    lower, upper = _bounds(model)
+    lower, upper = model.parameter_bounds()
     stop_reason, theta = "", theta0
     try:
         with np.errstate(all="ignore"):
@@ -496,15 +415,11 @@ def refine(
     # The estimation ranges decide whether a simulation may start from N_2^{-1} of the
     # measured outputs; record them first, so that every MSE reported here (and the
     # choice between starts) is the one evaluate() gives for the returned model.
-    fitted.record_ranges([(e.u, e.y) for e in data.experiments])
+    fitted = fitted.with_ranges([(e.u, e.y) for e in data.experiments])
     elapsed = time.perf_counter() - t_start
     metrics = check_model(fitted, data, METHOD)
     settings: dict[str, Any] = {
-        "na": fitted.na,
-        "nb": fitted.nb,
-        "nk": fitted.nk,
-        "input_block": None if fitted.input_block is None else fitted.input_block.kind,
-        "output_degree": None if fitted.output_block is None else fitted.output_block.degree,
+        **_describe(fitted),
         "max_nfev": int(max_nfev),
         "tail_fraction": float(tail_fraction),
         "patience": int(patience),
@@ -543,6 +458,7 @@ def fit_simulation_error(
     r2: int = 3,
     initial: BlockModel | None = None,
     input_block: Block | None = None,
+    output_block: Block | None = None,
     max_nfev: int = 200,
     tail_fraction: float = 0.2,
     patience: int = 5,
@@ -570,8 +486,8 @@ def fit_simulation_error(
         Orders of the default input block (B1) and the output polynomial (B3).
     initial : BlockModel, optional
         Starting model instead of the initial estimate.
-    input_block : Block, optional
-        Template of the input block (kind and form; see ``initial_estimate``).
+    input_block, output_block : Block, optional
+        Templates of the blocks (kind and form; see ``initial_estimate``).
     max_nfev, tail_fraction, patience, ftol, xtol, gtol
         See :func:`refine`.
 
@@ -612,7 +528,15 @@ def fit_simulation_error(
         if na is None or nb is None or nk is None:
             raise ParameterError("give the orders na, nb and nk (or a starting model initial=)")
         start = initial_estimate(
-            data, cls, na=na, nb=nb, nk=nk, r1=r1, r2=r2, input_block=input_block
+            data,
+            cls,
+            na=na,
+            nb=nb,
+            nk=nk,
+            r1=r1,
+            r2=r2,
+            input_block=input_block,
+            output_block=output_block,
         )
         origin = "initial estimate"
     else:
@@ -638,9 +562,11 @@ def fit_simulation_error(
     )
     if initial is not None or not issubclass(cls, HammersteinWiener):
         result = refine(start, data, **options)
-        result.settings = {**result.settings, "initial": origin}
-        result.history["initial_seconds"] = t_initial
-        return result
+        return replace(
+            result,
+            settings={**result.settings, "initial": origin},
+            history={**result.history, "initial_seconds": t_initial},
+        )
     return _best_hammerstein_wiener(data, start, t_initial, r1, input_block, options)
 
 
@@ -671,8 +597,9 @@ def _best_hammerstein_wiener(
         results["initial estimate"] = refine(start, data, **options)
     except EstimationError as exc:
         failures["initial estimate"] = str(exc)
-    degree = start.output_block.degree
-    if degree > 1:  # with r2 = 1 the H-W model is the Hammerstein model: one start is enough
+    identity = start.output_block.identity()
+    # with r2 = 1 the H-W model is the Hammerstein model: one start is enough
+    if identity is not None and start.output_block.free_mask(True).any():
         try:
             nested = fit_simulation_error(
                 data,
@@ -687,8 +614,7 @@ def _best_hammerstein_wiener(
         except BlockidError as exc:  # e.g. an input block the Hammerstein class does not take
             failures[NESTED_START] = f"the Hammerstein fit to start from failed: {exc}"
         else:
-            identity = Polynomial([1.0] + [0.0] * (degree - 1), constant=False)
-            nested_start = _build(start, nested.input_block, identity, nested.a, nested.b)
+            nested_start = start.with_blocks((*nested.blocks, identity), ranges=None)
             try:
                 results[NESTED_START] = refine(nested_start, data, **options)
             except EstimationError as exc:
@@ -703,17 +629,16 @@ def _best_hammerstein_wiener(
         )
     origin = min(results, key=lambda k: results[k].settings["final_simulation_mse"])
     result = results[origin]
-    result.settings = {
-        **result.settings,
-        "initial": origin,
-        "starts": {
-            **{
-                k: {"final_simulation_mse": r.settings["final_simulation_mse"]}
-                for k, r in results.items()
-            },
-            **{k: {"error": v} for k, v in failures.items()},
-        },
+    starts = {
+        k: {"final_simulation_mse": r.settings["final_simulation_mse"]} for k, r in results.items()
     }
-    result.history["initial_seconds"] = t_initial
-    result.history["seconds"] = time.perf_counter() - t0
-    return result
+    starts.update({k: {"error": v} for k, v in failures.items()})
+    return replace(
+        result,
+        settings={**result.settings, "initial": origin, "starts": starts},
+        history={
+            **result.history,
+            "initial_seconds": t_initial,
+            "seconds": time.perf_counter() - t0,
+        },
+    )

@@ -1,56 +1,63 @@
-"""Block-oriented models: Hammerstein, Wiener, Hammerstein-Wiener and backlash.
-
-All four are one cascade with optional outer blocks (SISO):
+"""Block-oriented models: a chain of blocks between one input and one output.
 
 .. math::
 
-    w(k) = N_1(u(k)),\\qquad
-    A(z^{-1})\\,x(k) = z^{-n_k} B(z^{-1})\\,w(k),\\qquad
-    y(k) = N_2(x(k))
+    s_0 = u - u_0, \\qquad s_{i+1} = G_i(s_i), \\qquad y = s_n + y_0
 
-* :class:`Hammerstein` — ``N_1`` static (two-segment polynomial B1 by default),
-  no ``N_2``;
-* :class:`Wiener` — no ``N_1`` (``w = u``), ``N_2`` a polynomial without constant (B3);
-* :class:`HammersteinWiener` — both (paper B, B1–B3);
-* :class:`BacklashModel` — ``N_1`` the backlash of paper A (A3), no ``N_2``: the
-  "pseudo-Hammerstein" of A4–A5.
+where every ``G_i`` is a block (:mod:`blockid.blocks`): a static nonlinearity, a
+dynamic nonlinearity acting on the measured input (backlash), or a linear dynamic block
+(:class:`~blockid.blocks.linear.LinearBlock`). :class:`ChainModel` simulates, predicts,
+differentiates and stores any such chain without knowing the kinds of its blocks; the
+named structures are chains of a fixed shape:
 
-The linear block follows the MATLAB convention of :class:`~blockid.models.ARX`
-(``a = [a_1..a_na]``, ``b = [b_0..b_{nb-1}]``, ``b_0`` multiplies ``w(k - nk)``).
+* :class:`Hammerstein` — static ``N_1`` then linear (two-segment polynomial B1 by
+  default);
+* :class:`Wiener` — linear then static ``N_2`` (a polynomial without constant, B3, by
+  default);
+* :class:`HammersteinWiener` — ``N_1``, linear, ``N_2`` (paper B, B1–B3);
+* :class:`BacklashModel` — backlash (A3) then linear: paper A's pseudo-Hammerstein;
+* :class:`WienerHammerstein` — linear, static, linear.
 
-Normalisation (SPEC): the cascade is otherwise not identifiable, because a gain can
-move between the blocks. With an input block ``b_0 = 1`` is fixed; with an output
-block its linear coefficient ``q_1 = 1`` is fixed. Paper A's S2 (``v2(t) = x(t-1) +
-... - a_1 v2(t-1) - a_2 v2(t-2)``) is ``na = 2, nb = 1, nk = 1`` with ``b_0 = 1``.
+Linear blocks follow the MATLAB convention (``a = [a_1..a_na]``, ``b = [b_0..b_{nb-1}]``,
+``b_0`` multiplies ``w(k - nk)``).
 
-One-step-ahead prediction needs the unmeasured ``x`` in the past: it is recovered from
-the measured output as ``x = N_2^{-1}(y)``, so a model with an output block predicts
-one step ahead only where ``N_2`` is monotone over the measured range.
+Normalisation (SPEC): a gain between two blocks is not identifiable. A linear block
+that follows a nonlinear block fixes ``b_0 = 1``; a static block that follows a linear
+block fixes its own input gain (:meth:`~blockid.blocks.base.Block.free_mask`: the output
+polynomial fixes ``q_1 = 1``). Paper A's S2 (``v2(t) = x(t-1) + ... - a_1 v2(t-1) - a_2
+v2(t-2)``) is ``na = 2, nb = 1, nk = 1`` with ``b_0 = 1``.
+
+Initial state: a simulation given measured outputs starts the *last* linear block from
+them, through the inverse of the static blocks after it where they are monotone over
+the range seen in estimation (otherwise from rest); every other block starts at rest (a
+backlash in the middle of its dead band). One-step-ahead prediction recovers the last
+linear block's past outputs the same way, so a model with an output block predicts one
+step ahead only where that block is invertible over the measured range.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
 
-from blockid.blocks import Backlash, Polynomial
+from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
 from blockid.blocks.base import Block, DynamicBlock, StaticBlock, block_from_dict
-from blockid.errors import BlockidError, EstimationError, ModelFileError, OrderError
-from blockid.models.arx import ARX
+from blockid.blocks.linear import LinearBlock
+from blockid.errors import BlockidError, ModelFileError, OrderError, ParameterError
 from blockid.models.base import Model
 
 __all__ = [
+    "ChainModel",
     "BlockModel",
     "Hammerstein",
     "Wiener",
     "HammersteinWiener",
     "BacklashModel",
+    "WienerHammerstein",
     "BLOCK_STRUCTURES",
 ]
-
-#: Blocks whose extrapolation beyond the fitted range is unreliable.
-_POLYNOMIAL_KINDS = ("polynomial", "two-segment-polynomial")
 
 #: SPEC names of the input-block parameters, by block kind (others keep their own names).
 _SPEC_NAMES = {"polynomial": {"coefficients": "f"}}
@@ -66,8 +73,490 @@ def _one_name(names: Any, what: str) -> tuple[str]:
     return names
 
 
-class BlockModel(Model):
-    """Generic ``N_1 - L - N_2`` cascade; use the named subclasses.
+class ChainModel(Model):
+    """A chain of blocks from one input to one output (module docstring).
+
+    Parameters
+    ----------
+    input, output : str
+        Signal names.
+    blocks : sequence of Block
+        The chain, input side first: at least one
+        :class:`~blockid.blocks.linear.LinearBlock`; a dynamic block only first.
+    sampling_time : float, optional
+    input_offset, output_offset : float
+        Operating point subtracted from ``u`` and ``y`` before the blocks (default 0).
+    ranges : dict, optional
+        Input ranges of the nonlinear blocks seen in estimation (see :attr:`ranges`).
+
+    Examples
+    --------
+    A Wiener-Hammerstein chain (linear, static, linear):
+
+    >>> from blockid.blocks import Polynomial
+    >>> from blockid.blocks.linear import LinearBlock
+    >>> m = ChainModel("u", "y", [LinearBlock(1, 1, 0, a=[-0.5], b=[0.5]),
+    ...                           Polynomial([1.0, 0.0, -0.1], constant=False),
+    ...                           LinearBlock(1, 1, 1, a=[-0.2], b=[1.0])])
+    >>> m.free_parameters().round(3).tolist()
+    [-0.5, 0.5, 0.0, -0.1, -0.2]
+    """
+
+    structure: ClassVar[str] = "chain"
+
+    def __init__(
+        self,
+        input: Any,
+        output: Any,
+        blocks: Sequence[Block],
+        *,
+        sampling_time: float | None = None,
+        input_offset: float = 0.0,
+        output_offset: float = 0.0,
+        ranges: dict[str, Any] | None = None,
+    ) -> None:
+        self.inputs = _one_name(input, "input")
+        self.outputs = _one_name(output, "output")
+        blocks = tuple(blocks)
+        self._check_chain(blocks)
+        self.blocks: tuple[Block, ...] = blocks
+        self.sampling_time = sampling_time
+        self.input_offset = float(input_offset)
+        self.output_offset = float(output_offset)
+        #: Ranges of the nonlinear blocks' inputs seen in the estimation data (relative
+        #: to the offsets): ``"u"`` for the chain input, ``"x"`` for the input of the
+        #: output block, ``"s<i>"`` for a static block ``i`` inside the chain.
+        self.ranges: dict[str, list[float]] = {
+            k: [float(v[0]), float(v[1])] for k, v in (ranges or {}).items()
+        }
+
+    # ------------------------------------------------------------------ structure
+    def _check_chain(self, blocks: tuple[Block, ...]) -> None:
+        if not any(isinstance(b, LinearBlock) for b in blocks):
+            raise OrderError("a block-oriented model needs a linear block")
+        for i, block in enumerate(blocks):
+            if not isinstance(block, Block):
+                raise OrderError(f"block {i} is not a block: {block!r}")
+            if isinstance(block, DynamicBlock) and i > 0:
+                raise OrderError(
+                    f"a dynamic {block.kind} block acts on the measured input: put it first"
+                )
+            try:
+                block.check_normalised(self._after(blocks, i))
+            except ParameterError as exc:
+                raise OrderError(str(exc)) from None
+
+    @staticmethod
+    def _after(blocks: tuple[Block, ...], i: int) -> bool:
+        """For a linear block: whether a nonlinear block precedes it; for a nonlinear
+        block: whether a linear block does (the normalisation, module docstring)."""
+        if i == 0:
+            return False
+        before = isinstance(blocks[i - 1], LinearBlock)
+        return not before if isinstance(blocks[i], LinearBlock) else before
+
+    @property
+    def linear_blocks(self) -> tuple[LinearBlock, ...]:
+        return tuple(b for b in self.blocks if isinstance(b, LinearBlock))
+
+    @property
+    def last_linear_index(self) -> int:
+        return max(i for i, b in enumerate(self.blocks) if isinstance(b, LinearBlock))
+
+    @property
+    def linear(self) -> LinearBlock:
+        """The last linear block (the only one in the named cascades)."""
+        return self.blocks[self.last_linear_index]  # type: ignore[return-value]
+
+    @property
+    def input_block(self) -> Block | None:
+        """The first block when it is nonlinear, else None."""
+        first = self.blocks[0]
+        return None if isinstance(first, LinearBlock) else first
+
+    @property
+    def output_block(self) -> StaticBlock | None:
+        """The last block when it is static after the last linear block, else None."""
+        last = self.blocks[-1]
+        return last if isinstance(last, StaticBlock) and len(self.blocks) > 1 else None
+
+    @property
+    def max_lag(self) -> int:
+        return self.linear.max_lag
+
+    def linear_orders(self) -> tuple[int, int, int]:
+        """Orders ``(na, nb, nk)`` of the product of all linear blocks (the chain's
+        linear approximation; the only block's orders for one linear block)."""
+        lin = self.linear_blocks
+        na = sum(g.na for g in lin)
+        nk = sum(g.nk for g in lin)
+        nb = sum(g.nb for g in lin) - (len(lin) - 1)
+        return na, nb, nk
+
+    def is_stable(self, margin: float = 0.0) -> bool:
+        """True when every linear block's poles lie inside the circle of radius 1 - margin."""
+        return all(g.is_stable(margin) for g in self.linear_blocks)
+
+    def poles(self) -> np.ndarray:
+        """Poles of all linear blocks."""
+        return np.concatenate([g.poles() for g in self.linear_blocks])
+
+    def _range_key(self, i: int) -> str:
+        if i == 0:
+            return "u"
+        if i == len(self.blocks) - 1 and i > self.last_linear_index:
+            return "x"
+        return f"s{i}"
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """Parameters under SPEC's names: ``f, p`` / backlash names, ``a, b``, ``q``.
+
+        With several linear blocks their parameters are ``a1, b1, a2, b2, ..``.
+        """
+        out: dict[str, Any] = {}
+        several = len(self.linear_blocks) > 1
+        n_lin = 0
+        for i, block in enumerate(self.blocks):
+            if isinstance(block, LinearBlock):
+                n_lin += 1
+                tag = str(n_lin) if several else ""
+                out[f"a{tag}"] = block.a.tolist()
+                out[f"b{tag}"] = block.b.tolist()
+                continue
+            if block is self.output_block and isinstance(block, Polynomial):
+                out["q"] = block.coefficients.tolist()
+                continue
+            rename = _SPEC_NAMES.get(block.kind, {}) if i == 0 else {}
+            for key, value in block.parameters.items():
+                if key == "constant" and value is (i == 0):
+                    continue  # the usual case; kept only when unusual
+                name = rename.get(key, key)
+                out[name if name not in out else f"{name}_{i}"] = value
+        return out
+
+    # ------------------------------------------------------------------ dynamics
+    def _u(self, u: Any) -> np.ndarray:
+        u, _ = self._check_signals(u)
+        return u[:, 0] - self.input_offset
+
+    def _run(self, s: np.ndarray, stop: int) -> np.ndarray:
+        """The signal entering block ``stop`` (blocks before it from rest)."""
+        for block in self.blocks[:stop]:
+            s = _apply(block, s)
+        return s
+
+    def block_inputs(self, u: Any) -> list[np.ndarray]:
+        """The signal entering every block (relative to the input offset), from rest."""
+        s, out = self._u(u), []
+        for block in self.blocks:
+            out.append(s)
+            s = _apply(block, s)
+        return out
+
+    def internal(self, u: Any) -> np.ndarray:
+        """The input of the last linear block for input ``u`` (``w = N_1(u)`` of the
+        cascades; ``u`` itself when the chain starts with it)."""
+        return self._run(self._u(u), self.last_linear_index)
+
+    def x_from_y(self, y: np.ndarray) -> np.ndarray:
+        """The last linear block's output from ``y`` (relative to the offset): the static
+        blocks after it inverted over the ranges seen in estimation.
+
+        Raises :class:`~blockid.errors.EstimationError` where a block is not invertible.
+        """
+        x = np.asarray(y, dtype=float)
+        for i in range(len(self.blocks) - 1, self.last_linear_index, -1):
+            seen = self.ranges.get(self._range_key(i))
+            x = self.blocks[i].invert(x, None if seen is None else tuple(seen))
+        return x
+
+    def initial_state(self, y_initial: Any) -> np.ndarray | None:
+        """Initial outputs of the last linear block from measured outputs, or None."""
+        if y_initial is None:
+            return None
+        _, y0 = self._check_signals(np.zeros((len(np.atleast_1d(y_initial)), 1)), y_initial)
+        y0 = y0[: self.max_lag, 0] - self.output_offset
+        try:
+            return self.x_from_y(y0)
+        except BlockidError:
+            return None
+
+    def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
+        """Free-run simulation from the input alone.
+
+        Without ``y_initial`` every block starts at rest; with it, the last linear
+        block's first ``max_lag`` outputs are set from the measurement (module
+        docstring).
+        """
+        last = self.last_linear_index
+        w = self._run(self._u(u), last)
+        x = self.blocks[last].simulate(w, self.initial_state(y_initial))  # type: ignore[call-arg]
+        y = self._run_from(x, last + 1)
+        return (y + self.output_offset)[:, None]
+
+    def _run_from(self, s: np.ndarray, start: int) -> np.ndarray:
+        for block in self.blocks[start:]:
+            s = _apply(block, s)
+        return s
+
+    def predict(self, u: Any, y: Any) -> np.ndarray:
+        """One-step-ahead prediction: the last linear block's past outputs recovered
+        from the measured ``y``, its input simulated from ``u``."""
+        u_arr, y_arr = self._check_signals(u, y)
+        x_meas = self.x_from_y(y_arr[:, 0] - self.output_offset)
+        last = self.last_linear_index
+        w = self._run(u_arr[:, 0] - self.input_offset, last)
+        x_hat = self.blocks[last].predict(w, x_meas)  # type: ignore[attr-defined]
+        out = self._run_from(x_hat, last + 1) + self.output_offset
+        out[: self.max_lag] = y_arr[: self.max_lag, 0]
+        return out[:, None]
+
+    # ------------------------------------------------------------------ vectors
+    def _masks(self) -> list[np.ndarray]:
+        return [b.free_mask(self._after(self.blocks, i)) for i, b in enumerate(self.blocks)]
+
+    def free_parameters(self) -> np.ndarray:
+        """The identifiable parameters as one vector, block after block, without the
+        entries the normalisation fixes (``b_0`` after a nonlinear block, ``q_1``)."""
+        parts = [b.to_vector()[m] for b, m in zip(self.blocks, self._masks(), strict=True)]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def free_parameter_names(self) -> list[str]:
+        """Names of :meth:`free_parameters`' entries, e.g. ``f_0``, ``a_1``, ``q_2``."""
+        names: list[str] = []
+        for i, (block, mask) in enumerate(zip(self.blocks, self._masks(), strict=True)):
+            if isinstance(block, LinearBlock):
+                full = [f"a_{j}" for j in range(1, block.na + 1)]
+                full += [f"b_{j}" for j in range(block.nb)]
+                if len(self.linear_blocks) > 1:
+                    k = self.linear_blocks.index(block) + 1
+                    full = [f"{n[0]}{k}{n[1:]}" for n in full]
+            else:
+                full = _vector_names(block, "q" if block is self.output_block else None, i)
+            names += [n for n, keep in zip(full, mask, strict=True) if keep]
+        return names
+
+    def parameter_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of :meth:`free_parameters` (positive slopes, non-negative dead bands)."""
+        lows, highs = [], []
+        for block, mask in zip(self.blocks, self._masks(), strict=True):
+            lo, hi = block.bounds()
+            lows.append(lo[mask])
+            highs.append(hi[mask])
+        return np.concatenate(lows), np.concatenate(highs)
+
+    def block_columns(self) -> list[np.ndarray]:
+        """For every block, the column of :meth:`free_parameters` of each entry of its
+        vector (-1 for a fixed entry)."""
+        cols, pos = [], 0
+        for mask in self._masks():
+            c = np.full(mask.size, -1)
+            c[mask] = np.arange(pos, pos + int(mask.sum()))
+            pos += int(mask.sum())
+            cols.append(c)
+        return cols
+
+    def with_free_parameters(self, theta: Any) -> ChainModel:
+        """A copy with :meth:`free_parameters` replaced by ``theta`` (ranges kept)."""
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        n = self.free_parameters().size
+        if theta.size != n:
+            raise OrderError(f"expected {n} free parameters, got {theta.size}")
+        blocks, pos = [], 0
+        for block, mask in zip(self.blocks, self._masks(), strict=True):
+            full = block.to_vector()
+            k = int(mask.sum())
+            full[mask] = theta[pos : pos + k]
+            pos += k
+            blocks.append(block.with_vector(full) if k else block)
+        return self.with_blocks(blocks)
+
+    def with_blocks(self, blocks: Sequence[Block], **changes: Any) -> ChainModel:
+        """A model of the same class, names and offsets with other blocks (ranges kept
+        unless the offsets change)."""
+        kwargs: dict[str, Any] = dict(
+            sampling_time=self.sampling_time,
+            input_offset=self.input_offset,
+            output_offset=self.output_offset,
+            ranges=self.ranges,
+        )
+        if "input_offset" in changes or "output_offset" in changes:
+            kwargs["ranges"] = None
+        kwargs.update(changes)
+        return type(self)._from_blocks(self.inputs[0], self.outputs[0], tuple(blocks), **kwargs)
+
+    def replace(self, **changes: Any) -> ChainModel:
+        """A copy with ``sampling_time``, offsets or ``ranges`` changed."""
+        return self.with_blocks(self.blocks, **changes)
+
+    @classmethod
+    def _from_blocks(cls, input: str, output: str, blocks: tuple[Block, ...], **kwargs: Any):
+        model = cls.__new__(cls)
+        cls._check_shape(blocks)
+        ChainModel.__init__(model, input, output, blocks, **kwargs)
+        return model
+
+    @classmethod
+    def _check_shape(cls, blocks: tuple[Block, ...]) -> None:
+        """Named structures check that ``blocks`` has their shape."""
+
+    # ------------------------------------------------------------------ ranges
+    def estimation_ranges(self, experiments: Any) -> dict[str, list[float]]:
+        """Input ranges of the nonlinear blocks (and of ``u``) over estimation data, a
+        sequence of ``(u, y)`` arrays, each simulated from rest."""
+        seen: dict[str, list[np.ndarray]] = {}
+        for u, _ in experiments:
+            s = self._u(u)
+            for i, block in enumerate(self.blocks):
+                if i == 0 or not isinstance(block, LinearBlock):
+                    seen.setdefault(self._range_key(i), []).append(s)
+                s = _apply(block, s)
+        out = {}
+        for key, parts in seen.items():
+            values = np.concatenate(parts)
+            if key == "u" or np.all(np.isfinite(values)):
+                out[key] = [float(values.min()), float(values.max())]
+        return out
+
+    def with_ranges(self, experiments: Any) -> ChainModel:
+        """A copy that remembers the ranges seen in ``experiments`` (to flag
+        extrapolation later and to bound inversions)."""
+        return self.replace(ranges=self.estimation_ranges(experiments))
+
+    def record_ranges(self, experiments: Any) -> None:
+        """In place: :meth:`with_ranges` for code that builds a model step by step."""
+        self.ranges = self.estimation_ranges(experiments)
+
+    def extrapolation(self, u: Any) -> list[str]:
+        """Warnings when ``u`` (or a signal inside) leaves the recorded ranges of a block
+        that extrapolates unreliably (polynomials: a cubic can run away there)."""
+        notes: list[str] = []
+        if not self.ranges:
+            return notes
+        s = self._u(u)
+        for i, block in enumerate(self.blocks):
+            key = self._range_key(i)
+            if key in self.ranges and getattr(block, "warn_extrapolation", False):
+                notes += self._leaves(key, s, i)
+            s = _apply(block, s)
+        return notes
+
+    def _leaves(self, key: str, values: np.ndarray, i: int) -> list[str]:
+        lo, hi = self.ranges[key]
+        if key == "u":  # report in the user's units, not relative to the offset
+            lo, hi, values = (
+                lo + self.input_offset,
+                hi + self.input_offset,
+                values + self.input_offset,
+            )
+            what = f"input {self.inputs[0]!r}"
+        elif key == "x":
+            what = "the linear block's output x (input of the output block)"
+        else:
+            what = f"the input of block {i} ({self.blocks[i].kind})"
+        span = max(hi - lo, 1e-300)
+        out = (values < lo - 0.02 * span) | (values > hi + 0.02 * span)
+        if not out.any():
+            return []
+        worst = float(max(lo - values.min(), values.max() - hi)) / span
+        return [
+            f"{what} leaves the range seen in estimation [{lo:.4g}, {hi:.4g}] in "
+            f"{int(out.sum())} of {values.size} samples (by up to {100 * worst:.0f} % "
+            "of that range): the model extrapolates there"
+        ]
+
+    # ------------------------------------------------------------------ files
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "structure": self.structure,
+            "inputs": list(self.inputs),
+            "outputs": list(self.outputs),
+            "sampling_time": self.sampling_time,
+            "chain": [b.to_dict() for b in self.blocks],
+            "parameters": self.parameters,
+            "offsets": {
+                "inputs": {self.inputs[0]: self.input_offset},
+                "outputs": {self.outputs[0]: self.output_offset},
+            },
+            "estimation_ranges": self.ranges,
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ChainModel:
+        if "chain" in data:
+            blocks = tuple(block_from_dict(d) for d in data["chain"])
+        else:
+            blocks = cls._blocks_from_version1(data)
+        offsets = data.get("offsets", {})
+        try:
+            return cls._from_blocks(
+                data["inputs"][0],
+                data["outputs"][0],
+                blocks,
+                sampling_time=data.get("sampling_time"),
+                input_offset=offsets.get("inputs", {}).get(data["inputs"][0], 0.0),
+                output_offset=offsets.get("outputs", {}).get(data["outputs"][0], 0.0),
+                ranges=data.get("estimation_ranges", {}),
+            )
+        except OrderError as exc:
+            raise ModelFileError(f"the {cls.structure} model's blocks do not fit: {exc}") from None
+
+    @classmethod
+    def _blocks_from_version1(cls, data: dict[str, Any]) -> tuple[Block, ...]:
+        """Blocks of a model file written before chains (orders, block kinds, SPEC names)."""
+        params = dict(data["parameters"])
+        kinds = data.get("blocks", {})
+        orders = data["orders"]
+        blocks: list[Block] = []
+        if kinds.get("input"):
+            kind = kinds["input"]
+            back = {v: k for k, v in _SPEC_NAMES.get(kind, {}).items()}
+            block_params = {
+                back.get(k, k): v for k, v in params.items() if k not in ("a", "b", "q")
+            }
+            if kind == "polynomial":
+                block_params.setdefault("constant", True)
+            blocks.append(block_from_dict({"kind": kind, **block_params}))
+        blocks.append(
+            LinearBlock(
+                int(orders["na"]), int(orders["nb"]), int(orders["nk"]), params["a"], params["b"]
+            )
+        )
+        if kinds.get("output"):
+            if kinds["output"] != "polynomial" or "q" not in params:
+                raise ModelFileError("the output block must be a polynomial with parameters 'q'")
+            blocks.append(Polynomial(params["q"], constant=False))
+        return tuple(blocks)
+
+
+def _apply(block: Block, s: np.ndarray) -> np.ndarray:
+    """One block on a signal, from rest."""
+    if isinstance(block, LinearBlock):
+        return block.simulate(s)
+    if isinstance(block, DynamicBlock):
+        return block.simulate(s, x0=block.rest_state(float(s[0])) if s.size else 0.0)
+    return np.asarray(block(s), dtype=float)
+
+
+def _vector_names(block: Block, prefix: str | None, i: int) -> list[str]:
+    """Names of a nonlinear block's vector entries: ``f_0, f_1, ..``, ``q_1, ..``, ``c_left``."""
+    rename = _SPEC_NAMES.get(block.kind, {}) if i == 0 else {}
+    names = []
+    for key, value in block.parameters.items():
+        if isinstance(value, bool):
+            continue
+        if isinstance(value, list | tuple):
+            base = prefix or rename.get(key, key)
+            first = 1 if prefix == "q" else 0
+            names += [f"{base}_{j + first}" for j in range(len(value))]
+        else:
+            names.append(key)
+    return names
+
+
+class BlockModel(ChainModel):
+    """The ``N_1 - L - N_2`` cascade with optional outer blocks; use the named subclasses.
 
     Parameters
     ----------
@@ -75,9 +564,9 @@ class BlockModel(Model):
         Signal names.
     input_block : Block, optional
         Static block or backlash; ``None`` means ``w = u``.
-    output_block : Polynomial, optional
-        Polynomial without constant term, ``y = q_1 x + q_2 x^2 + ...``; ``None`` means
-        ``y = x``.
+    output_block : StaticBlock, optional
+        Static block after the linear one (B3: a polynomial without constant term,
+        ``y = q_1 x + q_2 x^2 + ...``, ``q_1 = 1``); ``None`` means ``y = x``.
     na, nb, nk : int
         Orders of the linear block (MATLAB convention).
     a, b : sequence of float, optional
@@ -97,7 +586,7 @@ class BlockModel(Model):
         output: Any,
         *,
         input_block: Block | None = None,
-        output_block: Polynomial | None = None,
+        output_block: StaticBlock | None = None,
         na: int = 1,
         nb: int = 1,
         nk: int = 1,
@@ -107,406 +596,118 @@ class BlockModel(Model):
         input_offset: float = 0.0,
         output_offset: float = 0.0,
     ) -> None:
-        self.inputs = _one_name(input, "input")
-        self.outputs = _one_name(output, "output")
-        for flag, block, what in (
-            (self.requires_input_block, input_block, "an input block"),
-            (self.requires_output_block, output_block, "an output block"),
-        ):
-            if flag is True and block is None:
-                raise OrderError(f"a {self.structure} model needs {what}")
-            if flag is False and block is not None:
-                raise OrderError(f"a {self.structure} model has no {what[3:]}")
-        if output_block is not None and (
-            not isinstance(output_block, Polynomial) or output_block.constant
-        ):
-            raise OrderError("the output block must be a Polynomial without constant term (B3)")
-        self.input_block = input_block
-        self.output_block = output_block
-        self.sampling_time = sampling_time
-        self.input_offset = float(input_offset)
-        self.output_offset = float(output_offset)
-        #: Ranges of the block inputs seen in the estimation data, ``{"u": [lo, hi],
-        #: "x": [lo, hi]}`` (relative to the offsets); set by :meth:`record_ranges`.
-        self.ranges: dict[str, list[float]] = {}
-        for name, value in (("na", na), ("nb", nb), ("nk", nk)):
-            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
-                raise OrderError(
-                    f"{name}={value!r}: a block-oriented (single-input single-output) model "
-                    "takes one whole number >= 0 per order"
-                )
-        if nb < 1:
-            raise OrderError(f"nb={nb}: a block-oriented model needs nb >= 1")
-        if b is None:
-            b = np.zeros(nb)
-            if input_block is not None:
-                b[0] = 1.0
-        b = np.asarray(b, dtype=float).reshape(-1)
-        if input_block is not None and b.size and b[0] != 1.0:
-            raise OrderError(f"b_0 is fixed to 1 when there is an input block (got {b[0]})")
-        if output_block is not None and output_block.coefficients[0] != 1.0:
-            raise OrderError(
-                f"q_1 is fixed to 1 (normalisation B3); got {output_block.coefficients[0]}"
-            )
-        self.linear = ARX(
-            ["w"],
-            ["x"],
-            na,
-            nb,
-            nk,
-            a={"x": {"x": np.zeros(na) if a is None else a}},
-            b={"x": {"w": b}},
+        blocks: list[Block] = []
+        if input_block is not None:
+            blocks.append(input_block)
+        blocks.append(LinearBlock(na, nb, nk, a, b, unit_b0=input_block is not None))
+        if output_block is not None:
+            blocks.append(output_block)
+        type(self)._check_shape(tuple(blocks))
+        super().__init__(
+            input,
+            output,
+            blocks,
+            sampling_time=sampling_time,
+            input_offset=input_offset,
+            output_offset=output_offset,
         )
 
-    # ------------------------------------------------------------------ structure
+    @classmethod
+    def _check_shape(cls, blocks: tuple[Block, ...]) -> None:
+        lin = [i for i, b in enumerate(blocks) if isinstance(b, LinearBlock)]
+        if len(lin) != 1:
+            raise OrderError(f"a {cls.structure or 'cascade'} model has one linear block")
+        has_in, has_out = lin[0] == 1, len(blocks) > lin[0] + 1
+        if lin[0] > 1 or len(blocks) > lin[0] + 2:
+            raise OrderError(
+                f"a {cls.structure or 'cascade'} model is input block - linear - output block"
+            )
+        for flag, present, what in (
+            (cls.requires_input_block, has_in, "an input block"),
+            (cls.requires_output_block, has_out, "an output block"),
+        ):
+            if flag is True and not present:
+                raise OrderError(f"a {cls.structure} model needs {what}")
+            if flag is False and present:
+                raise OrderError(f"a {cls.structure} model has no {what[3:]}")
+        if has_out and not isinstance(blocks[-1], StaticBlock):
+            raise OrderError("the output block must be a static block")
+        if has_out and isinstance(blocks[-1], Polynomial) and blocks[-1].constant:
+            raise OrderError("the output block must be a Polynomial without constant term (B3)")
+
+    @classmethod
+    def default_blocks(cls, r1: int = 3, r2: int = 3) -> tuple[Block | None, Block | None]:
+        """Templates of the blocks this structure fits by default: the two-segment
+        polynomial of order ``r1`` (B1) in, the identity polynomial of degree ``r2``
+        (B3) out; None for a block the structure has not."""
+        return (
+            TwoSegmentPolynomial.template(r1) if cls.requires_input_block else None,
+            Polynomial.template(r2, constant=False) if cls.requires_output_block else None,
+        )
+
+    @classmethod
+    def cascade(
+        cls,
+        input: Any,
+        output: Any,
+        *,
+        input_block: Block | None,
+        output_block: Block | None,
+        **kwargs: Any,
+    ) -> BlockModel:
+        """A model of this structure from its blocks, whatever its constructor takes."""
+        model = cls.__new__(cls)
+        BlockModel.__init__(
+            model, input, output, input_block=input_block, output_block=output_block, **kwargs
+        )
+        return model
+
+    # the single linear block's orders and coefficients
     @property
     def na(self) -> int:
-        return int(self.linear.na[0, 0])
+        return self.linear.na
 
     @property
     def nb(self) -> int:
-        return int(self.linear.nb[0, 0])
+        return self.linear.nb
 
     @property
     def nk(self) -> int:
-        return int(self.linear.nk[0, 0])
+        return self.linear.nk
 
     @property
     def a(self) -> np.ndarray:
         """``[a_1..a_na]`` of the linear block."""
-        return self.linear.a["x"]["x"]
+        return self.linear.a
 
     @property
     def b(self) -> np.ndarray:
         """``[b_0..b_{nb-1}]`` of the linear block."""
-        return self.linear.b["x"]["w"]
-
-    @property
-    def max_lag(self) -> int:
-        return self.linear.max_lag
+        return self.linear.b
 
     @property
     def fixed_b0(self) -> bool:
         return self.input_block is not None
 
-    def is_stable(self, margin: float = 0.0) -> bool:
-        """True when the linear block's poles lie inside the circle of radius 1 - margin."""
-        return self.linear.is_stable(margin)
-
-    @property
-    def parameters(self) -> dict[str, Any]:
-        """Parameters under SPEC's names: ``f, p`` / backlash names, ``a, b``, ``q``."""
-        out: dict[str, Any] = {}
-        if self.input_block is not None:
-            rename = _SPEC_NAMES.get(self.input_block.kind, {})
-            for key, value in self.input_block.parameters.items():
-                if key == "constant" and value is True:
-                    continue  # the usual case; kept only when there is no constant term
-                out[rename.get(key, key)] = value
-        out["a"] = self.a.tolist()
-        out["b"] = self.b.tolist()
-        if self.output_block is not None:
-            out["q"] = self.output_block.coefficients.tolist()
-        return out
-
-    # ------------------------------------------------------------------ dynamics
-    def _u(self, u: Any) -> np.ndarray:
-        u, _ = self._check_signals(u)
-        return u[:, 0] - self.input_offset
-
-    def internal(self, u: Any, x0: float | None = None) -> np.ndarray:
-        """The linear block's input ``w = N_1(u)`` (``u`` itself without input block).
-
-        A backlash starts from ``x0``; by default from the middle of its dead band at
-        the first input, so that no start-up jump is simulated.
-        """
-        u = self._u(u)
-        block = self.input_block
-        if block is None:
-            return u.copy()
-        if isinstance(block, DynamicBlock):
-            if x0 is None:
-                x0 = self._backlash_rest(block, u[0]) if isinstance(block, Backlash) else 0.0
-            return block.simulate(u, x0=x0)
-        return np.asarray(block(u), dtype=float)
-
-    @staticmethod
-    def _backlash_rest(block: Backlash, u0: float) -> float:
-        return 0.5 * (block.m_left * (u0 + block.c_left) + block.m_right * (u0 - block.c_right))
-
     def monotone_branch(self) -> tuple[float, float]:
-        """The interval around ``x = 0`` on which the output polynomial is monotone.
-
-        ``q_1 = 1`` makes it increasing at 0; the branch runs to the nearest stationary
-        points on either side (infinite where there is none).
-        """
-        coeffs = np.concatenate(([0.0], self.output_block.coefficients))
-        crit = np.polynomial.polynomial.polyroots(np.polynomial.polynomial.polyder(coeffs))
-        real = crit[np.abs(crit.imag) < 1e-12].real if crit.size else np.zeros(0)
-        lo = max((r for r in real if r < 0), default=-np.inf)
-        hi = min((r for r in real if r > 0), default=np.inf)
-        return float(lo), float(hi)
-
-    def x_from_y(self, y: np.ndarray) -> np.ndarray:
-        """``x = N_2^{-1}(y)`` (``y`` relative to the offset) on the monotone branch.
-
-        The polynomial need only be monotone over the values the model works with: the
-        branch around 0 must contain the range of ``x`` seen in estimation (when
-        recorded). Outputs beyond the branch's reach map to its ends.
-        """
-        if self.output_block is None:
-            return y
-        lo, hi = self.monotone_branch()
-        seen = self.ranges.get("x")
-        if seen is not None and (seen[0] < lo or seen[1] > hi):
-            raise EstimationError(
-                f"the output block {self.output_block.coefficients.tolist()} is not monotone "
-                f"over the range of x it was fitted on [{seen[0]:.4g}, {seen[1]:.4g}] (it turns "
-                f"at {lo if seen[0] < lo else hi:.4g}), so past x cannot be recovered from the "
-                "measured y; one-step prediction is not defined. Use free-run simulation"
-            )
-        scale = 1.0 + float(np.max(np.abs(y), initial=0.0))
-        big = 1e6 * scale
-        rng = (max(lo, -big), min(hi, big))
-        try:
-            return self.output_block.inverse(y, u_range=rng, clip=True)
-        except BlockidError as exc:
-            raise EstimationError(
-                f"the output block {self.output_block.coefficients.tolist()} cannot be inverted "
-                f"on its monotone branch {rng} ({exc}); one-step prediction is not defined"
-            ) from None
-
-    def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
-        """Free-run simulation from the input alone.
-
-        Without ``y_initial`` the linear block starts at rest; with it, its first
-        ``max_lag`` outputs are set from the measurement (through ``N_2^{-1}`` when the
-        output block is monotone there; otherwise the block starts at rest).
-        """
-        w = self.internal(u)
-        x_init = None
-        if y_initial is not None:
-            _, y0 = self._check_signals(np.zeros((len(np.atleast_1d(y_initial)), 1)), y_initial)
-            y0 = y0[: self.max_lag, 0] - self.output_offset
-            try:
-                x_init = self.x_from_y(y0)[:, None]
-            except BlockidError:
-                x_init = None
-        x = self.linear.simulate(w[:, None], x_init)[:, 0]
-        y = x if self.output_block is None else self.output_block(x)
-        return (y + self.output_offset)[:, None]
-
-    def predict(self, u: Any, y: Any) -> np.ndarray:
-        """One-step-ahead prediction: past ``x`` recovered from the measured ``y``."""
-        u_arr, y_arr = self._check_signals(u, y)
-        y_rel = y_arr[:, 0] - self.output_offset
-        x_meas = self.x_from_y(y_rel)
-        w = self.internal(u_arr)
-        x_hat = self.linear.predict(w[:, None], x_meas[:, None])[:, 0]
-        y_hat = x_hat if self.output_block is None else self.output_block(x_hat)
-        out = y_hat + self.output_offset
-        out[: self.max_lag] = y_arr[: self.max_lag, 0]
-        return out[:, None]
-
-    # ------------------------------------------------------------------ vectors
-    def free_parameters(self) -> np.ndarray:
-        """The identifiable parameters as one vector (fixed ``b_0``, ``q_1`` left out).
-
-        Order: input block, ``a``, ``b`` (without ``b_0`` if fixed), ``q_2..``.
-        """
-        parts = []
-        if self.input_block is not None:
-            parts.append(_block_vector(self.input_block))
-        parts.append(self.a)
-        parts.append(self.b[1:] if self.fixed_b0 else self.b)
-        if self.output_block is not None:
-            parts.append(self.output_block.coefficients[1:])
-        return np.concatenate(parts)
-
-    def with_free_parameters(self, theta: Any) -> BlockModel:
-        """A copy with :meth:`free_parameters` replaced by ``theta``."""
-        theta = np.asarray(theta, dtype=float).reshape(-1)
-        if theta.size != self.free_parameters().size:
-            raise OrderError(
-                f"expected {self.free_parameters().size} free parameters, got {theta.size}"
-            )
-        pos = 0
-        input_block = None
-        if self.input_block is not None:
-            n = _block_vector(self.input_block).size
-            input_block = _block_with_vector(self.input_block, theta[pos : pos + n])
-            pos += n
-        a = theta[pos : pos + self.na]
-        pos += self.na
-        nfree_b = self.nb - 1 if self.fixed_b0 else self.nb
-        b = theta[pos : pos + nfree_b]
-        pos += nfree_b
-        if self.fixed_b0:
-            b = np.concatenate(([1.0], b))
-        output_block = None
-        if self.output_block is not None:
-            output_block = Polynomial(np.concatenate(([1.0], theta[pos:])), constant=False)
-        return self._replace(input_block=input_block, output_block=output_block, a=a, b=b)
-
-    def record_ranges(self, experiments: Any) -> None:
-        """Remember the ranges of ``u`` and of the linear block's output ``x`` over
-        estimation data (a sequence of ``(u, y)`` arrays), to flag extrapolation later."""
-        us, xs = [], []
-        for u, _ in experiments:
-            us.append(self._u(u))
-            xs.append(self.linear.simulate(self.internal(u)[:, None])[:, 0])
-        u_all, x_all = np.concatenate(us), np.concatenate(xs)
-        self.ranges = {"u": [float(u_all.min()), float(u_all.max())]}
-        if self.output_block is not None and np.all(np.isfinite(x_all)):
-            self.ranges["x"] = [float(x_all.min()), float(x_all.max())]
-
-    def extrapolation(self, u: Any) -> list[str]:
-        """Warnings when ``u`` (or the simulated ``x``) leaves the recorded ranges.
-
-        A polynomial block fitted on a range says nothing outside it; a cubic output
-        block can run away there.
-        """
-        notes = []
-        if not self.ranges:
-            return notes
-        u_rel = self._u(u)
-        checks = []
-        kind = getattr(self.input_block, "kind", "")
-        if kind in _POLYNOMIAL_KINDS:  # piecewise-linear blocks extrapolate by construction
-            checks.append(("u", u_rel, f"input {self.inputs[0]!r}"))
-        if "x" in self.ranges:
-            x = self.linear.simulate(self.internal(u)[:, None])[:, 0]
-            checks.append(("x", x, "the linear block's output x (input of the output block)"))
-        for key, values, what in checks:
-            lo, hi = self.ranges[key]
-            if key == "u":  # report in the user's units, not relative to the offset
-                lo, hi, values = (
-                    lo + self.input_offset,
-                    hi + self.input_offset,
-                    (values + self.input_offset),
-                )
-            span = max(hi - lo, 1e-300)
-            out = (values < lo - 0.02 * span) | (values > hi + 0.02 * span)
-            if out.any():
-                worst = float(max(lo - values.min(), values.max() - hi)) / span
-                notes.append(
-                    f"{what} leaves the range seen in estimation [{lo:.4g}, {hi:.4g}] in "
-                    f"{int(out.sum())} of {values.size} samples (by up to {100 * worst:.0f} % "
-                    "of that range): the model extrapolates there"
-                )
-        return notes
+        """The interval around ``x = 0`` on which the output polynomial is monotone."""
+        return self.output_block.monotone_branch()  # type: ignore[union-attr]
 
     def _replace(self, **changes: Any) -> BlockModel:
-        kwargs = dict(
-            input_block=self.input_block,
-            output_block=self.output_block,
-            na=self.na,
-            nb=self.nb,
-            nk=self.nk,
-            a=self.a,
-            b=self.b,
-            sampling_time=self.sampling_time,
-            input_offset=self.input_offset,
-            output_offset=self.output_offset,
-        )
-        kwargs.update(changes)
-        cls = type(self)
-        new = cls(self.inputs[0], self.outputs[0], **_ctor_kwargs(cls, kwargs))
-        if "input_offset" not in changes and "output_offset" not in changes:
-            new.ranges = dict(self.ranges)
-        return new
-
-    # ------------------------------------------------------------------ files
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "structure": self.structure,
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "sampling_time": self.sampling_time,
-            "orders": {"na": self.na, "nb": self.nb, "nk": self.nk},
-            "blocks": {
-                "input": None if self.input_block is None else self.input_block.kind,
-                "output": None if self.output_block is None else "polynomial",
-            },
-            "parameters": self.parameters,
-            "offsets": {
-                "inputs": {self.inputs[0]: self.input_offset},
-                "outputs": {self.outputs[0]: self.output_offset},
-            },
-            "estimation_ranges": self.ranges,
-        }
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> BlockModel:
-        params = dict(data["parameters"])
-        kinds = data.get("blocks", {})
-        input_block = None
-        if kinds.get("input"):
-            kind = kinds["input"]
-            back = {v: k for k, v in _SPEC_NAMES.get(kind, {}).items()}
-            block_params = {
-                back.get(k, k): v for k, v in params.items() if k not in ("a", "b", "q")
-            }
-            if kind == "polynomial":
-                block_params.setdefault("constant", True)
-            input_block = block_from_dict({"kind": kind, **block_params})
-        output_block = None
-        if kinds.get("output"):
-            if kinds["output"] != "polynomial" or "q" not in params:
-                raise ModelFileError("the output block must be a polynomial with parameters 'q'")
-            output_block = Polynomial(params["q"], constant=False)
-        orders = data["orders"]
-        offsets = data.get("offsets", {})
-        kwargs = dict(
-            input_block=input_block,
-            output_block=output_block,
-            na=int(orders["na"]),
-            nb=int(orders["nb"]),
-            nk=int(orders["nk"]),
-            a=params["a"],
-            b=params["b"],
-            sampling_time=data.get("sampling_time"),
-            input_offset=offsets.get("inputs", {}).get(data["inputs"][0], 0.0),
-            output_offset=offsets.get("outputs", {}).get(data["outputs"][0], 0.0),
-        )
-        model = cls(data["inputs"][0], data["outputs"][0], **_ctor_kwargs(cls, kwargs))
-        model.ranges = {
-            k: [float(v[0]), float(v[1])] for k, v in data.get("estimation_ranges", {}).items()
-        }
-        return model
-
-
-def _ctor_kwargs(cls: type, kwargs: dict[str, Any]) -> dict[str, Any]:
-    """Drop the block arguments a subclass's constructor does not take."""
-    if cls.requires_input_block is False:
-        kwargs.pop("input_block", None)
-    if cls.requires_output_block is False:
-        kwargs.pop("output_block", None)
-    return kwargs
-
-
-def _block_vector(block: Block) -> np.ndarray:
-    if hasattr(block, "to_vector"):
-        return np.asarray(block.to_vector(), dtype=float)
-    values = [v for k, v in block.parameters.items() if not isinstance(v, bool)]
-    return np.concatenate([np.atleast_1d(np.asarray(v, dtype=float)) for v in values])
-
-
-def _block_with_vector(block: Block, theta: np.ndarray) -> Block:
-    if hasattr(block, "with_vector"):
-        return block.with_vector(theta)
-    if isinstance(block, Backlash):
-        return Backlash(*theta)
-    params, pos = {}, 0
-    for key, value in block.parameters.items():
-        if isinstance(value, bool):
-            params[key] = value
-            continue
-        size = np.atleast_1d(np.asarray(value)).size
-        chunk = theta[pos : pos + size]
-        params[key] = chunk.tolist() if isinstance(value, list) else float(chunk[0])
-        pos += size
-    return type(block).from_dict({"kind": block.kind, **params})
+        """A copy with blocks, ``a``/``b``, offsets or sampling time changed."""
+        blocks = list(self.blocks)
+        k = self.last_linear_index
+        if "input_block" in changes and self.input_block is not None:
+            blocks[0] = changes.pop("input_block")
+        if "output_block" in changes and self.output_block is not None:
+            blocks[-1] = changes.pop("output_block")
+        a, b = changes.pop("a", None), changes.pop("b", None)
+        if a is not None or b is not None:
+            g = self.linear
+            blocks[k] = LinearBlock(
+                g.na, g.nb, g.nk, g.a if a is None else a, g.b if b is None else b
+            )
+        return self.with_blocks(blocks, **changes)
 
 
 class Hammerstein(BlockModel):
@@ -530,9 +731,19 @@ class Hammerstein(BlockModel):
     def __init__(self, input: Any, output: Any, *, input_block: StaticBlock, **kwargs: Any):
         super().__init__(input, output, input_block=input_block, **kwargs)
 
+    @classmethod
+    def _check_shape(cls, blocks: tuple[Block, ...]) -> None:
+        super()._check_shape(blocks)
+        if not isinstance(blocks[0], StaticBlock):
+            raise OrderError(
+                f"a hammerstein model needs a static input block, got {blocks[0].kind}; "
+                "use the backlash structure for a backlash"
+            )
+
 
 class Wiener(BlockModel):
-    """Linear block followed by a static output polynomial (``L - N_2``), ``q_1 = 1``.
+    """Linear block followed by a static output block (``L - N_2``), by default the
+    polynomial of B3 with ``q_1 = 1``.
 
     .. math:: A(z^{-1}) x(k) = z^{-n_k} B(z^{-1}) u(k),\\quad y(k) = \\sum_m q_m x(k)^m
     """
@@ -541,7 +752,7 @@ class Wiener(BlockModel):
     requires_input_block = False
     requires_output_block = True
 
-    def __init__(self, input: Any, output: Any, *, output_block: Polynomial, **kwargs: Any):
+    def __init__(self, input: Any, output: Any, *, output_block: StaticBlock, **kwargs: Any):
         super().__init__(input, output, output_block=output_block, **kwargs)
 
 
@@ -558,12 +769,20 @@ class HammersteinWiener(BlockModel):
         output: Any,
         *,
         input_block: StaticBlock,
-        output_block: Polynomial,
+        output_block: StaticBlock,
         **kwargs: Any,
     ):
         super().__init__(
             input, output, input_block=input_block, output_block=output_block, **kwargs
         )
+
+    @classmethod
+    def _check_shape(cls, blocks: tuple[Block, ...]) -> None:
+        super()._check_shape(blocks)
+        if not isinstance(blocks[0], StaticBlock):
+            raise OrderError(
+                f"a hammerstein-wiener model needs a static input block, got {blocks[0].kind}"
+            )
 
 
 class BacklashModel(BlockModel):
@@ -585,12 +804,66 @@ class BacklashModel(BlockModel):
     requires_output_block = False
 
     def __init__(self, input: Any, output: Any, *, input_block: Backlash, **kwargs: Any):
-        if not isinstance(input_block, Backlash):
-            raise OrderError("a backlash model's input block must be a Backlash")
         super().__init__(input, output, input_block=input_block, **kwargs)
 
+    @classmethod
+    def default_blocks(cls, r1: int = 3, r2: int = 3) -> tuple[Block | None, Block | None]:
+        return Backlash.template(), None
 
-#: Structure name -> class, for the command line and the fitting dispatcher.
+    @classmethod
+    def _check_shape(cls, blocks: tuple[Block, ...]) -> None:
+        super()._check_shape(blocks)
+        if not isinstance(blocks[0], Backlash):
+            raise OrderError("a backlash model's input block must be a Backlash")
+
+
+class WienerHammerstein(ChainModel):
+    """Linear, static, linear (``L_1 - N - L_2``): e.g. the Wiener-Hammerstein benchmark.
+
+    .. math::
+
+        A_1 x = z^{-n_{k1}} B_1 u, \\quad v = N(x), \\quad
+        A_2 y = z^{-n_{k2}} B_2 v, \\qquad b_{2,0} = 1
+
+    and ``N`` fixes its own input gain (``q_1 = 1`` for the polynomial of B3).
+
+    Parameters
+    ----------
+    input, output : str
+    first, static, second : blocks
+        :class:`~blockid.blocks.linear.LinearBlock`, a static block, a linear block.
+    **kwargs
+        ``sampling_time``, offsets, ``ranges`` as for :class:`ChainModel`.
+    """
+
+    structure = "wiener-hammerstein"
+
+    def __init__(
+        self,
+        input: Any,
+        output: Any,
+        *,
+        first: LinearBlock,
+        static: StaticBlock,
+        second: LinearBlock,
+        **kwargs: Any,
+    ) -> None:
+        blocks = (first, static, second)
+        self._check_shape(blocks)
+        super().__init__(input, output, blocks, **kwargs)
+
+    @classmethod
+    def _check_shape(cls, blocks: tuple[Block, ...]) -> None:
+        kinds = [
+            isinstance(blocks[i], t) for i, t in enumerate((LinearBlock, StaticBlock, LinearBlock))
+        ]
+        if len(blocks) != 3 or not all(kinds):
+            raise OrderError(
+                "a wiener-hammerstein model is linear block, static block, linear block"
+            )
+
+
+#: Structure name -> class of the cascades with one linear block.
 BLOCK_STRUCTURES = {
     cls.structure: cls for cls in (Hammerstein, Wiener, HammersteinWiener, BacklashModel)
 }

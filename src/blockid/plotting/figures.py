@@ -62,34 +62,43 @@ def plot_model_output(
 def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> Any:
     """Identified nonlinear blocks of a block-oriented model, truth dashed if given.
 
-    ``u`` (the input data) sets the input range; the output block is drawn over the
-    range of the linear block's output when ``u`` is simulated.
+    ``u`` (the input data) sets each block's input range: the range of the signal that
+    enters it when ``u`` is simulated.
     """
     from blockid.blocks.base import DynamicBlock
+    from blockid.blocks.linear import LinearBlock
 
-    panels = [b for b in ("input_block", "output_block") if getattr(model, b, None) is not None]
+    panels = [(i, b) for i, b in enumerate(model.blocks) if not isinstance(b, LinearBlock)]
     fig, axes = _figure(max(len(panels), 1), width=5.0, height=3.6)
-    u_rel = None if u is None else np.asarray(u, float).ravel() - model.input_offset
-    for ax, which in zip(axes, panels, strict=False):
-        block = getattr(model, which)
-        ref = getattr(truth, which, None) if truth is not None else None
+    inputs = None if u is None else model.block_inputs(np.asarray(u, float).reshape(-1, 1))
+    ref_blocks = getattr(truth, "blocks", None)
+    for ax, (i, block) in zip(axes, panels, strict=False):
+        ref = None
+        if ref_blocks is not None and len(ref_blocks) == len(model.blocks):
+            ref = ref_blocks[i] if type(ref_blocks[i]) is type(block) else None
+        s = None if inputs is None else inputs[i]
         if isinstance(block, DynamicBlock):
-            block.plot(ax=ax, u=u_rel, truth=ref)
-        elif which == "input_block":
-            rng = None if u_rel is None else (float(u_rel.min()), float(u_rel.max()))
-            block.plot(ax=ax, u_range=rng, truth=ref)
+            block.plot(ax=ax, u=s, truth=ref)
         else:
-            rng = None
-            if u is not None:
-                x = model.linear.simulate(model.internal(u)[:, None])[:, 0]
-                rng = (float(x.min()), float(x.max()))
-            block.plot(ax=ax, u_range=rng, truth=ref)
-            ax.set_xlabel("x (output of the linear block)")
-            ax.set_ylabel("y = N2(x) (relative to the output offset)")
-        if which == "input_block":
+            rng = None if s is None else (float(np.min(s)), float(np.max(s)))
+            if hasattr(block, "plot"):
+                block.plot(ax=ax, u_range=rng, truth=ref)
+            else:
+                grid = np.linspace(*(rng or (-1.0, 1.0)), 400)
+                ax.plot(grid, block(grid), label="identified")
+        if i == 0:
             ax.set_xlabel(f"u = {model.inputs[0]} (relative to the input offset)")
             ax.set_ylabel("w = N1(u)")
-        ax.set_title(f"{which.replace('_', ' ')}: {block.kind}", fontsize=9)
+            which = "input block"
+        elif block is model.output_block:
+            ax.set_xlabel("x (output of the linear block)")
+            ax.set_ylabel("y = N2(x) (relative to the output offset)")
+            which = "output block"
+        else:
+            ax.set_xlabel(f"input of block {i}")
+            ax.set_ylabel(f"output of block {i}")
+            which = f"block {i}"
+        ax.set_title(f"{which}: {block.kind}", fontsize=9)
     fig.tight_layout()
     return fig
 

@@ -1,0 +1,532 @@
+"""The one registry of model structures, their estimators and their options.
+
+Every structure is declared here once: the blocks it has, the methods that identify it
+(the first is the default), and for each method the options it takes. Everything else
+is generated from this declaration: :func:`~blockid.fitting.fit_model` resolves and
+checks options with it, the command line builds its ``--help`` and its flags from it,
+the model-level estimators (:mod:`blockid.fitting.estimator`) take their keywords from
+it, and the tests check that every option reaches its fitter.
+
+An option is declared once in :data:`OPTIONS` with its type, its allowed range and its
+help text. :meth:`Option.convert` turns a Python value *or* the text a user typed (on
+the command line or in a ``key=value`` network spec) into the typed value, and names the
+Python parameter when the value is wrong (the command line maps that name to its flag).
+
+=====================  ==========================================  ==================
+structure              methods                                     default
+=====================  ==========================================  ==================
+arx                    batch, rls, aw-rls, hierarchical-rls        batch
+hammerstein            simulation-error, key-term-rls              simulation-error
+wiener                 simulation-error, key-term-rls              simulation-error
+hammerstein-wiener     simulation-error, key-term-rls              simulation-error
+backlash               simulation-error, aw-rls                    simulation-error
+=====================  ==========================================  ==================
+
+Modules are named as text and imported only when a fit runs, so that importing the
+registry (and starting the command line) stays cheap.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from blockid.errors import ParameterError
+
+__all__ = [
+    "OPTIONS",
+    "STRUCTURES",
+    "Method",
+    "Option",
+    "Structure",
+    "get_structure",
+    "option_flag",
+    "parse_orders",
+]
+
+
+# ----------------------------------------------------------------------------- values
+def _text(value: Any) -> str | None:
+    return value.strip() if isinstance(value, str) else None
+
+
+def parse_orders(value: Any, name: str) -> Any:
+    """An order: a whole number ``>= 0``, or for ARX a matrix (rows: outputs).
+
+    Text ``"2"`` gives 2 and ``"2,1;1,2"`` gives ``[[2, 1], [1, 2]]``.
+
+    >>> parse_orders("2,1;1,2", "na"), parse_orders(3, "nb")
+    ([[2, 1], [1, 2]], 3)
+    """
+    text = _text(value)
+    if text is None:
+        if isinstance(value, bool):
+            raise ParameterError(f"{name} must be a whole number >= 0, got {value!r}")
+        return value  # numbers and matrices are checked by the model
+    try:
+        rows = [[int(v) for v in row.replace(" ", ",").split(",") if v] for row in text.split(";")]
+    except ValueError:
+        rows = []
+    if not rows or not all(rows):
+        raise ParameterError(
+            f"{name}={text!r}: give a whole number, or a matrix with rows separated by ';' "
+            "and entries by ',' (rows: outputs), e.g. 2 or '2,1;1,2'"
+        )
+    if len(rows) == 1 and len(rows[0]) == 1:
+        return rows[0][0]
+    return rows
+
+
+def _count(value: Any, name: str, low: float) -> int:
+    text = _text(value)
+    if text is not None:
+        try:
+            value = int(text)
+        except ValueError:
+            raise ParameterError(
+                f"{name} must be a whole number >= {low:g}, got {text!r}"
+            ) from None
+    if isinstance(value, bool) or not isinstance(value, int) and not _is_integer(value):
+        raise ParameterError(f"{name} must be a whole number >= {low:g}, got {value!r}")
+    if value < low:
+        raise ParameterError(f"{name} must be a whole number >= {low:g}, got {value!r}")
+    return int(value)
+
+
+def _is_integer(value: Any) -> bool:
+    try:
+        import numpy as np
+    except ImportError:  # pragma: no cover - numpy is a dependency
+        return False
+    return isinstance(value, np.integer)
+
+
+def _real(value: Any, name: str, low: float | None, high: float | None, open_low: bool) -> float:
+    text = _text(value)
+    try:
+        number = float(text if text is not None else value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number, got {value!r}") from None
+    if isinstance(value, bool) or math.isnan(number):
+        raise ParameterError(f"{name} must be a number, got {value!r}")
+    if low is not None and (number < low or (open_low and number == low)):
+        rel = ">" if open_low else ">="
+        raise ParameterError(f"{name} must be {rel} {low:g}, got {number:g}")
+    if high is not None and number > high:
+        raise ParameterError(f"{name} must be <= {high:g}, got {number:g}")
+    return number
+
+
+def _boolean(value: Any, name: str) -> bool:
+    text = _text(value)
+    if text is not None:
+        low = text.lower()
+        if low in ("true", "yes", "1", "on"):
+            return True
+        if low in ("false", "no", "0", "off"):
+            return False
+        raise ParameterError(f"{name} must be true or false, got {text!r}")
+    if isinstance(value, bool) or type(value).__name__ == "bool_":
+        return bool(value)
+    raise ParameterError(f"{name} must be True or False, got {value!r}")
+
+
+def _forgetting(value: Any, name: str) -> Any:
+    from blockid.estimators.forgetting import ForgettingSchedule
+
+    try:
+        return ForgettingSchedule.parse(value)
+    except ParameterError as exc:
+        raise ParameterError(f"{name}: {exc}") from None
+
+
+def _block(value: Any, name: str) -> Any:
+    from blockid.blocks.base import Block, block_template
+
+    if isinstance(value, Block):
+        return value
+    text = _text(value)
+    if text is None:
+        raise ParameterError(
+            f"{name} must be a block (e.g. DeadZone(0, 0)) or its name, such as 'dead-zone' "
+            f"or 'piecewise-linear:knots=7', got {value!r}"
+        )
+    try:
+        return block_template(text)
+    except ParameterError as exc:
+        raise ParameterError(f"{name}: {exc}") from None
+
+
+def _numbers(value: Any, name: str) -> Any:
+    """A number or a list of numbers (text: comma separated)."""
+    text = _text(value)
+    if text is not None:
+        try:
+            parts = [float(p) for p in text.split(",") if p.strip()]
+        except ValueError:
+            raise ParameterError(
+                f"{name} must be a number or comma-separated numbers, got {text!r}"
+            ) from None
+        if not parts:
+            raise ParameterError(f"{name} must be a number or comma-separated numbers, got ''")
+        return parts[0] if len(parts) == 1 else parts
+    return value
+
+
+# ----------------------------------------------------------------------------- options
+@dataclass(frozen=True)
+class Option:
+    """One estimator option: its Python name, type, allowed range and help text.
+
+    ``kind`` is one of ``"orders"`` (whole number or ARX matrix), ``"count"`` (whole
+    number ``>= low``), ``"real"`` (number in ``[low, high]``, ``(low, high]`` with
+    ``open_low``), ``"bool"``, ``"forgetting"`` (factor or schedule, parsed once into a
+    :class:`~blockid.estimators.ForgettingSchedule`), ``"block"`` (a block or its
+    name, see :func:`blockid.blocks.base.block_template`) and ``"numbers"``.
+    """
+
+    name: str
+    kind: str
+    help: str
+    low: float | None = None
+    high: float | None = None
+    open_low: bool = False
+    #: Shown as the value's placeholder in help, e.g. ``SCHEDULE``.
+    metavar: str = ""
+
+    def convert(self, value: Any) -> Any:
+        """The typed, checked value of ``value`` (a Python value or text); None stays None.
+
+        Raises :class:`~blockid.errors.ParameterError` naming the parameter.
+        """
+        if value is None:
+            return None
+        try:
+            return self._convert(value)
+        except ParameterError as exc:
+            raise ParameterError(str(exc), parameter=self.name) from None
+
+    def _convert(self, value: Any) -> Any:
+        if self.kind == "orders":
+            return parse_orders(value, self.name)
+        if self.kind == "count":
+            return _count(value, self.name, 0 if self.low is None else self.low)
+        if self.kind == "real":
+            return _real(value, self.name, self.low, self.high, self.open_low)
+        if self.kind == "bool":
+            return _boolean(value, self.name)
+        if self.kind == "forgetting":
+            return _forgetting(value, self.name)
+        if self.kind == "block":
+            return _block(value, self.name)
+        if self.kind == "numbers":
+            return _numbers(value, self.name)
+        raise AssertionError(f"unknown option kind {self.kind!r}")  # pragma: no cover
+
+
+def _options(*items: Option) -> dict[str, Option]:
+    return {o.name: o for o in items}
+
+
+#: Every option any estimator takes, declared once.
+OPTIONS: dict[str, Option] = _options(
+    Option("na", "orders", "Output lags na (ARX: a matrix 'N,N;N,N' per output).", metavar="N"),
+    Option("nb", "orders", "Input coefficients nb (b_0..b_nb-1), N or ARX matrix.", metavar="N"),
+    Option("nk", "orders", "Input delay nk in samples, N or ARX matrix.", metavar="N"),
+    Option("r1", "count", "Degree of the two-segment input polynomial (B1).", low=1),
+    Option("r2", "count", "Degree of the output polynomial (B3).", low=1),
+    Option(
+        "input_block",
+        "block",
+        "Input block: two-segment-polynomial, polynomial[:degree=N], dead-zone, "
+        "saturation, piecewise-linear[:knots=N] or a user block's kind.",
+        metavar="KIND",
+    ),
+    Option(
+        "output_block",
+        "block",
+        "Output block: polynomial[:degree=N] or a user block's kind.",
+        metavar="KIND",
+    ),
+    Option(
+        "center",
+        "bool",
+        "Fit around the mean operating point (offsets kept in the model).",
+    ),
+    Option("refine", "bool", "Refine the estimate on free-run simulation error afterwards."),
+    Option(
+        "allow_unstable",
+        "bool",
+        "Keep an ARX model with poles on or outside the unit circle.",
+    ),
+    Option(
+        "convergence_check",
+        "bool",
+        "Fail when a recursive ARX estimate's one-step MSE exceeds max_mse_ratio times "
+        "the least-squares optimum.",
+    ),
+    Option(
+        "max_mse_ratio",
+        "real",
+        "Convergence check of recursive ARX methods: allowed one-step MSE ratio.",
+        low=1.0,
+    ),
+    Option(
+        "forgetting",
+        "forgetting",
+        "Forgetting factor in (0, 1], or a schedule such as 0.98:200,1.",
+        metavar="SCHEDULE",
+    ),
+    Option(
+        "initial_covariance",
+        "real",
+        "P(0) scale of the recursive methods.",
+        low=0.0,
+        open_low=True,
+    ),
+    Option(
+        "initial_parameters",
+        "numbers",
+        "theta(0) of a paper's recursive algorithm: one number, or one per parameter.",
+        metavar="X[,X..]",
+    ),
+    Option("passes", "count", "Passes of a recursive method over the data.", low=1),
+    Option(
+        "tol",
+        "real",
+        "Convergence tolerance on the relative parameter change over one pass.",
+        low=0.0,
+        open_low=True,
+    ),
+    Option(
+        "normalize",
+        "bool",
+        "Run a paper's recursion on signals divided by their spread (mapped back exactly).",
+    ),
+    Option("eps1", "real", "AW-RLS weight eps1 (A8).", low=0.0, open_low=True),
+    Option("eps2", "real", "AW-RLS weight eps2 (A8).", low=0.0),
+    Option(
+        "record_history",
+        "bool",
+        "Keep the parameter trajectory of a recursive method.",
+    ),
+    Option("max_nfev", "count", "Simulation-error fit: limit on simulations.", low=1),
+    Option(
+        "tail_fraction",
+        "real",
+        "Simulation-error fit: fraction held out for early stopping (0 switches it off).",
+        low=0.0,
+        high=0.9,
+    ),
+    Option(
+        "patience",
+        "count",
+        "Simulation-error fit: iterations without a better tail error before stopping.",
+        low=1,
+    ),
+    Option("ftol", "real", "Simulation-error fit: cost tolerance.", low=0.0, open_low=True),
+    Option("xtol", "real", "Simulation-error fit: step tolerance.", low=0.0, open_low=True),
+    Option("gtol", "real", "Simulation-error fit: gradient tolerance.", low=0.0, open_low=True),
+)
+
+
+def option_flag(name: str) -> str:
+    """The command-line flag of an option: ``initial_covariance`` -> ``--initial-covariance``."""
+    return "--" + name.replace("_", "-")
+
+
+# ----------------------------------------------------------------------------- methods
+@dataclass(frozen=True)
+class Method:
+    """An estimator of a structure: the function that runs it and the options it takes.
+
+    ``target`` is ``"module:function"``; the function is called as
+    ``function(data, structure=..., method=..., **options)`` through :meth:`run`, the
+    keywords ``structure``/``method`` only where ``passes`` names them.
+    """
+
+    name: str
+    target: str
+    options: tuple[str, ...]
+    help: str
+    recursive: bool = False
+    #: Which of "structure" and "method" the function takes as keywords.
+    passes: tuple[str, ...] = ()
+
+    def function(self) -> Callable[..., Any]:
+        module, name = self.target.split(":")
+        return getattr(importlib.import_module(module), name)
+
+    def run(self, data: Any, structure: str, options: dict[str, Any]) -> Any:
+        extra = {"structure": structure, "method": self.name}
+        extra = {k: v for k, v in extra.items() if k in self.passes}
+        return self.function()(data, **extra, **options)
+
+
+@dataclass(frozen=True)
+class Structure:
+    """A model structure: name, model class, blocks, and its methods (default first)."""
+
+    name: str
+    model: str
+    help: str
+    methods: tuple[Method, ...]
+    #: Options every method of the structure takes (handled by fit_model itself).
+    common: tuple[str, ...] = ()
+    #: Fit around the operating point unless told otherwise.
+    center_default: bool = False
+    block_oriented: bool = True
+    method_names: tuple[str, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "method_names", tuple(m.name for m in self.methods))
+
+    @property
+    def default_method(self) -> Method:
+        return self.methods[0]
+
+    def method(self, name: str | None) -> Method:
+        """The method called ``name`` (None: the default)."""
+        if name is None:
+            return self.default_method
+        for m in self.methods:
+            if m.name == name:
+                return m
+        raise ParameterError(
+            f"method={name!r} does not apply to {self.name}; choose one of "
+            f"{', '.join(self.method_names)}"
+        )
+
+    def accepted(self, method: str | None) -> tuple[str, ...]:
+        """Options of this structure fitted by ``method``, in declaration order."""
+        return self.common + self.method(method).options
+
+    def model_class(self) -> type:
+        module, name = self.model.split(":")
+        return getattr(importlib.import_module(module), name)
+
+
+_ORDERS = ("na", "nb", "nk")
+_RECURSIVE = ("initial_covariance", "passes")
+_ARX = _ORDERS + ("center", "allow_unstable")
+_SIMULATION_ERROR = ("max_nfev", "tail_fraction", "patience", "ftol", "xtol", "gtol")
+_PAPER = ("passes", "tol", "initial_covariance", "initial_parameters", "normalize")
+
+
+def _arx_method(name: str, options: tuple[str, ...], help: str) -> Method:
+    return Method(
+        name,
+        "blockid.fitting.arx:fit_arx",
+        _ARX + options,
+        help,
+        recursive=name != "batch",
+        passes=("method",),
+    )
+
+
+def _block_methods(blocks: tuple[str, ...], paper: Method) -> tuple[Method, ...]:
+    return (
+        Method(
+            "simulation-error",
+            "blockid.fitting.simulation_error:fit_simulation_error",
+            blocks + _SIMULATION_ERROR,
+            "minimise the free-run simulation error (converges; the default)",
+            passes=("structure",),
+        ),
+        paper,
+    )
+
+
+def _key_term(blocks: tuple[str, ...]) -> Method:
+    return Method(
+        "key-term-rls",
+        "blockid.fitting.key_term:fit_key_term_rls",
+        blocks + ("forgetting",) + _PAPER + ("record_history",),
+        "paper B's key-term RLS with internal-variable estimation (B4, B5)",
+        recursive=True,
+        passes=("structure",),
+    )
+
+
+_CHECK = ("convergence_check", "max_mse_ratio")
+
+#: The structures, in the order the command line lists them.
+STRUCTURES: dict[str, Structure] = {
+    s.name: s
+    for s in (
+        Structure(
+            "arx",
+            "blockid.models.arx:ARX",
+            "linear ARX, multi-input multi-output (MATLAB na/nb/nk)",
+            (
+                _arx_method("batch", (), "batch least squares (QR)"),
+                _arx_method(
+                    "rls",
+                    ("forgetting",) + _RECURSIVE + _CHECK,
+                    "recursive least squares with forgetting factor or schedule",
+                ),
+                _arx_method(
+                    "aw-rls",
+                    ("eps1", "eps2") + _RECURSIVE + _CHECK,
+                    "adaptive-weighted RLS (A8)",
+                ),
+                _arx_method(
+                    "hierarchical-rls",
+                    ("forgetting",) + _RECURSIVE + _CHECK,
+                    "hierarchical RLS, one sub-estimator per output lag group (A10)",
+                ),
+            ),
+            block_oriented=False,
+        ),
+        Structure(
+            "hammerstein",
+            "blockid.models.block:Hammerstein",
+            "static input block, then a linear block (N1-L)",
+            _block_methods(("r1", "input_block"), _key_term(("r1",))),
+            common=_ORDERS + ("center", "refine"),
+        ),
+        Structure(
+            "wiener",
+            "blockid.models.block:Wiener",
+            "linear block, then a static output block (L-N2)",
+            _block_methods(("r2", "output_block"), _key_term(("r2",))),
+            common=_ORDERS + ("center", "refine"),
+            center_default=True,
+        ),
+        Structure(
+            "hammerstein-wiener",
+            "blockid.models.block:HammersteinWiener",
+            "input block, linear block, output block (N1-L-N2, paper B)",
+            _block_methods(("r1", "r2", "input_block", "output_block"), _key_term(("r1", "r2"))),
+            common=_ORDERS + ("center", "refine"),
+        ),
+        Structure(
+            "backlash",
+            "blockid.models.block:BacklashModel",
+            "backlash, then a linear block (paper A's pseudo-Hammerstein)",
+            _block_methods(
+                (),
+                Method(
+                    "aw-rls",
+                    "blockid.fitting.backlash:fit_backlash_aw_rls",
+                    ("eps1", "eps2") + _PAPER + ("record_history",),
+                    "paper A's adaptive-weighted RLS with internal-variable estimation (A8)",
+                    recursive=True,
+                ),
+            ),
+            common=_ORDERS + ("center", "refine"),
+        ),
+    )
+}
+
+
+def get_structure(name: Any) -> Structure:
+    """The declaration of structure ``name``, or a clear error listing the known ones."""
+    if name not in STRUCTURES:
+        raise ParameterError(
+            f"structure={name!r} is unknown; choose one of {', '.join(STRUCTURES)}"
+        )
+    return STRUCTURES[name]
