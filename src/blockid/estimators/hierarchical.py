@@ -123,8 +123,13 @@ class HierarchicalRLS(RecursiveEstimator):
         self.covariance_ = self.covariance_[np.ix_(self._inv, self._inv)]
         return status
 
+    def _validate_params(self) -> None:
+        super()._validate_params()
+        # read once per fit/partial_fit call (a schedule instance is used as it is)
+        self._schedule = ForgettingSchedule.parse(self.forgetting)
+
     def _kernel(self, theta, P, Phi, y, e, start) -> int:
-        lam = ForgettingSchedule.parse(self.forgetting).factors(start, Phi.shape[0])
+        lam = self._schedule.factors(start, Phi.shape[0])
         return _k.hierarchical_rls_run(
             theta, P, Phi, y, self._bounds, lam, self._trace_max(Phi.shape[1]), e
         )

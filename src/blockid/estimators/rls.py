@@ -128,7 +128,9 @@ class RecursiveLeastSquares(RecursiveEstimator):
     Parameters
     ----------
     forgetting : float or str or ForgettingSchedule, default 1.0
-        Constant factor in (0, 1] or a schedule such as ``"0.98:200,1"`` (paper B).
+        Constant factor in (0, 1] or a schedule such as ``"0.98:200,1"`` (paper B),
+        read at the start of every ``fit``/``partial_fit`` call; a schedule counts the
+        samples seen since the last ``fit``.
     initial_covariance : float, default 1e8
         ``P(0) = initial_covariance * I``.
     initial_parameters : float or array, default 0.0
@@ -172,6 +174,11 @@ class RecursiveLeastSquares(RecursiveEstimator):
         self.initial_parameters = initial_parameters
         self.max_covariance_trace = max_covariance_trace
 
+    def _validate_params(self) -> None:
+        super()._validate_params()
+        # read once per fit/partial_fit call (a schedule instance is used as it is)
+        self._schedule = ForgettingSchedule.parse(self.forgetting)
+
     def _kernel(self, theta, P, Phi, y, e, start) -> int:
-        lam = ForgettingSchedule.parse(self.forgetting).factors(start, Phi.shape[0])
+        lam = self._schedule.factors(start, Phi.shape[0])
         return _k.rls_run(theta, P, Phi, y, lam, self._trace_max(Phi.shape[1]), e)

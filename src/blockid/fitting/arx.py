@@ -33,6 +33,7 @@ from blockid.estimators import (
     HierarchicalRLS,
     RecursiveLeastSquares,
 )
+from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
@@ -46,7 +47,7 @@ ARX_METHODS = ("batch", "rls", "aw-rls", "hierarchical-rls")
 def make_estimator(
     method: str,
     *,
-    forgetting: float | str = 1.0,
+    forgetting: float | str | ForgettingSchedule = 1.0,
     initial_covariance: float | None = None,
     eps1: float = 1.0,
     eps2: float = 0.1,
@@ -105,7 +106,7 @@ def fit_arx(
     nk: Any = 1,
     *,
     method: str = "batch",
-    forgetting: float | str = 1.0,
+    forgetting: float | str | ForgettingSchedule = 1.0,
     initial_covariance: float | None = None,
     eps1: float = 1.0,
     eps2: float = 0.1,
@@ -123,8 +124,10 @@ def fit_arx(
     na, nb, nk : int or matrix
         Orders in the MATLAB convention (see :class:`~blockid.models.ARX`).
     method : {"batch", "rls", "aw-rls", "hierarchical-rls"}
-    forgetting : float or str
-        Forgetting factor or schedule (``"0.98:200,1"``) of the RLS methods.
+    forgetting : float, str or ForgettingSchedule
+        Forgetting factor or schedule (``"0.98:200,1"``) of the RLS methods, read once
+        here (a bad value fails before any data work) and handed to the estimators as a
+        :class:`~blockid.estimators.forgetting.ForgettingSchedule`.
     initial_covariance : float, optional
         ``P(0)`` relative to the RMS-scaled regressors (defaults 1e8; 1e5 for AW-RLS).
     eps1, eps2 : float
@@ -149,6 +152,7 @@ def fit_arx(
         )
     if int(passes) != passes or passes < 1:
         raise ParameterError(f"passes={passes!r} must be a whole number >= 1")
+    schedule = ForgettingSchedule.parse(forgetting)  # once, not per output and chunk
     u_off = y_off = None
     if center:
         u_off = np.mean(np.vstack([e.u for e in data.experiments]), axis=0)
@@ -188,7 +192,7 @@ def fit_arx(
         target = np.concatenate([b[1] for b in blocks])
         est = make_estimator(
             method,
-            forgetting=forgetting,
+            forgetting=schedule,
             initial_covariance=initial_covariance,
             eps1=eps1,
             eps2=eps2,

@@ -22,7 +22,9 @@ internal signal, unstable linear block after a pass) and a model that fails
 :func:`~blockid.fitting.check_model`.
 
 Several experiments are processed one after another, each starting with the internal
-signals at rest; ``theta`` and ``P`` are carried over, also from pass to pass.
+signals at rest; ``theta`` and ``P`` are carried over, also from pass to pass. The
+passes, checks and read-back are run by :func:`blockid.fitting.recursive.fit_recursive`,
+to which this module describes the algorithm (:class:`_BacklashAWRLS`).
 """
 
 from __future__ import annotations
@@ -35,17 +37,15 @@ from blockid._kernels import backlash_awrls as _k
 from blockid.blocks import Backlash
 from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError, ParameterError
-from blockid.fitting.checks import check_model
-from blockid.fitting.key_term import (
+from blockid.fitting.recursive import (
+    RecursiveAlgorithm,
+    Signals,
     check_siso,
-    history_on_failure,
-    initial_vector,
+    fit_recursive,
     int_at_least,
-    one_step_metrics,
-    poles_of,
+    largest_lag,
+    normalised_signals,
     positive_number,
-    run_passes,
-    signals,
 )
 from blockid.fitting.result import FitResult
 from blockid.models.block import BacklashModel
@@ -137,6 +137,90 @@ def _check_branches_excited(switching: list[tuple[np.ndarray, ...]]) -> None:
             )
 
 
+class _BacklashAWRLS(RecursiveAlgorithm):
+    """AW-RLS (A8) with internal-variable estimation (A7) on the centred, normalised
+    signals; ``theta`` is ordered as in (A6)."""
+
+    method = "AW-RLS"
+    label = "aw-rls"
+    reasons = {
+        _k.REASON_STEP: "the AW-RLS update became non-finite or lost positive definiteness",
+        _k.REASON_EXPLODED: "the estimated backlash output x exceeded 1e6 (1 + max|v|)",
+        _k.REASON_ZERO_SLOPE: "a slope estimate (theta_1 or theta_3) reached exactly 0, "
+        "where the dead-band edges of (A7) are undefined",
+    }
+
+    def __init__(
+        self, orders: tuple[int, int, int], eps: tuple[float, float], signals: Signals
+    ) -> None:
+        na, nb, nk = orders
+        self.orders = orders  # na, nb, nk
+        self.eps = eps  # eps1, eps2 of the adaptive weight (A8)
+        self.names = _names(na, nb)
+        self.n0 = largest_lag(na, nb, nk)
+        self.a = slice(4 + nb - 1, 4 + nb - 1 + na)
+        self.u_map, self.v_map = signals.u_map, signals.y_map
+        # eps1, eps2 and the |x_hat| beyond which the recursion has diverged
+        self.params = np.array([eps[0], eps[1], 1e6 * (1.0 + signals.y_max)])
+        # (u, f1, f2) of every experiment in the current pass: which branches were driven
+        self.switching: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+
+    def run(self, theta, P, u, v, count, hist, stride):
+        na, nb, nk = self.orders
+        N = u.size
+        orders = np.array([nb, na, nk, self.n0, stride], dtype=np.int64)
+        x, f1, f2 = np.empty(N), np.empty(N), np.empty(N)
+        if count == 0:  # a new pass
+            self.switching.clear()
+        self.switching.append((u, f1, f2))
+        status, reason = _k.backlash_aw_rls_run(
+            theta, P, u, v, orders, self.params, x, f1, f2, hist
+        )
+        return status, reason, ""
+
+    def to_data_units(self, theta):
+        return _to_data_units(theta, self.u_map, self.v_map, self.orders[1])
+
+    def from_data_units(self, theta):
+        return _from_data_units(theta, self.u_map, self.v_map, self.orders[1])
+
+    def model(self, theta, data):
+        """Read back (A6): the backlash from ``theta_1..theta_4``, then ``b, a``."""
+        na, nb, nk = self.orders
+        if not np.all(np.isfinite(theta)):
+            raise EstimationError(
+                "AW-RLS: the linear block's static gain B(1) is 0, so the backlash offset cannot "
+                "be recovered from the centred signals; use normalize=False. See "
+                "docs/convergence.md"
+            )
+        _check_branches_excited(self.switching)
+        try:
+            block = _read_backlash(theta)
+            return BacklashModel(
+                data.inputs[0],
+                data.outputs[0],
+                input_block=block,
+                na=na,
+                nb=nb,
+                nk=nk,
+                a=theta[self.a],
+                b=np.concatenate(([1.0], theta[4 : self.a.start])),
+                sampling_time=data.sampling_time,
+            )
+        except ParameterError as exc:  # pragma: no cover - _read_backlash checks first
+            raise EstimationError(f"AW-RLS returned an invalid backlash: {exc}") from None
+
+    def settings(self, common):
+        na, nb, nk = self.orders
+        settings = {"na": na, "nb": nb, "nk": nk, "eps1": self.eps[0], "eps2": self.eps[1]}
+        for key in ("initial_covariance", "initial_parameters", "passes", "passes_run"):
+            settings[key] = common[key]
+        settings.update(converged=common["converged"], normalize=common["normalize"])
+        if common["passes"] > 1:  # tol is not used in one pass
+            settings["tol"] = common["tol"]
+        return settings
+
+
 def fit_backlash_aw_rls(
     data: Dataset,
     *,
@@ -215,7 +299,7 @@ def fit_backlash_aw_rls(
     >>> {k: round(v, 4) for k, v in fit.model.input_block.parameters.items()}
     {'m_left': 0.9, 'c_left': 0.8, 'm_right': 0.9, 'c_right': 0.85}
     """
-    method = "AW-RLS"
+    method = _BacklashAWRLS.method
     check_siso(data, method)
     na = int_at_least("na", na, 0)
     nb = int_at_least("nb", nb, 1)
@@ -225,106 +309,19 @@ def fit_backlash_aw_rls(
     eps1 = positive_number("eps1", eps1)
     eps2 = positive_number("eps2", eps2)
     mu = positive_number("initial_covariance", initial_covariance)
-    names = _names(na, nb)
-    n = len(names)
-    n0 = max(na, nk + nb - 1, 1)
-    data.check_orders(n0, n, what=f"backlash model na={na}, nb={nb}, nk={nk}")
-    records, u_map, v_map = signals(data, normalize, center=True)
-    theta = initial_vector(initial_parameters, n, names)
-    if np.ndim(initial_parameters) != 0:  # given in the data's units
-        theta = _from_data_units(theta, u_map, v_map, nb)
-
-    P = mu * np.eye(n)
-    v_max = max(float(np.max(np.abs(v))) for _, _, v in records)
-    params = np.array([eps1, eps2, 1e6 * (1.0 + v_max)])
-    orders = np.array([nb, na, nk, n0, 1], dtype=np.int64)
-    switching: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-
-    def run(u: np.ndarray, v: np.ndarray, count: int, hist: np.ndarray, stride: int):
-        N = u.size
-        orders[4] = stride
-        x, f1, f2 = np.empty(N), np.empty(N), np.empty(N)
-        if count == 0:  # a new pass
-            switching.clear()
-        switching.append((u, f1, f2))
-        status, reason = _k.backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist)
-        return status, reason, ""
-
-    reasons = {
-        _k.REASON_STEP: "the AW-RLS update became non-finite or lost positive definiteness",
-        _k.REASON_EXPLODED: "the estimated backlash output x exceeded 1e6 (1 + max|v|)",
-        _k.REASON_ZERO_SLOPE: "a slope estimate (theta_1 or theta_3) reached exactly 0, "
-        "where the dead-band edges of (A7) are undefined",
-    }
-    ia = 4 + nb - 1
-    with history_on_failure(
-        record_history, names, lambda rows: _to_data_units(rows, u_map, v_map, nb)
-    ) as state:
-        n_passes, converged, hist_theta, hist_at = run_passes(
-            run,
-            theta,
-            records,
-            n0=n0,
-            passes=passes,
-            tol=tol,
-            record=record_history,
-            method=method,
-            reasons=reasons,
-            poles=lambda th: poles_of(th[ia : ia + na]),
-        )
-        state["raw"] = {"theta": hist_theta, "update": hist_at}
-        theta = _to_data_units(theta, u_map, v_map, nb)
-        if not np.all(np.isfinite(theta)):
-            raise EstimationError(
-                "AW-RLS: the linear block's static gain B(1) is 0, so the backlash offset cannot "
-                "be recovered from the centred signals; use normalize=False. See "
-                "docs/convergence.md"
-            )
-        _check_branches_excited(switching)
-        try:
-            block = _read_backlash(theta)
-            model = BacklashModel(
-                data.inputs[0],
-                data.outputs[0],
-                input_block=block,
-                na=na,
-                nb=nb,
-                nk=nk,
-                a=theta[ia : ia + na],
-                b=np.concatenate(([1.0], theta[4:ia])),
-                sampling_time=data.sampling_time,
-            )
-        except ParameterError as exc:  # pragma: no cover - _read_backlash checks first
-            raise EstimationError(f"AW-RLS returned an invalid backlash: {exc}") from None
-        check_model(model, data, method)
-
-    settings: dict[str, Any] = {
-        "na": na,
-        "nb": nb,
-        "nk": nk,
-        "eps1": eps1,
-        "eps2": eps2,
-        "initial_covariance": mu,
-        "initial_parameters": np.asarray(initial_parameters, dtype=float).tolist(),
-        "passes": passes,
-        "passes_run": n_passes,
-        "converged": converged,
-        "normalize": bool(normalize),
-    }
-    if passes > 1:
-        settings["tol"] = tol
-    history: dict[str, Any] = {}
-    if record_history:
-        history = {
-            "theta": _to_data_units(hist_theta, u_map, v_map, nb),
-            "names": names,
-            "update": hist_at,
-        }
-    return FitResult(
-        model=model,
-        method="aw-rls",
-        settings=settings,
-        estimation_metrics=one_step_metrics(model, data),
-        n_samples=int(data.n_samples),
-        history=history,
+    data.check_orders(
+        largest_lag(na, nb, nk),
+        len(_names(na, nb)),
+        what=f"backlash model na={na}, nb={nb}, nk={nk}",
+    )
+    signals = normalised_signals(data, normalize, center=True)
+    return fit_recursive(
+        data,
+        signals,
+        _BacklashAWRLS((na, nb, nk), (eps1, eps2), signals),
+        initial_parameters=initial_parameters,
+        initial_covariance=mu,
+        passes=passes,
+        tol=tol,
+        record_history=record_history,
     )

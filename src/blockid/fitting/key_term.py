@@ -1,4 +1,4 @@
-"""Paper B's key-term RLS with internal-variable estimation (B4, B5), and its pass driver.
+"""Paper B's key-term RLS with internal-variable estimation (B4, B5).
 
 Key-term separation makes the Hammerstein-Wiener model linear in its parameters once
 the unmeasured internal signals ``w`` and ``x`` are known (B4):
@@ -12,7 +12,9 @@ the unmeasured internal signals ``w`` and ``x`` are known (B4):
 with ``b_0 = q_1 = 1``. The recursion (B5) replaces ``w`` and ``x`` by estimates
 computed sample by sample from the newest parameters and takes one RLS step with a
 forgetting factor; passes over the data repeat until the parameters stop changing.
-The compiled pass is :func:`blockid._kernels.key_term.key_term_run`.
+The compiled pass is :func:`blockid._kernels.key_term.key_term_run`; the passes, checks
+and read-back are run by :func:`blockid.fitting.recursive.fit_recursive`, to which this
+module describes the algorithm (:class:`_KeyTermRLS`).
 
 The same algorithm with a block removed gives paper B's comparison models:
 ``"hammerstein"`` (no ``q``; ``x = y`` is measured), ``"wiener"`` (``w = u``, ``b_0``
@@ -30,9 +32,8 @@ Choices (SPEC leaves them open):
   in our experiments, never reached the tolerance (docs/convergence.md).
 * Every experiment, in every pass, starts with the internal signals at rest (0 before
   its first sample); ``theta`` and ``P`` are carried from one experiment to the next.
-* Convergence: the passes stop when every parameter changed by less than
-  ``tol * (1 + |theta_i|)`` over the last pass. Reaching ``passes`` without that (with
-  ``passes > 1``) is a failure, reported as :class:`~blockid.errors.EstimationError`.
+  Convergence is as :mod:`blockid.fitting.recursive` describes: every parameter
+  changed by less than ``tol * (1 + |theta_i|)`` over the last pass.
 * The recursion runs on ``u / std(u)``, ``y / std(y)`` (``normalize=True``) and the
   parameters are mapped back exactly; on raw signals its behaviour depends on the
   units (``P(0) = 1e6 I`` meets ``x^3`` of large signals).
@@ -43,9 +44,6 @@ Choices (SPEC leaves them open):
 
 from __future__ import annotations
 
-import contextlib
-import math
-from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -54,10 +52,18 @@ from blockid._kernels import key_term as _k
 from blockid._kernels.rls import OK
 from blockid.blocks import Polynomial, TwoSegmentPolynomial
 from blockid.data.dataset import Dataset
-from blockid.errors import DataError, EstimationError, ParameterError
+from blockid.errors import ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
-from blockid.evaluation.metrics import metrics_by_output
-from blockid.fitting.checks import check_model
+from blockid.fitting.recursive import (
+    RecursiveAlgorithm,
+    Signals,
+    check_siso,
+    fit_recursive,
+    int_at_least,
+    largest_lag,
+    normalised_signals,
+    positive_number,
+)
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
 from blockid.models.block import BlockModel, Hammerstein, HammersteinWiener, Wiener
@@ -72,235 +78,7 @@ KEY_TERM_STRUCTURES = {
     "arx": (False, False),
 }
 
-#: Largest number of parameter vectors kept in a recorded history (decimated beyond).
-HISTORY_ROWS = 20_000
 
-_CONVERGENCE_DOC = "See docs/convergence.md"
-
-
-# ---------------------------------------------------------------------- validation
-def int_at_least(name: str, value: Any, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
-        raise ParameterError(f"{name}={value!r} must be a whole number >= {low}")
-    return int(value)
-
-
-def positive_number(name: str, value: Any) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a positive number, got {value!r}") from None
-    if not (math.isfinite(number) and number > 0.0):
-        raise ParameterError(f"{name} must be a positive finite number, got {value!r}")
-    return number
-
-
-def check_siso(data: Dataset, method: str) -> None:
-    if not isinstance(data, Dataset):
-        raise DataError(f"{method} needs a blockid Dataset, got {type(data).__name__}")
-    if data.n_inputs != 1 or data.n_outputs != 1:
-        raise DataError(
-            f"{method} identifies one input and one output, but the data have "
-            f"{data.n_inputs} inputs and {data.n_outputs} outputs; select one of each"
-        )
-
-
-def initial_vector(value: Any, n: int, names: list[str]) -> np.ndarray:
-    """``theta(0)``: a number for every entry, or one value per parameter."""
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        arr = np.full(n + 1, np.nan)  # reported below
-    if arr.ndim == 0:
-        arr = np.full(n, float(arr))
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)):
-        raise ParameterError(
-            f"initial_parameters must be a finite number or {n} finite values "
-            f"({', '.join(names)}), got {value!r}"
-        )
-    return arr.copy()
-
-
-# ---------------------------------------------------------------------- pass driver
-def history_stride(passes: int, n_updates: int) -> int:
-    """Keep every ``stride``-th parameter vector so at most ``HISTORY_ROWS`` are kept."""
-    return max(1, math.ceil(passes * n_updates / HISTORY_ROWS))
-
-
-def signals(
-    data: Dataset, normalize: bool, center: bool = False
-) -> tuple[list[tuple[str, np.ndarray, np.ndarray]], tuple[float, float], tuple[float, float]]:
-    """``(name, u, y)`` of every experiment, normalised, and the ``(offset, scale)`` of
-    ``u`` and of ``y``: ``(signal - offset) / scale``.
-
-    With ``normalize`` the scale is the spread (standard deviation over all
-    experiments), else 1; with ``center`` too the offset is the mean, else 0. The
-    spread, not the RMS, so that a signal recorded around a large operating point keeps
-    its variation at unit size.
-    """
-    u_all = np.concatenate([e.u[:, 0] for e in data.experiments])
-    y_all = np.concatenate([e.y[:, 0] for e in data.experiments])
-    u0 = float(np.mean(u_all)) if normalize and center else 0.0
-    y0 = float(np.mean(y_all)) if normalize and center else 0.0
-    su = _spread(u_all) if normalize else 1.0
-    sy = _spread(y_all) if normalize else 1.0
-    out = [
-        (
-            e.name,
-            np.ascontiguousarray((e.u[:, 0] - u0) / su),
-            np.ascontiguousarray((e.y[:, 0] - y0) / sy),
-        )
-        for e in data.experiments
-    ]
-    return out, (u0, su), (y0, sy)
-
-
-def _spread(x: np.ndarray) -> float:
-    """Standard deviation, else RMS (constant signal), else 1 (all zero)."""
-    return float(np.std(x)) or float(np.sqrt(np.mean(x**2))) or 1.0
-
-
-def start_vector(value: Any, factors: np.ndarray, names: list[str]) -> np.ndarray:
-    """``theta(0)`` on the normalised signals: a number as it is (the papers' small equal
-    values), a vector given in the data's units divided by the unscaling ``factors``."""
-    theta = initial_vector(value, factors.size, names)
-    return theta if np.ndim(value) == 0 else theta / factors
-
-
-def run_passes(
-    run: Callable[[np.ndarray, np.ndarray, int, np.ndarray, int], tuple[int, int, str]],
-    theta: np.ndarray,
-    records: list[tuple[str, np.ndarray, np.ndarray]],
-    *,
-    n0: int,
-    passes: int,
-    tol: float,
-    record: bool,
-    method: str,
-    reasons: dict[int, str],
-    poles: Callable[[np.ndarray], np.ndarray],
-) -> tuple[int, bool | None, np.ndarray | None, np.ndarray | None]:
-    """Repeat passes of a recursive kernel until ``theta`` settles; raise on failure.
-
-    ``run(u, y, count, hist, stride) -> (status, reason, detail)`` processes one
-    experiment once, updating ``theta`` in place (``detail``: text added to a failure
-    report); ``count`` is the number of updates before it in
-    the current pass (where a forgetting schedule stands). ``records`` holds ``(name,
-    u, y)`` per experiment. ``poles(theta)`` gives the linear block's poles, checked
-    after every pass.
-
-    Returns the number of passes run, whether they converged (None for one pass), and
-    the recorded history (rows of ``theta`` and their update counts) or None.
-    """
-    n_updates = sum(u.size - n0 for _, u, _ in records)
-    stride = history_stride(passes, n_updates)
-    rows: list[np.ndarray] = []
-    at: list[np.ndarray] = []
-    count = 0
-    converged: bool | None = None
-    change = np.inf
-
-    def failure(message: str) -> EstimationError:
-        exc = EstimationError(message)
-        if record:  # in the recursion's units; the caller converts (see recorded_history)
-            exc.history = {
-                "theta": np.vstack(rows) if rows else np.zeros((0, theta.size)),
-                "update": np.concatenate(at) if at else np.zeros(0),
-            }
-        return exc
-
-    for p in range(1, passes + 1):
-        before = theta.copy()
-        in_pass = 0
-        for name, u, y in records:
-            m = (u.size - n0) // stride if record else 0
-            hist = np.zeros((m, theta.size))
-            status, reason, detail = run(u, y, in_pass, hist, stride)
-            if record:
-                # Rows the kernel wrote before a failure at sample `status`.
-                kept = m if status == OK else min(m, max(0, (status - n0) // stride))
-                rows.append(hist[:kept])
-                at.append(count + stride * np.arange(1, kept + 1))
-            if status != OK:
-                raise failure(
-                    f"{method} diverged in pass {p}, experiment '{name}', at sample "
-                    f"{status}: {reasons[reason]}{detail}. No model is returned; try other "
-                    f"orders, more exciting data or another method. {_CONVERGENCE_DOC}"
-                )
-            count += u.size - n0
-            in_pass += u.size - n0
-        if not np.all(np.isfinite(theta)):
-            raise failure(
-                f"{method} diverged in pass {p}: the parameter estimates are not finite. "
-                f"{_CONVERGENCE_DOC}"
-            )
-        rho = float(np.max(np.abs(poles(theta)), initial=0.0))
-        if not rho < 1.0:
-            raise failure(
-                f"{method} diverged: after pass {p} the linear block is unstable (largest "
-                f"pole magnitude {rho:.4g}), so its internal signals grow without bound. "
-                f"No model is returned. {_CONVERGENCE_DOC}"
-            )
-        if p > 1:
-            change = float(np.max(np.abs(theta - before) / (1.0 + np.abs(theta))))
-            if change < tol:
-                converged = True
-                break
-    else:
-        if passes > 1:
-            raise failure(
-                f"{method} did not converge in {passes} passes: the parameters still "
-                f"changed by up to {change:.3g} (relative) in the last pass, tolerance "
-                f"{tol:g}. Raise passes, or the internal-variable iteration has no stable "
-                f"fixed point on these data. {_CONVERGENCE_DOC}"
-            )
-    hist_theta = np.vstack(rows) if record else None
-    hist_at = np.concatenate(at) if record else None
-    return p, converged, hist_theta, hist_at
-
-
-@contextlib.contextmanager
-def history_on_failure(
-    record: bool, names: list[str], to_data_units: Callable[[np.ndarray], np.ndarray]
-) -> Iterator[dict[str, Any]]:
-    """Give an :class:`EstimationError` raised inside the recorded history, in data units.
-
-    :func:`run_passes` attaches the rows recorded up to its own failures; for a failure
-    after it (a check of the result), put its history in the yielded dict under
-    ``"raw"`` (``{"theta", "update"}`` in the recursion's units).
-    """
-    state: dict[str, Any] = {}
-    try:
-        yield state
-    except EstimationError as exc:
-        raw = exc.history if exc.history is not None else state.get("raw")
-        if record and raw is not None and "names" not in raw:
-            exc.history = {
-                "theta": to_data_units(raw["theta"]),
-                "names": names,
-                "update": raw["update"],
-            }
-        raise
-
-
-def poles_of(a: np.ndarray) -> np.ndarray:
-    """Roots of ``z^na + a_1 z^(na-1) + .. + a_na`` (the poles of ``1/A``)."""
-    return np.roots(np.concatenate(([1.0], a))) if a.size else np.zeros(0)
-
-
-def one_step_metrics(model: Any, data: Dataset) -> dict[str, dict[str, float]]:
-    """One-step-ahead metrics on the estimation data; ``{}`` when the model cannot predict
-    one step ahead (an output polynomial not invertible over the measured range)."""
-    try:
-        y_hat = [model.predict(e.u, e.y) for e in data.experiments]
-    except EstimationError:
-        return {}
-    lag = model.max_lag
-    y = np.vstack([e.y[lag:] for e in data.experiments])
-    return metrics_by_output(y, np.vstack([yh[lag:] for yh in y_hat]), model.outputs)
-
-
-# ---------------------------------------------------------------------- key-term RLS
 def _layout(structure: str, na: int, nb: int, r1: int, r2: int) -> list[str]:
     """Names of the entries of theta in the order of (B4)."""
     has_in, has_out = KEY_TERM_STRUCTURES[structure]
@@ -333,43 +111,137 @@ def _unscale(structure: str, na: int, nb: int, r1: int, r2: int, su: float, sy: 
     return np.concatenate(parts)
 
 
-def _model(
-    structure: str, theta: np.ndarray, data: Dataset, na: int, nb: int, nk: int, r1: int
-) -> Any:
-    """The identified model from theta (B4 order)."""
-    has_in, has_out = KEY_TERM_STRUCTURES[structure]
-    pos = 0
-    kwargs: dict[str, Any] = dict(na=na, nb=nb, nk=nk, sampling_time=data.sampling_time)
-    if has_in:
-        f, p = theta[: r1 + 1], theta[r1 + 1 : 2 * r1 + 2]
-        kwargs["input_block"] = TwoSegmentPolynomial(f, p)
-        pos = 2 * r1 + 2
-        b = np.concatenate(([1.0], theta[pos : pos + nb - 1]))
-        pos += nb - 1
-    else:
-        b = theta[pos : pos + nb]
-        pos += nb
-    a = theta[pos : pos + na]
-    pos += na
-    kwargs.update(a=a, b=b)
-    if has_out:
-        kwargs["output_block"] = Polynomial(np.concatenate(([1.0], theta[pos:])), constant=False)
-    u_name, y_name = data.inputs[0], data.outputs[0]
-    if structure == "arx":
-        return ARX(
-            [u_name],
-            [y_name],
-            na,
-            nb,
-            nk,
-            a={y_name: {y_name: a}},
-            b={y_name: {u_name: b}},
-            sampling_time=data.sampling_time,
+class _KeyTermRLS(RecursiveAlgorithm):
+    """Key-term RLS (B5) for one structure, on ``u / su`` and ``y / sy``.
+
+    ``theta`` is ordered as in (B4): ``f_0..f_r1, p_0..p_r1`` (input block), ``b``,
+    ``a_1..a_na``, ``q_2..q_r2`` (output block).
+    """
+
+    method = "key-term RLS"
+    label = "key-term-rls"
+    reasons = {
+        _k.REASON_STEP: "the RLS update became non-finite or lost positive definiteness",
+        _k.REASON_EXPLODED: "the estimated internal signal x exceeded 1e6 (1 + max|y|): "
+        "the estimated linear block drives it unstable",
+    }
+
+    def __init__(
+        self,
+        structure: str,
+        orders: tuple[int, int, int, int, int],
+        schedule: ForgettingSchedule,
+        mu: float,
+        signals: Signals,
+    ) -> None:
+        na, nb, nk, r1, r2 = orders
+        self.structure = structure
+        self.orders = orders  # na, nb, nk, r1, r2
+        self.has_in, self.has_out = KEY_TERM_STRUCTURES[structure]
+        self.schedule = schedule  # lambda over the updates of a pass (restarts every pass)
+        self.names = _layout(structure, na, nb, r1, r2)
+        self.n0 = largest_lag(na, nb, nk)
+        ia = (2 * r1 + 2 if self.has_in else 0) + nb - (1 if self.has_in else 0)
+        self.a = slice(ia, ia + na)
+        self.sy = signals.y_map[1]  # to report |x_hat| in the data's units
+        self.y_max = signals.y_max
+        # P's trace bound, and the |x_hat| beyond which the recursion has diverged
+        self.limits = np.array([mu * len(self.names), 1e6 * (1.0 + self.y_max)])
+        self.factors = _unscale(structure, na, nb, r1, r2, signals.u_map[1], self.sy)
+
+    def run(self, theta, P, u, y, count, hist, stride):
+        na, nb, nk, r1, r2 = self.orders
+        N, n0 = u.size, self.n0
+        lam = np.ones(N)
+        lam[n0:] = self.schedule.factors(count, N - n0)
+        orders = np.array(
+            [r1, nb, na, r2, nk, self.has_in, self.has_out, n0, stride], dtype=np.int64
         )
-    cls = {"hammerstein-wiener": HammersteinWiener, "hammerstein": Hammerstein}.get(
-        structure, Wiener
-    )
-    return cls(u_name, y_name, **kwargs)
+        w, x = np.empty(N), np.empty(N)
+        status, reason = _k.key_term_run(theta, P, u, y, lam, orders, self.limits, w, x, hist)
+        detail = ""
+        if status != OK and self.has_out:
+            x_max = float(np.max(np.abs(x[:status]), initial=0.0)) * self.sy
+            detail = (
+                f" (largest |x_hat| so far {x_max:.3g}, largest |y| {self.y_max * self.sy:.3g})"
+            )
+        return status, reason, detail
+
+    def to_data_units(self, theta):
+        return theta * self.factors
+
+    def from_data_units(self, theta):
+        return theta / self.factors
+
+    def model(self, theta, data):
+        """The identified model from theta (B4 order)."""
+        na, nb, nk, r1, _ = self.orders
+        pos = 0
+        kwargs: dict[str, Any] = dict(na=na, nb=nb, nk=nk, sampling_time=data.sampling_time)
+        if self.has_in:
+            f, p = theta[: r1 + 1], theta[r1 + 1 : 2 * r1 + 2]
+            kwargs["input_block"] = TwoSegmentPolynomial(f, p)
+            pos = 2 * r1 + 2
+            b = np.concatenate(([1.0], theta[pos : pos + nb - 1]))
+            pos += nb - 1
+        else:
+            b = theta[pos : pos + nb]
+            pos += nb
+        a = theta[pos : pos + na]
+        pos += na
+        kwargs.update(a=a, b=b)
+        if self.has_out:
+            q = np.concatenate(([1.0], theta[pos:]))
+            kwargs["output_block"] = Polynomial(q, constant=False)
+        u_name, y_name = data.inputs[0], data.outputs[0]
+        if self.structure == "arx":
+            return ARX(
+                [u_name],
+                [y_name],
+                na,
+                nb,
+                nk,
+                a={y_name: {y_name: a}},
+                b={y_name: {u_name: b}},
+                sampling_time=data.sampling_time,
+            )
+        cls = {"hammerstein-wiener": HammersteinWiener, "hammerstein": Hammerstein}.get(
+            self.structure, Wiener
+        )
+        return cls(u_name, y_name, **kwargs)
+
+    def model_to_check(self, model):
+        """An ARX result is checked as the same linear model without blocks."""
+        if self.structure != "arx":
+            return model
+        na, nb, nk, _, _ = self.orders
+        y_name, u_name = model.outputs[0], model.inputs[0]
+        return BlockModel(
+            u_name,
+            y_name,
+            na=na,
+            nb=nb,
+            nk=nk,
+            a=model.a[y_name][y_name],
+            b=model.b[y_name][u_name],
+            sampling_time=model.sampling_time,
+        )
+
+    def settings(self, common):
+        na, nb, nk, r1, r2 = self.orders
+        settings = {
+            "structure": self.structure,
+            "na": na,
+            "nb": nb,
+            "nk": nk,
+            "forgetting": str(self.schedule),
+            **common,
+        }
+        if self.has_in:
+            settings["r1"] = r1
+        if self.has_out:
+            settings["r2"] = r2
+        return settings
 
 
 def fit_key_term_rls(
@@ -403,8 +275,9 @@ def fit_key_term_rls(
     r1, r2 : int
         Degrees of the two-segment input polynomial (B1, ``>= 1``) and of the output
         polynomial (B3, ``>= 2``). Ignored for a structure without that block.
-    forgetting : float or str
-        Forgetting factor or schedule (paper B: ``"0.98:200,1"``).
+    forgetting : float, str or ForgettingSchedule
+        Forgetting factor or schedule (paper B: ``"0.98:200,1"``), restarting with every
+        pass; read once, before anything else, so a bad value fails at once.
     passes : int
         Maximum number of passes over the data.
     tol : float
@@ -425,7 +298,8 @@ def fit_key_term_rls(
         convergence depends on the units: the same plant with ``u`` in other units
         fails in the first samples (too large) or stalls (too small).
     record_history : bool
-        Keep the parameter trajectory (decimated to at most ``HISTORY_ROWS`` rows, in
+        Keep the parameter trajectory (decimated to at most
+        :data:`~blockid.fitting.recursive.HISTORY_ROWS` rows, in
         the data's units) in ``result.history``: ``"theta"`` (rows), ``"names"``,
         ``"update"`` (update count of every row, counted over all passes).
 
@@ -461,7 +335,8 @@ def fit_key_term_rls(
     >>> fit.settings["converged"], np.round(fit.model.a, 4).tolist()
     (True, [-0.9, -0.01, 0.105])
     """
-    method = "key-term RLS"
+    method = _KeyTermRLS.method
+    schedule = ForgettingSchedule.parse(forgetting)  # once, before any data work
     if structure not in KEY_TERM_STRUCTURES:
         raise ParameterError(
             f"unknown structure {structure!r} for key-term RLS; choose one of "
@@ -477,99 +352,19 @@ def fit_key_term_rls(
     passes = int_at_least("passes", passes, 1)
     tol = positive_number("tol", tol)
     mu = positive_number("initial_covariance", initial_covariance)
-    schedule = ForgettingSchedule.parse(forgetting)
-    names = _layout(structure, na, nb, r1, r2)
-    n = len(names)
-    n0 = max(na, nk + nb - 1, 1)
-    data.check_orders(n0, n, what=f"key-term RLS {structure} na={na}, nb={nb}, nk={nk}")
-    records, (_, su), (_, sy) = signals(data, normalize)
-    factors = _unscale(structure, na, nb, r1, r2, su, sy)
-    theta = start_vector(initial_parameters, factors, names)
-
-    P = mu * np.eye(n)
-    y_max = max(float(np.max(np.abs(y))) for _, _, y in records)
-    limits = np.array([mu * n, 1e6 * (1.0 + y_max)])
-    ia = (2 * r1 + 2 if has_in else 0) + nb - (1 if has_in else 0)
-    orders = np.array([r1, nb, na, r2, nk, has_in, has_out, n0, 1], dtype=np.int64)
-
-    def run(u: np.ndarray, y: np.ndarray, count: int, hist: np.ndarray, stride: int):
-        N = u.size
-        lam = np.ones(N)
-        lam[n0:] = schedule.factors(count, N - n0)
-        orders[8] = stride
-        w, x = np.empty(N), np.empty(N)
-        status, reason = _k.key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist)
-        detail = ""
-        if status != OK and has_out:
-            x_max = float(np.max(np.abs(x[:status]), initial=0.0)) * sy
-            detail = f" (largest |x_hat| so far {x_max:.3g}, largest |y| {y_max * sy:.3g})"
-        return status, reason, detail
-
-    reasons = {
-        _k.REASON_STEP: "the RLS update became non-finite or lost positive definiteness",
-        _k.REASON_EXPLODED: "the estimated internal signal x exceeded 1e6 (1 + max|y|): "
-        "the estimated linear block drives it unstable",
-    }
-    with history_on_failure(record_history, names, lambda rows: rows * factors) as state:
-        n_passes, converged, hist_theta, hist_at = run_passes(
-            run,
-            theta,
-            records,
-            n0=n0,
-            passes=passes,
-            tol=tol,
-            record=record_history,
-            method=method,
-            reasons=reasons,
-            poles=lambda th: poles_of(th[ia : ia + na]),
-        )
-        state["raw"] = {"theta": hist_theta, "update": hist_at}
-        theta = theta * factors
-        model = _model(structure, theta, data, na, nb, nk, r1)
-        checked = model if structure != "arx" else _block_twin(model, na, nb, nk)
-        check_model(checked, data, method)
-
-    settings: dict[str, Any] = {
-        "structure": structure,
-        "na": na,
-        "nb": nb,
-        "nk": nk,
-        "forgetting": str(schedule),
-        "passes": passes,
-        "passes_run": n_passes,
-        "converged": converged,
-        "tol": tol,
-        "initial_covariance": mu,
-        "initial_parameters": np.asarray(initial_parameters, dtype=float).tolist(),
-        "normalize": bool(normalize),
-    }
-    if has_in:
-        settings["r1"] = r1
-    if has_out:
-        settings["r2"] = r2
-    history: dict[str, Any] = {}
-    if record_history:
-        history = {"theta": hist_theta * factors, "names": names, "update": hist_at}
-    return FitResult(
-        model=model,
-        method="key-term-rls",
-        settings=settings,
-        estimation_metrics=one_step_metrics(model, data),
-        n_samples=int(data.n_samples),
-        history=history,
+    n = len(_layout(structure, na, nb, r1, r2))
+    data.check_orders(
+        largest_lag(na, nb, nk), n, what=f"key-term RLS {structure} na={na}, nb={nb}, nk={nk}"
     )
-
-
-def _block_twin(model: ARX, na: int, nb: int, nk: int) -> BlockModel:
-    """The same linear model as a block model without blocks, for :func:`check_model`."""
-    y_name, u_name = model.outputs[0], model.inputs[0]
-    return BlockModel(
-        u_name,
-        y_name,
-        na=na,
-        nb=nb,
-        nk=nk,
-        a=model.a[y_name][y_name],
-        b=model.b[y_name][u_name],
-        sampling_time=model.sampling_time,
+    signals = normalised_signals(data, normalize)
+    algorithm = _KeyTermRLS(structure, (na, nb, nk, r1, r2), schedule, mu, signals)
+    return fit_recursive(
+        data,
+        signals,
+        algorithm,
+        initial_parameters=initial_parameters,
+        initial_covariance=mu,
+        passes=passes,
+        tol=tol,
+        record_history=record_history,
     )
