@@ -65,6 +65,9 @@ class Block(ABC):
     """
 
     kind: ClassVar[str] = ""
+    #: ``"static"`` (memoryless), ``"dynamic"`` (nonlinear with memory, acting on the
+    #: measured input) or ``"linear"`` (the linear dynamic block): the role in a chain.
+    role: ClassVar[str] = ""
     #: True when the block output is ``regressors(u) @ to_vector()``.
     linear_in_parameters: ClassVar[bool] = False
     #: True when the block says nothing reliable outside the input range it was fitted
@@ -190,6 +193,12 @@ class Block(ABC):
 class StaticBlock(Block):
     """A memoryless nonlinearity ``w(k) = N(u(k))``."""
 
+    role: ClassVar[str] = "static"
+
+    def run(self, u: np.ndarray) -> np.ndarray:
+        """The block's output for the input sequence ``u``."""
+        return np.asarray(self(u), dtype=float)
+
     @abstractmethod
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """Evaluate the block on an array of inputs (any shape)."""
@@ -309,6 +318,12 @@ class DynamicBlock(Block):
 
     A dynamic block acts on the measured input: in a model it comes first.
     """
+
+    role: ClassVar[str] = "dynamic"
+
+    def run(self, u: np.ndarray) -> np.ndarray:
+        """The block's output for ``u``, started at :meth:`rest_state`."""
+        return self.simulate(u, x0=self.rest_state(float(u[0])) if u.size else 0.0)
 
     @abstractmethod
     def simulate(self, u: np.ndarray, x0: float = 0.0) -> np.ndarray:

@@ -59,6 +59,11 @@ class LinearBlock(Block):
     """
 
     kind: ClassVar[str] = "linear"
+    role: ClassVar[str] = "linear"
+
+    def run(self, w: np.ndarray) -> np.ndarray:
+        """The block's output for ``w``, from rest."""
+        return self.simulate(w)
 
     def __init__(
         self,

@@ -127,8 +127,8 @@ class Polynomial(_PlottableStaticBlock):
     def check_normalised(self, after_linear: bool) -> None:
         if after_linear and self.constant:
             raise ParameterError(
-                "a polynomial after a linear block has no constant term (B3): "
-                "use Polynomial(q, constant=False)"
+                "an output polynomial after a linear block must be a Polynomial without "
+                "constant term (B3): use Polynomial(q, constant=False)"
             )
         if after_linear and self.coefficients[0] != 1.0:
             raise ParameterError(

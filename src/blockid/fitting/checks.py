@@ -88,7 +88,7 @@ def check_model(
         rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
             f"{method} returned a linear block that is unstable or on the edge of stability "
-            f"(largest pole magnitude {rho:.6g}, limit {1 - STABILITY_MARGIN:g}); its "
+            f"(largest pole magnitude {rho:.10g}, limit {1 - STABILITY_MARGIN:g}); its "
             "simulation would diverge or ring, so no model is returned. See docs/convergence.md"
         )
     mse = simulation_mse(model, data)

@@ -65,10 +65,7 @@ def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> A
     ``u`` (the input data) sets each block's input range: the range of the signal that
     enters it when ``u`` is simulated.
     """
-    from blockid.blocks.base import DynamicBlock
-    from blockid.blocks.linear import LinearBlock
-
-    panels = [(i, b) for i, b in enumerate(model.blocks) if not isinstance(b, LinearBlock)]
+    panels = [(i, b) for i, b in enumerate(model.blocks) if b.role != "linear"]
     fig, axes = _figure(max(len(panels), 1), width=5.0, height=3.6)
     inputs = None if u is None else model.block_inputs(np.asarray(u, float).reshape(-1, 1))
     ref_blocks = getattr(truth, "blocks", None)
@@ -77,7 +74,7 @@ def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> A
         if ref_blocks is not None and len(ref_blocks) == len(model.blocks):
             ref = ref_blocks[i] if type(ref_blocks[i]) is type(block) else None
         s = None if inputs is None else inputs[i]
-        if isinstance(block, DynamicBlock):
+        if block.role == "dynamic":
             block.plot(ax=ax, u=s, truth=ref)
         else:
             rng = None if s is None else (float(np.min(s)), float(np.max(s)))
