@@ -1,5 +1,8 @@
 import json
 
+import numpy as np
+import pandas as pd
+import pytest
 from typer.testing import CliRunner
 
 from blockid.cli.main import app
@@ -19,6 +22,23 @@ def test_demo_keeps_data_models_figures_and_results(tmp_path):
         "electrohydraulic_validation.png",
         "results.json",
     } <= names
-    for structure in doc["best"]:  # every saved model loads and is the best of its structure
+    assert set(doc["best"]) == {"hammerstein-wiener", "hammerstein", "wiener", "arx"}
+    assert {f"model_{s}.json" for s in doc["best"]} <= names
+    # Every saved model is the best of its structure: loaded from its file and run free
+    # on the validation record the demo wrote, it reproduces the MSE results.json
+    # reports for that structure (computed here from the arrays, not by blockid).
+    validation = pd.read_csv(out / "electrohydraulic_validation.csv")
+    u = validation["current"].to_numpy()
+    y = validation["velocity"].to_numpy()
+    for structure, best in doc["best"].items():
         model = load_model(out / f"model_{structure}.json")
         assert model.inputs == ("current",) and model.outputs == ("velocity",)
+        saved = json.loads((out / f"model_{structure}.json").read_text())
+        assert saved["estimation"] == {"estimator": best["estimator"]}
+        lag = model.max_lag
+        y_sim = model.simulate(u, y[:lag])[:, 0]
+        mse = float(np.mean((y[lag:] - y_sim[lag:]) ** 2))
+        assert mse == pytest.approx(best["mse"]["velocity"], rel=1e-9), structure
+        # and it is the lowest of that structure's rows in the table
+        rows = [row for row in doc["table"] if row["model"] == structure and "mse" in row]
+        assert best["mse"]["velocity"] == min(row["mse"]["velocity"] for row in rows)

@@ -25,8 +25,13 @@ def test_save_load_identical_predictions(tmp_path, rng):
     assert np.array_equal(again.simulate(u), model.simulate(u))
     assert np.array_equal(again.predict(u, y), model.predict(u, y))
     assert again.sampling_time == 0.05
+    doc = json.loads(path.read_text())
+    assert (doc["format"], doc["version"]) == ("blockid-model", 1)
+    assert doc["estimation"] == {"method": "batch"}
+    assert doc["model"] == model.to_dict()
     with pytest.raises(errors.BlockidError, match="exists"):
         save_model(model, path)
+    assert json.loads(path.read_text()) == doc  # the refused save left the file alone
 
 
 @pytest.mark.parametrize(
@@ -49,6 +54,15 @@ def test_save_load_identical_predictions(tmp_path, rng):
 def test_damaged_files(tmp_path, text, match):
     path = tmp_path / "m.json"
     path.write_text(text)
-    with pytest.raises(errors.ModelFileError, match=match):
+    with pytest.raises(errors.ModelFileError, match=match) as info:
         load_model(path)
-    json.loads('{"ok": 1}')
+    # the message names the file it refused, first, so a user knows which one to fix
+    assert str(info.value).startswith(str(path))
+    assert path.read_text() == text  # loading never rewrites a file
+
+
+def test_missing_file_is_named(tmp_path):
+    path = tmp_path / "nowhere.json"
+    with pytest.raises(errors.ModelFileError) as info:
+        load_model(path)
+    assert str(info.value) == f"model file {path} does not exist"

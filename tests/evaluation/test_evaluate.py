@@ -1,0 +1,117 @@
+"""evaluate(): free-run and one-step output, initial samples skipped, by hand.
+
+The model is ``y(t) = 0.5 y(t-1) - 0.25 y(t-2) + u(t-1)`` (``max_lag = 2``) on two
+short experiments; every number below is worked out in the comments, in binary-exact
+arithmetic, so the metrics are compared exactly or to rounding.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from blockid.data import Dataset
+from blockid.data.dataset import Experiment
+from blockid.errors import DataError, ParameterError
+from blockid.evaluation import evaluate
+from blockid.models import ARX
+
+MODEL = ARX(["u"], ["y"], 2, 1, 1, a={"y": {"y": [-0.5, 0.25]}}, b={"y": {"u": [1.0]}})
+
+U_A = [1.0, 0.0, 2.0, 0.0, 0.0, 0.0]
+Y_A = [0.0, 1.0, 0.5, 2.0, 1.0, 0.0]
+U_B = [0.0, 0.0, -4.0, 0.0]
+Y_B = [2.0, 0.0, 0.0, -8.0]
+
+# Free run from the first two measured outputs:
+#   A: t2 = 0.5*1 - 0.25*0 + 0 = 0.5;  t3 = 0.25 - 0.25 + 2 = 2;  t4 = 1 - 0.125 = 0.875;
+#      t5 = 0.4375 - 0.5 = -0.0625
+#   B: t2 = 0 - 0.5 + 0 = -0.5;  t3 = -0.25 - 0 - 4 = -4.25
+SIM_A = [0.0, 1.0, 0.5, 2.0, 0.875, -0.0625]
+SIM_B = [2.0, 0.0, -0.5, -4.25]
+SIM_ERR = [0.0, 0.0, 0.125, 0.0625, 0.5, -3.75]  # y - y_sim after the first two of each
+# One step ahead from measured past outputs:
+#   A: t2 = 0.5;  t3 = 0.25 - 0.25 + 2 = 2;  t4 = 1 - 0.125 = 0.875;  t5 = 0.5 - 0.5 = 0
+#   B: t2 = -0.5;  t3 = 0 - 0 - 4 = -4
+PRED_A = [0.0, 1.0, 0.5, 2.0, 0.875, 0.0]
+PRED_B = [2.0, 0.0, -0.5, -4.0]
+PRED_ERR = [0.0, 0.0, 0.125, 0.0, 0.5, -4.0]
+Y_KEPT = [0.5, 2.0, 1.0, 0.0, 0.0, -8.0]  # mean -0.75; sum of squared deviations 65.875
+
+
+def _data() -> Dataset:
+    def exp(name, u, y):
+        return Experiment(name, np.array(u)[:, None], np.array(y)[:, None])
+
+    return Dataset(("u",), ("y",), 0.1, [exp("A", U_A, Y_A), exp("B", U_B, Y_B)])
+
+
+def test_the_hand_computation_is_right():
+    # the numbers above, checked once against the definition (not against blockid)
+    assert sum((y - m) ** 2 for y, m in zip(Y_KEPT, [-0.75] * 6, strict=True)) == 65.875
+    kept_sim = SIM_A[2:] + SIM_B[2:]
+    assert [y - s for y, s in zip(Y_KEPT, kept_sim, strict=True)] == SIM_ERR
+
+
+def test_free_run_outputs_and_metrics():
+    out = evaluate(MODEL, _data(), "simulation")
+    assert out.skip == 2 and out.mode == "simulation"
+    assert out.outputs[0][:, 0].tolist() == SIM_A
+    assert out.outputs[1][:, 0].tolist() == SIM_B
+    m = out.metrics
+    # over the 6 samples after the initial two of each experiment (not 10)
+    assert m["mse"]["y"] == pytest.approx(14.33203125 / 6, rel=1e-15)
+    assert m["rmse"]["y"] == pytest.approx(math.sqrt(14.33203125 / 6), rel=1e-15)
+    assert m["mae"]["y"] == pytest.approx(4.4375 / 6, rel=1e-15)
+    assert m["max_abs_error"]["y"] == 3.75  # from a negative error
+    assert m["fit_percent"]["y"] == pytest.approx(
+        100.0 * (1.0 - math.sqrt(14.33203125 / 65.875)), rel=1e-14
+    )
+    assert out.to_dict()["n_samples"] == 10
+    assert out.to_dict()["initial_samples_per_experiment"] == 2
+
+
+def test_one_step_outputs_and_metrics():
+    out = evaluate(MODEL, _data(), "one-step")
+    assert out.outputs[0][:, 0].tolist() == PRED_A
+    assert out.outputs[1][:, 0].tolist() == PRED_B
+    m = out.metrics
+    assert m["mse"]["y"] == pytest.approx(16.265625 / 6, rel=1e-15)
+    assert m["mae"]["y"] == pytest.approx(4.625 / 6, rel=1e-15)
+    assert m["max_abs_error"]["y"] == 4.0
+    assert m["fit_percent"]["y"] == pytest.approx(
+        100.0 * (1.0 - math.sqrt(16.265625 / 65.875)), rel=1e-14
+    )
+    frame = out.to_frame()
+    assert frame["y_pred"].tolist() == PRED_A + PRED_B
+
+
+def test_two_outputs_are_scored_separately():
+    # y1 is MODEL on u; y2 = u(t-1) (a pure delay). Both free-run from rest values.
+    model = ARX(
+        ["u"],
+        ["y1", "y2"],
+        na=[[2, 0], [0, 0]],
+        nb=1,
+        nk=1,
+        a={"y1": {"y1": [-0.5, 0.25], "y2": []}, "y2": {"y1": [], "y2": []}},
+        b={"y1": {"u": [1.0]}, "y2": {"u": [1.0]}},
+    )
+    u = np.array(U_A)
+    y = np.column_stack([Y_A, [5.0, 1.0, 0.0, 2.0, 0.0, -3.0]])
+    data = Dataset.from_arrays(u, y, inputs=["u"], outputs=["y1", "y2"])
+    m = evaluate(model, data, "simulation").metrics
+    # y1 errors after t = 2: [0, 0, 0.125, 0.0625]; y2: u(t-1) = [0, 2, 0, 0] vs
+    # [0, 2, 0, -3]: errors [0, 0, 0, -3]
+    assert m["mse"] == {"y1": 0.01953125 / 4, "y2": 9.0 / 4}
+    assert m["max_abs_error"] == {"y1": 0.125, "y2": 3.0}
+
+
+def test_bad_mode_and_mismatched_signals():
+    with pytest.raises(ParameterError, match="mode must be one of simulation, one-step"):
+        evaluate(MODEL, _data(), "two-step")
+    other = Dataset.from_arrays(np.zeros(5), np.zeros(5), inputs=["v"], outputs=["y"])
+    with pytest.raises(DataError, match=r"expects inputs \['u'\].*have inputs \['v'\]"):
+        evaluate(MODEL, other)
