@@ -77,3 +77,67 @@ def test_every_module_declares_all():
         if module.endswith("__main__"):
             continue
         assert hasattr(mod, "__all__"), f"{module} has no __all__"
+
+
+def test_the_command_line_starts_without_the_heavy_libraries():
+    """``blockid --help`` must not pay for pandas, SciPy, numba or matplotlib: commands
+    import them when they run (issue: every command used to spend ~1.7 s starting)."""
+    code = (
+        "import sys, blockid, blockid.cli.main\n"
+        "heavy = [m for m in ('pandas', 'scipy', 'numba', 'matplotlib') if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_structure_names_are_interpreted_in_the_registry_only():
+    """No module compares a structure name against a literal outside the registry
+    (one structure name, one interpreter)."""
+    pattern = __import__("re").compile(r"structure\s*(==|!=|in)\s*[(\"']")
+    offenders = []
+    for path in SRC.rglob("*.py"):
+        if path.name == "registry.py":
+            continue
+        for number, line in enumerate(path.read_text().splitlines(), start=1):
+            if pattern.search(line):
+                offenders.append(f"{path.relative_to(SRC)}:{number}: {line.strip()}")
+    assert not offenders, offenders
+
+
+def test_no_isinstance_ladder_over_block_types_outside_blocks():
+    """Per-block knowledge lives in the blocks: outside ``blocks/`` no function tests a
+    value against two or more block classes."""
+    import ast
+
+    names = {
+        "Backlash",
+        "DeadZone",
+        "Saturation",
+        "PiecewiseLinear",
+        "Polynomial",
+        "TwoSegmentPolynomial",
+        "LinearBlock",
+        "StaticBlock",
+        "DynamicBlock",
+    }
+    offenders = []
+    for path in SRC.rglob("*.py"):
+        if "blocks" in path.parts:
+            continue
+        tree = ast.parse(path.read_text())
+        for fn in ast.walk(tree):
+            if not isinstance(fn, ast.FunctionDef):
+                continue
+            seen = set()
+            for node in ast.walk(fn):
+                if (
+                    isinstance(node, ast.Call)
+                    and getattr(node.func, "id", "") == "isinstance"
+                    and len(node.args) == 2
+                ):
+                    seen |= {
+                        n.id for n in ast.walk(node.args[1]) if isinstance(n, ast.Name)
+                    } & names
+            if len(seen) >= 2:
+                offenders.append(f"{path.relative_to(SRC)}::{fn.name} tests {sorted(seen)}")
+    assert not offenders, offenders

@@ -6,70 +6,73 @@ Data flows one way::
                           \\-> _kernels (numba, NumPy only) <-/
 
 The top level re-exports a small, deliberate API; everything else lives in its
-subpackage (``blockid.blocks``, ``blockid.models``, ``blockid.estimators``, ...).
+subpackage (``blockid.blocks``, ``blockid.models``, ``blockid.estimators``, ...). The
+names are imported on first use (PEP 562), so ``import blockid`` and the command line
+start without loading pandas, SciPy or numba until a command needs them.
 """
 
-from blockid.blocks import (
-    Backlash,
-    DeadZone,
-    PiecewiseLinear,
-    Polynomial,
-    Saturation,
-    TwoSegmentPolynomial,
-)
-from blockid.data import Dataset, Experiment, read_data
-from blockid.errors import (
-    BlockidError,
-    DataError,
-    EstimationError,
-    ModelFileError,
-    OrderError,
-    ParameterError,
-)
-from blockid.estimators import (
-    AdaptiveWeightedRLS,
-    BatchLeastSquares,
-    ForgettingSchedule,
-    HierarchicalRLS,
-    RecursiveLeastSquares,
-)
-from blockid.evaluation import evaluate, metrics_by_output
-from blockid.fitting import fit_arx
-from blockid.models import ARX, load_model, save_model
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 __version__ = "0.1.0"
 
-__all__ = [
+#: Public name -> module that defines it.
+_WHERE = {
     # data
-    "Dataset",
-    "Experiment",
-    "read_data",
+    "Dataset": "blockid.data",
+    "Experiment": "blockid.data",
+    "read_data": "blockid.data",
     # blocks
-    "Backlash",
-    "DeadZone",
-    "PiecewiseLinear",
-    "Polynomial",
-    "Saturation",
-    "TwoSegmentPolynomial",
+    "Backlash": "blockid.blocks",
+    "DeadZone": "blockid.blocks",
+    "LinearBlock": "blockid.blocks",
+    "PiecewiseLinear": "blockid.blocks",
+    "Polynomial": "blockid.blocks",
+    "Saturation": "blockid.blocks",
+    "StaticBlock": "blockid.blocks",
+    "TwoSegmentPolynomial": "blockid.blocks",
     # models
-    "ARX",
-    "load_model",
-    "save_model",
-    # estimators
-    "AdaptiveWeightedRLS",
-    "BatchLeastSquares",
-    "ForgettingSchedule",
-    "HierarchicalRLS",
-    "RecursiveLeastSquares",
-    # identification and validation
-    "evaluate",
-    "fit_arx",
-    "metrics_by_output",
+    "ARX": "blockid.models",
+    "ChainModel": "blockid.models",
+    "load_model": "blockid.models",
+    "save_model": "blockid.models",
+    # estimators (regressor level)
+    "AdaptiveWeightedRLS": "blockid.estimators",
+    "BatchLeastSquares": "blockid.estimators",
+    "ForgettingSchedule": "blockid.estimators",
+    "HierarchicalRLS": "blockid.estimators",
+    "RecursiveLeastSquares": "blockid.estimators",
+    # identification (model level) and validation
+    "ARXEstimator": "blockid.fitting.estimator",
+    "BacklashEstimator": "blockid.fitting.estimator",
+    "HammersteinEstimator": "blockid.fitting.estimator",
+    "HammersteinWienerEstimator": "blockid.fitting.estimator",
+    "WienerEstimator": "blockid.fitting.estimator",
+    "evaluate": "blockid.evaluation",
+    "fit_arx": "blockid.fitting",
+    "fit_model": "blockid.fitting",
+    "metrics_by_output": "blockid.evaluation",
     # errors
-    "BlockidError",
-    "DataError",
-    "EstimationError",
-    "ModelFileError",
-    "OrderError",
-    "ParameterError",
-]
+    "BlockidError": "blockid.errors",
+    "DataError": "blockid.errors",
+    "EstimationError": "blockid.errors",
+    "ModelFileError": "blockid.errors",
+    "OrderError": "blockid.errors",
+    "ParameterError": "blockid.errors",
+}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name]), name)
+        globals()[name] = value  # later look-ups skip this function
+        return value
+    raise AttributeError(f"module 'blockid' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_WHERE])

@@ -183,7 +183,7 @@ def test_bad_order_text(tito_csv):
     r = runner.invoke(
         app, [*FIT[:1], str(tito_csv), *FIT[1:3], "-y", "y1", "--na", "two", "--json"]
     )
-    assert r.exit_code == 2 and "--na 'two'" in r.stderr
+    assert r.exit_code == 2 and "na='two'" in r.stderr and "(option --na)" in r.stderr
 
 
 def test_version():

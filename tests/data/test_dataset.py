@@ -311,7 +311,7 @@ def test_select_out_of_range_names_option_range_and_length():
 
 
 def test_select_start_beyond_end():
-    with pytest.raises(DataError, match=r"--estimation 6: does not fit experiment 'b'"):
+    with pytest.raises(DataError, match=r"range 6: does not fit experiment 'b'"):
         two_experiments().select(6, None)
 
 
@@ -321,7 +321,7 @@ def test_select_negative_index_rejected():
 
 
 def test_select_empty_range_rejected():
-    with pytest.raises(DataError, match=r"--estimation 4:4 is empty"):
+    with pytest.raises(DataError, match=r"range 4:4 is empty"):
         two_experiments().select(4, 4)
 
 

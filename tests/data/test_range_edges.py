@@ -42,7 +42,7 @@ def test_select_refuses_a_range_beyond_the_record(start, stop):
     with pytest.raises(DataError) as info:
         _data().select(start, stop)
     message = str(info.value)
-    assert f"--estimation {text} does not fit experiment" in message
+    assert f"range {text} does not fit experiment" in message
     assert "has 50 samples (indices 0 to 49; a valid range is within 0:50)" in message
 
 

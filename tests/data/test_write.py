@@ -41,7 +41,7 @@ def test_write_table_refuses_to_overwrite(tmp_path, frame):
     with pytest.raises(DataError) as info:
         write_table(frame, path)
     message = str(info.value)
-    assert f"{path} already exists" in message and "--force" in message
+    assert f"{path} already exists" in message and "overwrite=True" in message
     assert "overwrite=True" in message
     assert path.read_text() == "precious\n"
     assert leftovers(tmp_path) == []
@@ -111,7 +111,7 @@ def test_write_text_atomic_round_trip_and_refusal(tmp_path):
     text = json.dumps({"a": [0.5, -0.25], "name": "Ωmega"})
     assert write_text_atomic(text, path) == path
     assert json.loads(path.read_text(encoding="utf-8")) == {"a": [0.5, -0.25], "name": "Ωmega"}
-    with pytest.raises(DataError, match="already exists; pass --force"):
+    with pytest.raises(DataError, match="already exists; pass overwrite=True"):
         write_text_atomic("{}", path)
     assert json.loads(path.read_text(encoding="utf-8"))["a"] == [0.5, -0.25]
     write_text_atomic("{}", path, overwrite=True)

@@ -62,7 +62,7 @@ def test_parse_subsystem_and_subset(rng):
     assert (spec.structure, spec.method, spec.options) == (
         "backlash",
         "aw-rls",
-        {"na": 2, "nb": 1, "nk": 1, "eps1": 1.5},
+        {"na": "2", "nb": "1", "nk": "1", "eps1": "1.5"},  # text: fit_model converts
     )
     with pytest.raises(errors.ParameterError, match="expected 'NAME: IN"):
         parse_subsystem("S1 u1 v1")
@@ -87,4 +87,7 @@ def test_bad_option_values_are_reported_per_subsystem(rng):
     spec = parse_subsystem("S1: u1 -> v1 | arx na=1 nb=1 nk=1 method=rls passes=abc")
     with pytest.raises(errors.ParameterError, match="subsystem S1"):
         fit_network(data, [spec])
-    assert parse_subsystem("S1: u1 -> v1 | arx forgetting=none").options == {"forgetting": None}
+    spec = parse_subsystem("S1: u1 -> v1 | arx method=rls forgetting=none")
+    assert spec.options == {"forgetting": "none"}
+    fit = fit_network(data, [spec])  # "none": the method's default forgetting (1)
+    assert fit.settings["subsystems"]["S1"]["forgetting"] == "1"

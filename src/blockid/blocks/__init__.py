@@ -1,7 +1,15 @@
-"""Nonlinear blocks: static curves and the backlash (hysteresis) block."""
+"""Blocks: static curves, the backlash (hysteresis) block and the linear dynamic block."""
 
 from blockid.blocks.backlash import Backlash
-from blockid.blocks.base import BLOCK_TYPES, Block, DynamicBlock, StaticBlock, block_from_dict
+from blockid.blocks.base import (
+    BLOCK_TYPES,
+    Block,
+    DynamicBlock,
+    StaticBlock,
+    block_from_dict,
+    block_template,
+)
+from blockid.blocks.linear import LinearBlock
 from blockid.blocks.polynomial import Polynomial, TwoSegmentPolynomial
 from blockid.blocks.static import DeadZone, PiecewiseLinear, Saturation
 
@@ -11,10 +19,12 @@ __all__ = [
     "Block",
     "DeadZone",
     "DynamicBlock",
+    "LinearBlock",
     "PiecewiseLinear",
     "Polynomial",
     "Saturation",
     "StaticBlock",
     "TwoSegmentPolynomial",
     "block_from_dict",
+    "block_template",
 ]

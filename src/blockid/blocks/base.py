@@ -108,7 +108,12 @@ class Block(ABC):
             chunk = theta[pos : pos + size]
             params[key] = chunk.tolist() if isinstance(value, list | tuple) else float(chunk[0])
             pos += size
-        return type(self)(**params)
+        try:
+            return type(self)(**params)
+        except BlockidError:
+            raise
+        except (TypeError, ValueError) as exc:  # a user block's own check
+            raise ParameterError(f"{self.kind}: {exc}") from None
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds of :meth:`to_vector` for the simulation-error fit."""
@@ -170,9 +175,12 @@ class Block(ABC):
         :meth:`scaled`) or a :class:`LinearFamily` (a sub-family linear in some
         parameters, fitted by the Hammerstein regression). With ``around`` (the best
         candidate of the first grid) a block may return a finer second grid. Blocks
-        linear in their parameters need no grid.
+        linear in their parameters need no grid; the default for the others is the block
+        itself, its parameters taken as the starting shape.
         """
-        return []
+        if self.linear_in_parameters or around is not None:
+            return []
+        return [self]
 
     # ------------------------------------------------------------------ files
     def to_dict(self) -> dict[str, Any]:
@@ -404,12 +412,14 @@ def _option_value(text: str) -> Any:
     return numbers[0] if len(numbers) == 1 else numbers
 
 
-def block_template(spec: str) -> Block:
+def block_template(spec: str, *, output: bool = False) -> Block:
     """A block to fit, from its name and form: ``"KIND[:key=value[;key=value..]]"``.
 
     ``KIND`` is a block's ``kind`` (``dead-zone``, ``saturation``, ``polynomial``,
     ``piecewise-linear``, ``two-segment-polynomial``, ``backlash`` or a user block's);
-    the options go to its :meth:`Block.template`. Lists are comma separated.
+    the options go to its :meth:`Block.template` (with ``output=True``, to its
+    ``output_template`` where it has one: the output polynomial has no constant term and
+    starts as the identity). Lists are comma separated.
 
     >>> block_template("polynomial:degree=2")
     Polynomial(coefficients=[0.0, 0.0, 0.0], constant=True)
@@ -432,7 +442,9 @@ def block_template(spec: str) -> Block:
                 "'polynomial:degree=3' or 'piecewise-linear:knots=7'"
             )
         options[key.strip().replace("-", "_")] = _option_value(value)
+    cls = BLOCK_TYPES[kind]
+    make = getattr(cls, "output_template", cls.template) if output else cls.template
     try:
-        return BLOCK_TYPES[kind].template(**options)
+        return make(**options)
     except TypeError as exc:
         raise ParameterError(f"block {kind!r}: {exc}") from None

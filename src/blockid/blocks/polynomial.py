@@ -117,6 +117,12 @@ class Polynomial(_PlottableStaticBlock):
             return cls(np.zeros(int(degree) + 1), constant=True)
         return cls([1.0] + [0.0] * (int(degree) - 1), constant=False)
 
+    @classmethod
+    def output_template(cls, degree: int = 3, constant: bool = False) -> Polynomial:
+        """The output block of B3 to fit: ``q = [1, 0, .., 0]`` of the given degree (a
+        constant term is refused after a linear block, B3)."""
+        return cls.template(degree, constant=constant)
+
     def free_mask(self, after_linear: bool) -> np.ndarray:
         """After a linear block a polynomial without constant fixes ``q_1 = 1`` (B3)."""
         mask = np.ones(self.coefficients.size, dtype=bool)

@@ -1,20 +1,46 @@
-"""Helpers shared by the CLI commands: option parsing, error reporting, output."""
+"""What every command shares: consoles, error reporting, data loading, JSON and tables.
+
+Library errors name Python parameters (``exc.parameter``); :func:`flag` maps them to
+this command line's flags, so that a message always says what to change on the line.
+"""
 
 from __future__ import annotations
 
 import functools
 import json
 import sys
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from blockid.errors import BlockidError, OrderError
+from blockid.errors import BlockidError, ParameterError
+from blockid.fitting.registry import OPTIONS, option_flag
 
-__all__ = ["stdout", "stderr", "cli_errors", "parse_order", "print_json", "metrics_table"]
+__all__ = [
+    "DataPaths",
+    "ExperimentColumn",
+    "Force",
+    "Inputs",
+    "Json",
+    "Outputs",
+    "SamplingTime",
+    "Seed",
+    "TimeColumn",
+    "cli_errors",
+    "error_line",
+    "flag",
+    "load_data",
+    "metrics_table",
+    "print_json",
+    "print_model",
+    "refuse_to_overwrite",
+    "stderr",
+    "stdout",
+]
 
 # rich falls back to 80 columns when writing to a pipe or file, which truncates numbers
 # in tables; use a wide console there (a terminal keeps its own width).
@@ -22,6 +48,39 @@ stdout = Console(highlight=False, soft_wrap=True, width=None if sys.stdout.isatt
 stderr = Console(
     stderr=True, highlight=False, soft_wrap=True, width=None if sys.stderr.isatty() else 400
 )
+
+#: Flags of the library parameters that are not estimator options (those are
+#: :func:`~blockid.fitting.registry.option_flag` of their name).
+FLAGS = {
+    "sampling_time": "--ts",
+    "time_column": "--time-column",
+    "experiment_column": "--experiment-column",
+    "inputs": "--input",
+    "outputs": "--output",
+    "overwrite": "--force",
+    "estimation": "--estimation",
+    "validation": "--validation",
+    "structure": "--structure",
+    "structures": "--structures",
+    "method": "--method",
+    "validation_bandwidth": "--validation-bandwidth",
+}
+
+
+def flag(parameter: str | None) -> str | None:
+    """The flag of a library parameter on this command line (None: it has none)."""
+    if parameter in FLAGS:
+        return FLAGS[parameter]
+    return option_flag(parameter) if parameter in OPTIONS else None
+
+
+def error_line(exc: BlockidError) -> str:
+    """``error: <message>``, naming the flag of the parameter at fault if it does not."""
+    message = " ".join(str(exc).split())
+    name = flag(getattr(exc, "parameter", None))
+    if name is not None and name not in message:
+        message += f" (option {name})"
+    return f"error: {message}"
 
 
 def cli_errors(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -32,7 +91,7 @@ def cli_errors(fn: Callable[..., Any]) -> Callable[..., Any]:
         try:
             return fn(*args, **kwargs)
         except BlockidError as exc:
-            stderr.print(f"[bold red]error:[/] {exc}", soft_wrap=True, markup=True)
+            stderr.print(error_line(exc), soft_wrap=True, markup=False)
             raise typer.Exit(code=2) from None
         except KeyboardInterrupt:
             stderr.print("interrupted; no output file was written")
@@ -41,20 +100,74 @@ def cli_errors(fn: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
-def parse_order(text: str | None, name: str) -> Any:
-    """``"2"`` -> 2; ``"2,1;1,2"`` -> [[2, 1], [1, 2]] (rows: outputs)."""
-    if text is None:
-        return None
-    try:
-        rows = [[int(v) for v in row.replace(" ", ",").split(",") if v] for row in text.split(";")]
-    except ValueError:
-        raise OrderError(
-            f"--{name} {text!r}: give a whole number, or a matrix with rows separated by ';' "
-            "and entries by ',' (rows: outputs), e.g. --na 2 or --na '2,1;1,2'"
-        ) from None
-    if len(rows) == 1 and len(rows[0]) == 1:
-        return rows[0][0]
-    return rows
+DataPaths = Annotated[
+    list[Path],
+    typer.Argument(metavar="DATA", help="Data file(s): .csv, .tsv, .txt, .parquet or .mat."),
+]
+Inputs = Annotated[
+    list[str],
+    typer.Option("--input", "-u", metavar="NAME", help="Input column; repeat for several inputs."),
+]
+Outputs = Annotated[
+    list[str],
+    typer.Option(
+        "--output", "-y", metavar="NAME", help="Output column; repeat for several outputs."
+    ),
+]
+SamplingTime = Annotated[
+    float | None,
+    typer.Option("--ts", metavar="SECONDS", help="Sampling time in seconds.", show_default=False),
+]
+TimeColumn = Annotated[
+    str | None,
+    typer.Option(
+        "--time-column", metavar="NAME", help="Column of sample times (sampling time inferred)."
+    ),
+]
+ExperimentColumn = Annotated[
+    str | None,
+    typer.Option(
+        "--experiment-column", metavar="NAME", help="Column labelling the experiment of each row."
+    ),
+]
+Force = Annotated[bool, typer.Option("--force", help="Replace an existing output file.")]
+Json = Annotated[bool, typer.Option("--json", help="Print one JSON document on stdout.")]
+Seed = Annotated[
+    int, typer.Option(metavar="N", help="Random seed: the same seed gives the same run.")
+]
+
+
+def refuse_to_overwrite(out: Path | None, force: bool) -> None:
+    """Stop before any work when ``out`` exists and ``--force`` was not given."""
+    if out is not None and out.exists() and not force:
+        raise ParameterError(f"{out} exists; pass --force to replace it")
+
+
+def load_data(
+    paths: Sequence[Path],
+    inputs: Sequence[str],
+    outputs: Sequence[str],
+    ts: float | None,
+    time_column: str | None,
+    experiment_column: str | None,
+    rng: str | None = None,
+    what: str = "--estimation",
+) -> Any:
+    """Read the data files; keep the samples of ``rng`` (the text of flag ``what``)."""
+    from blockid.data import parse_range, read_data
+
+    data = read_data(
+        paths,
+        inputs,
+        outputs,
+        sampling_time=ts,
+        time_column=time_column,
+        experiment_column=experiment_column,
+    )
+    if rng:
+        start, stop = parse_range(rng, what)
+        data = data.select(start, stop, what=what)
+    return data
 
 
 def print_json(doc: Any) -> None:
@@ -81,3 +194,25 @@ def metrics_table(title: str, rows: list[tuple[str, dict[str, dict[str, float]]]
                 f"{metrics['fit_percent'][out]:.2f}",
             )
     return table
+
+
+def print_model(model: Any) -> None:
+    """The parameters of a model (ARX: one row per coefficient) as a table."""
+    from rich.markup import escape
+
+    table = Table(title=f"{model.structure} model", title_justify="left")
+    table.add_column("parameter")
+    table.add_column("value", justify="right")
+    if hasattr(model, "parameter_names"):  # ARX
+        for i in range(len(model.outputs)):
+            names, values = model.parameter_names(i), model.parameter_vector(i)
+            for name, value in zip(names, values, strict=True):
+                table.add_row(escape(name), f"{value:.6g}")
+    elif hasattr(model, "subsystems"):
+        for name, sub in model.subsystems:
+            table.add_row(escape(name), sub.structure)
+    else:
+        for name, value in model.parameters.items():
+            values = value if isinstance(value, list) else [value]
+            table.add_row(name, ", ".join(f"{v:.6g}" for v in values))
+    stdout.print(table)

@@ -404,7 +404,7 @@ class Dataset:
         raise DataError(_unknown_name_message(prefix, "signal", name, self.inputs + self.outputs))
 
     def select(
-        self, start: int | None = None, stop: int | None = None, what: str = "--estimation"
+        self, start: int | None = None, stop: int | None = None, what: str = "range"
     ) -> Dataset:
         """Keep samples ``start <= k < stop`` of every experiment (Python slice rules).
 
@@ -822,7 +822,8 @@ def _frame_to_dataset(
         if not steps:
             raise DataError(
                 f"{where.prefix}cannot infer the sampling time from time {where.label} "
-                f"'{time_column}': every experiment has a single sample; pass sampling_time"
+                f"'{time_column}': every experiment has a single sample; pass sampling_time",
+                parameter="sampling_time",
             )
         inferred = _agreeing_sampling_time(
             steps, f"{where.prefix}time {where.label} '{time_column}'"

@@ -486,7 +486,9 @@ def _atomic_write(target: Path, overwrite: bool, write: Callable[[IO[bytes]], An
     if target.is_dir():
         raise DataError(f"cannot write {target}: it is a folder")
     if target.exists() and not overwrite:
-        raise DataError(f"{target} already exists; pass --force (overwrite=True) to replace it")
+        raise DataError(
+            f"{target} already exists; pass overwrite=True to replace it", parameter="overwrite"
+        )
     folder = target.parent
     if not folder.is_dir():
         raise DataError(f"cannot write {target}: folder {folder} does not exist")

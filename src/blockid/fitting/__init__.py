@@ -1,35 +1,52 @@
-"""Identification: from data and a model structure to a checked, fitted model."""
+"""Identification: from data and a model structure to a checked, fitted model.
 
-from blockid.fitting.arx import ARX_METHODS, fit_arx, make_estimator
-from blockid.fitting.backlash import fit_backlash_aw_rls
-from blockid.fitting.checks import check_model, linear_baseline, simulation_mse
-from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, STRUCTURES, fit_model
-from blockid.fitting.initial import initial_estimate
-from blockid.fitting.key_term import KEY_TERM_STRUCTURES, fit_key_term_rls
-from blockid.fitting.network import SubsystemSpec, fit_network, parse_subsystem, subset
-from blockid.fitting.result import FitResult
-from blockid.fitting.simulation_error import fit_simulation_error, refine
+Names are imported on first use (PEP 562): the registry of structures and options
+(:mod:`blockid.fitting.registry`) can be read, e.g. by the command line, without
+loading SciPy and numba.
+"""
 
-__all__ = [
-    "KEY_TERM_STRUCTURES",
-    "fit_backlash_aw_rls",
-    "fit_key_term_rls",
-    "fit_simulation_error",
-    "initial_estimate",
-    "refine",
-    "DEFAULT_METHOD",
-    "METHODS",
-    "STRUCTURES",
-    "SubsystemSpec",
-    "fit_model",
-    "fit_network",
-    "parse_subsystem",
-    "subset",
-    "ARX_METHODS",
-    "FitResult",
-    "check_model",
-    "fit_arx",
-    "linear_baseline",
-    "make_estimator",
-    "simulation_mse",
-]
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_WHERE = {
+    "ARX_METHODS": "arx",
+    "fit_arx": "arx",
+    "make_estimator": "arx",
+    "fit_backlash_aw_rls": "backlash",
+    "check_model": "checks",
+    "linear_baseline": "checks",
+    "simulation_mse": "checks",
+    "DEFAULT_METHOD": "dispatch",
+    "METHODS": "dispatch",
+    "STRUCTURES": "dispatch",
+    "fit_model": "dispatch",
+    "ESTIMATORS": "estimator",
+    "ModelEstimator": "estimator",
+    "initial_estimate": "initial",
+    "KEY_TERM_STRUCTURES": "key_term",
+    "fit_key_term_rls": "key_term",
+    "SubsystemSpec": "network",
+    "fit_network": "network",
+    "network_signals": "network",
+    "parse_subsystem": "network",
+    "subset": "network",
+    "FitResult": "result",
+    "fit_simulation_error": "simulation_error",
+    "refine": "simulation_error",
+}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        value = getattr(importlib.import_module(f"blockid.fitting.{_WHERE[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'blockid.fitting' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_WHERE])

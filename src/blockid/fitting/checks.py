@@ -107,7 +107,7 @@ def check_model(
                     "the structure or orders may not suit these data: try others, or "
                     "compare structures with 'blockid compare'"
                     if method.startswith("simulation-error")
-                    else "use the default method (simulation-error), add --refine, or see "
+                    else "use the default method (simulation-error), add refine=True, or see "
                     "docs/convergence.md"
                 )
                 raise EstimationError(

@@ -66,7 +66,8 @@ def resolve_options(
             f"{', '.join(accepted)}",
             parameter=unused[0],
         )
-    return decl, chosen.name, {k: OPTIONS[k].convert(v) for k, v in given.items()}
+    converted = {k: OPTIONS[k].convert(v) for k, v in given.items()}
+    return decl, chosen.name, {k: v for k, v in converted.items() if v is not None}
 
 
 def fit_model(

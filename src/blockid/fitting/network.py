@@ -21,7 +21,7 @@ from blockid.fitting.dispatch import fit_model
 from blockid.fitting.result import FitResult
 from blockid.models.network import Network
 
-__all__ = ["SubsystemSpec", "parse_subsystem", "subset", "fit_network"]
+__all__ = ["SubsystemSpec", "parse_subsystem", "network_signals", "subset", "fit_network"]
 
 
 @dataclass
@@ -39,27 +39,16 @@ class SubsystemSpec:
 _SPEC = re.compile(r"^\s*([\w.-]+)\s*:\s*([^>|]+?)\s*->\s*([^|]+?)\s*\|\s*(\S+)\s*(.*)$")
 
 
-def _value(text: str) -> Any:
-    """``key=value`` text to a Python value: int, float, true/false, none, or text."""
-    for conv in (int, float):
-        try:
-            return conv(text)
-        except ValueError:
-            pass
-    low = text.lower()
-    if low in ("true", "false"):
-        return low == "true"
-    if low in ("none", "null"):
-        return None
-    return text
-
-
 def parse_subsystem(text: str) -> SubsystemSpec:
     """Read ``"S1: u1 -> v1 | arx na=1 nb=1 nk=1 method=rls"``.
 
+    Option values stay text: :func:`~blockid.fitting.fit_model` converts and checks
+    them through the registry (:mod:`blockid.fitting.registry`), as it does the
+    command line's. Keys may be spelt with ``-`` or ``_`` (``input-block=dead-zone``).
+
     >>> s = parse_subsystem("S3: v1,v2 -> y1,y2 | arx na=2 nb=2 nk=1 method=hierarchical-rls")
     >>> s.inputs, s.outputs, s.method, s.options
-    (['v1', 'v2'], ['y1', 'y2'], 'hierarchical-rls', {'na': 2, 'nb': 2, 'nk': 1})
+    (['v1', 'v2'], ['y1', 'y2'], 'hierarchical-rls', {'na': '2', 'nb': '2', 'nk': '1'})
     """
     m = _SPEC.match(text)
     if not m:
@@ -73,10 +62,29 @@ def parse_subsystem(text: str) -> SubsystemSpec:
         if "=" not in item:
             raise ParameterError(f"subsystem {name}: option {item!r} must be key=value")
         key, val = item.split("=", 1)
-        options[key.replace("-", "_")] = _value(val)
+        options[key.replace("-", "_")] = val
     method = options.pop("method", None)
     split = lambda s: [p.strip() for p in s.split(",") if p.strip()]  # noqa: E731
     return SubsystemSpec(name, split(ins), split(outs), structure, method, options)
+
+
+def network_signals(specs: list[SubsystemSpec]) -> tuple[list[str], list[str]]:
+    """The network's external inputs and the outputs its subsystems produce.
+
+    External inputs are the subsystem inputs no subsystem produces, in order of first
+    use; outputs are in the order the subsystems name them.
+
+    >>> specs = [parse_subsystem("S1: u1 -> v1 | arx"), parse_subsystem("S2: v1,u2 -> y | arx")]
+    >>> network_signals(specs)
+    (['u1', 'u2'], ['v1', 'y'])
+    """
+    outputs: list[str] = []
+    for spec in specs:
+        outputs += [o for o in spec.outputs if o not in outputs]
+    inputs: list[str] = []
+    for spec in specs:
+        inputs += [i for i in spec.inputs if i not in outputs and i not in inputs]
+    return inputs, outputs
 
 
 def subset(data: Dataset, inputs: list[str], outputs: list[str]) -> Dataset:

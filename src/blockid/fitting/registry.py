@@ -37,6 +37,7 @@ from typing import Any
 from blockid.errors import ParameterError
 
 __all__ = [
+    "COMPARED_BY_DEFAULT",
     "OPTIONS",
     "STRUCTURES",
     "Method",
@@ -155,7 +156,7 @@ def _block(value: Any, name: str) -> Any:
             f"or 'piecewise-linear:knots=7', got {value!r}"
         )
     try:
-        return block_template(text)
+        return block_template(text, output=name == "output_block")
     except ParameterError as exc:
         raise ParameterError(f"{name}: {exc}") from None
 
@@ -177,6 +178,10 @@ def _numbers(value: Any, name: str) -> Any:
 
 
 # ----------------------------------------------------------------------------- options
+#: Text that stands for "no value: the method's default" (e.g. ``forgetting=none``).
+_NONE = ("none", "null", "default")
+
+
 @dataclass(frozen=True)
 class Option:
     """One estimator option: its Python name, type, allowed range and help text.
@@ -198,11 +203,12 @@ class Option:
     metavar: str = ""
 
     def convert(self, value: Any) -> Any:
-        """The typed, checked value of ``value`` (a Python value or text); None stays None.
+        """The typed, checked value of ``value`` (a Python value or text); None (or the
+        text ``none``) stays None: the method's default applies.
 
         Raises :class:`~blockid.errors.ParameterError` naming the parameter.
         """
-        if value is None:
+        if value is None or (isinstance(value, str) and value.strip().lower() in _NONE):
             return None
         try:
             return self._convert(value)
@@ -521,6 +527,10 @@ STRUCTURES: dict[str, Structure] = {
         ),
     )
 }
+
+
+#: The structures ``compare`` identifies unless told otherwise (paper B's four).
+COMPARED_BY_DEFAULT = ("arx", "hammerstein", "wiener", "hammerstein-wiener")
 
 
 def get_structure(name: Any) -> Structure:

@@ -526,7 +526,9 @@ def fit_simulation_error(
     t0 = time.perf_counter()
     if initial is None:
         if na is None or nb is None or nk is None:
-            raise ParameterError("give the orders na, nb and nk (or a starting model initial=)")
+            raise ParameterError(
+                "give the orders na, nb and nk (or a starting model initial=)", parameter="na"
+            )
         start = initial_estimate(
             data,
             cls,

@@ -6,9 +6,11 @@ from blockid.models.block import (
     BLOCK_STRUCTURES,
     BacklashModel,
     BlockModel,
+    ChainModel,
     Hammerstein,
     HammersteinWiener,
     Wiener,
+    WienerHammerstein,
 )
 from blockid.models.network import Network
 from blockid.models.serialization import (
@@ -23,9 +25,11 @@ __all__ = [
     "BLOCK_STRUCTURES",
     "BacklashModel",
     "BlockModel",
+    "ChainModel",
     "Hammerstein",
     "HammersteinWiener",
     "Wiener",
+    "WienerHammerstein",
     "ARX",
     "MODEL_TYPES",
     "Model",

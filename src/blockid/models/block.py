@@ -544,7 +544,7 @@ def _vector_names(block: Block, prefix: str | None, i: int) -> list[str]:
             continue
         if isinstance(value, list | tuple):
             base = prefix or rename.get(key, key)
-            first = 1 if prefix == "q" else 0
+            first = 1 if block.parameters.get("constant") is False else 0  # powers
             names += [f"{base}_{j + first}" for j in range(len(value))]
         else:
             names.append(key)

@@ -1,6 +1,26 @@
 """End-to-end workflows built on the library: comparison of structures, the papers'
-reproductions and the demo. They return data; the CLI prints it."""
+reproductions and the demo. They return data; the CLI prints it.
 
-from blockid.workflows.compare import CompareResult, ModelScore, compare_structures
+Names are imported on first use (PEP 562), so that the command line starts fast.
+"""
 
-__all__ = ["CompareResult", "ModelScore", "compare_structures"]
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_WHERE = {
+    "CompareResult": "compare",
+    "ModelScore": "compare",
+    "compare_structures": "compare",
+}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        value = getattr(importlib.import_module(f"blockid.workflows.{_WHERE[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'blockid.workflows' has no attribute {name!r}")

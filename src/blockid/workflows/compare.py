@@ -10,6 +10,7 @@ from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError
 from blockid.evaluation.validate import ModelOutput, evaluate
 from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, accepted_options, fit_model
+from blockid.fitting.registry import COMPARED_BY_DEFAULT
 from blockid.fitting.result import FitResult
 
 __all__ = ["ModelScore", "CompareResult", "compare_structures"]
@@ -68,7 +69,7 @@ class CompareResult:
 def compare_structures(
     estimation: Dataset,
     validation: Dataset,
-    structures: Sequence[str] = ("arx", "hammerstein", "wiener", "hammerstein-wiener"),
+    structures: Sequence[str] = COMPARED_BY_DEFAULT,
     *,
     method: str | None = None,
     options: dict[str, Any] | None = None,
@@ -103,8 +104,5 @@ def compare_structures(
 
 def _options_for(structure: str, method: str, options: dict[str, Any]) -> dict[str, Any]:
     """The shared options this structure and method use (``r1`` is not for ARX, ...)."""
-    keep = accepted_options(structure, method) | {"refine", "center"}
-    opts = {k: v for k, v in options.items() if k in keep}
-    if structure == "arx":
-        opts.pop("refine", None)
-    return opts
+    keep = accepted_options(structure, method)
+    return {k: v for k, v in options.items() if k in keep}

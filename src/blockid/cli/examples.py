@@ -1,0 +1,249 @@
+"""``blockid demo``, ``reproduce windtunnel|electrohydraulic`` and ``example-data``.
+
+The runs are library workflows (:mod:`blockid.workflows`); these commands print them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from blockid.cli._common import (
+    Force,
+    Json,
+    Seed,
+    cli_errors,
+    print_json,
+    refuse_to_overwrite,
+    stdout,
+)
+from blockid.workflows.examples import EXAMPLES
+
+__all__ = ["demo", "example_data", "reproduce_app"]
+
+reproduce_app = typer.Typer(
+    help="Reproduce the seed papers' experiments on blockid's simulated plants.",
+    no_args_is_help=True,
+    rich_markup_mode=None,
+)
+
+FiguresDir = Annotated[
+    Path, typer.Option("--figures", metavar="DIR", help="Folder for the PNG figures.")
+]
+
+
+@cli_errors
+def demo(
+    output_dir: Annotated[
+        Path,
+        typer.Option(
+            "--output-dir", metavar="DIR", help="Folder for the data, models and figures."
+        ),
+    ] = Path("demo-output"),
+    seed: Annotated[int, typer.Option(metavar="N", help="Random seed of the simulated plant.")] = 0,
+    json_out: Json = False,
+) -> None:
+    """Run the built-in example: paper B's experiment on the simulated excavator arm.
+
+    Same as 'blockid reproduce electrohydraulic', and keeps the data, the best model of
+    every structure and the figures in the output folder.
+    """
+    from blockid.workflows.demo import run_demo
+
+    result = run_demo(output_dir, seed=seed)
+    if json_out:
+        print_json(result.to_dict())
+        return
+    _print_electrohydraulic(result)
+    stdout.print(f"data, models, figures and results.json written to {output_dir}/")
+
+
+@reproduce_app.command("windtunnel")
+@cli_errors
+def reproduce_windtunnel(
+    seed: Seed = 0,
+    figures: FiguresDir = Path("reproduce-windtunnel"),
+    json_out: Json = False,
+) -> None:
+    """Paper A: block-oriented network vs conventional linear model (Table 2)."""
+    from blockid.workflows.reproduce_windtunnel import PAPER_TABLE, reproduce_windtunnel
+
+    result = reproduce_windtunnel(seed=seed, figures_dir=figures)
+    if json_out:
+        print_json(result.to_dict())
+        return
+    from rich.table import Table
+
+    table = Table(
+        title="Paper A, Table 2 form: free-run simulation from u1, u2 on the validation record",
+        title_justify="left",
+    )
+    for col in ("condition", "model", "estimator", "RMSE P0", "RMSE Ma", "max|e| P0", "max|e| Ma"):
+        table.add_column(col, justify="right" if "|" in col or "RMSE" in col else "left")
+    for row in result.table:
+        if "error" in row:
+            table.add_row(
+                row["condition"], row["model"], row["estimator"], "failed", "see below", "", ""
+            )
+            continue
+        table.add_row(row["condition"], row["model"], row["estimator"], *_errors(row))
+    for row in PAPER_TABLE:
+        table.add_row(row["condition"], row["model"], "paper A (measured data)", *_errors(row))
+    stdout.print(table)
+    for row in result.table:
+        if "error" in row:
+            stdout.print(
+                f"{row['condition']} {row['estimator']}: {row['error']}",
+                markup=False,
+                soft_wrap=True,
+            )
+    params = Table(
+        title="identified actuator parameters (truth of the simulator)", title_justify="left"
+    )
+    for col in (
+        "condition",
+        "estimator",
+        "a1 S1",
+        "b0 S1",
+        "m_left",
+        "c_left",
+        "m_right",
+        "c_right",
+        "a1 S2",
+        "a2 S2",
+    ):
+        params.add_column(col)
+    for condition, by_est in result.parameters.items():
+        for est, p in [("truth", result.truth[condition]), *by_est.items()]:
+            s1, s2 = p["S1"], p["S2"]
+            params.add_row(
+                condition,
+                est,
+                f"{s1['a'][0]:.4f}",
+                f"{s1['b'][0]:.4f}",
+                *(f"{s2[k]:.4f}" for k in ("m_left", "c_left", "m_right", "c_right")),
+                f"{s2['a'][0]:.4f}",
+                f"{s2['a'][1]:.4f}",
+            )
+    stdout.print(params)
+    stdout.print(f"figures written to {figures}/")
+
+
+def _errors(row: dict[str, Any]) -> tuple[str, ...]:
+    """RMSE and maximum absolute error of P0 (y1) and Ma (y2), as paper A prints them."""
+    rmse, worst = row["rmse"], row["max_abs_error"]
+    return (f"{rmse['y1']:.4f}", f"{rmse['y2']:.5f}", f"{worst['y1']:.4f}", f"{worst['y2']:.5f}")
+
+
+@reproduce_app.command("electrohydraulic")
+@cli_errors
+def reproduce_electrohydraulic(
+    seed: Seed = 0,
+    figures: FiguresDir = Path("reproduce-electrohydraulic"),
+    validation_bandwidth: Annotated[
+        str,
+        typer.Option(
+            metavar="HZ|none",
+            help="Corner frequency [Hz] of the validation command's low-pass, below 10; "
+            "'none' for the step-like moves that ask the models to extrapolate in frequency.",
+        ),
+    ] = "0.5",
+    json_out: Json = False,
+) -> None:
+    """Paper B: Hammerstein-Wiener vs Hammerstein, Wiener and ARX (Table 2)."""
+    from blockid.workflows.reproduce_electrohydraulic import reproduce_electrohydraulic
+
+    bandwidth = _bandwidth(validation_bandwidth)
+    result = reproduce_electrohydraulic(
+        seed=seed, figures_dir=figures, validation_bandwidth=bandwidth
+    )
+    if json_out:
+        print_json(result.to_dict())
+        return
+    _print_electrohydraulic(result)
+    stdout.print(f"figures written to {figures}/")
+
+
+def _bandwidth(text: str) -> float | None:
+    """``--validation-bandwidth``: a number (its range is checked by the plant) or ``none``."""
+    from blockid.errors import ParameterError
+
+    if text.strip().lower() == "none":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise ParameterError(
+            f"--validation-bandwidth must be a frequency in Hz or 'none', got {text!r}"
+        ) from None
+
+
+def _print_electrohydraulic(result: Any) -> None:
+    from rich.table import Table
+
+    from blockid.workflows.reproduce_electrohydraulic import PAPER_MSE
+
+    band = result.validation_bandwidth
+    table = Table(
+        title="Paper B, Table 2 form: MSE of free-run simulation on the validation trajectory "
+        + ("(step-like command) " if band is None else f"(command low-passed at {band:g} Hz) ")
+        + "[(rad/s)^2]",
+        title_justify="left",
+    )
+    for col in ("model", "estimator", "MSE", "fit %", "best", "paper B MSE"):
+        table.add_column(col, justify="left" if col in ("model", "estimator") else "right")
+    for row in result.table:
+        best = result.best.get(row["model"], {}).get("estimator") == row["estimator"]
+        if "error" in row:
+            table.add_row(row["model"], row["estimator"], "failed", "", "", "")
+            continue
+        table.add_row(
+            row["model"],
+            row["estimator"],
+            f"{row['mse']['velocity']:.4g}",
+            f"{row['fit_percent']['velocity']:.1f}",
+            "*" if best else "",
+            f"{PAPER_MSE[row['model']]:.4f}" if best else "",
+        )
+    stdout.print(table)
+    if "hammerstein-wiener" in result.best:
+        red = result.reductions()
+        stdout.print(
+            "best H-W MSE below: "
+            + ", ".join(f"{s} {100 * r:.0f} %" for s, r in red.items())
+            + "  (paper B: hammerstein 13 %, wiener 54 %, arx 58 %)"
+        )
+    for row in result.table:
+        if "error" in row:
+            stdout.print(f"{row['model']} {row['estimator']}: {row['error']}", markup=False)
+
+
+@cli_errors
+def example_data(
+    name: Annotated[str, typer.Argument(metavar="NAME", help=f"One of: {', '.join(EXAMPLES)}.")],
+    out: Annotated[
+        Path, typer.Option("--out", "-o", metavar="FILE", help="File to write (.csv/.parquet).")
+    ],
+    seed: Seed = 0,
+    force: Force = False,
+) -> None:
+    """Write a record of a built-in simulated plant, to try the other commands on.
+
+    One continuous record: the estimation experiment followed by the validation
+    experiment (the ranges to use are printed). electrohydraulic: columns t, current,
+    velocity (estimation: the averaged multisine runs; validation: a general trajectory).
+    windtunnel-*: t, u1, u2, v1, v2, y1, y2 at that operating condition.
+    """
+    from blockid.data import write_table
+    from blockid.workflows.examples import example_record
+
+    refuse_to_overwrite(out, force)
+    record = example_record(name, seed=seed)
+    write_table(record.frame, out, overwrite=force)
+    (a, b), (c, d) = record.estimation, record.validation
+    stdout.print(
+        f"{name} (seed {seed}) written to {out}: estimation record {a}:{b}, "
+        f"validation record {c}:{d} (use with --estimation/--validation)"
+    )

@@ -1,0 +1,103 @@
+"""``blockid simulate`` and ``predict``: run a saved model on data and score it."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from blockid.cli._common import (
+    DataPaths,
+    ExperimentColumn,
+    Force,
+    Json,
+    SamplingTime,
+    TimeColumn,
+    cli_errors,
+    load_data,
+    metrics_table,
+    print_json,
+    refuse_to_overwrite,
+    stderr,
+    stdout,
+)
+
+__all__ = ["predict", "simulate"]
+
+ModelPath = Annotated[
+    Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
+]
+Range = Annotated[
+    str | None, typer.Option("--range", metavar="START:STOP", help="Samples to use (default: all).")
+]
+OutTable = Annotated[
+    Path | None,
+    typer.Option(
+        "--out", "-o", metavar="FILE", help="Write data and model output (.csv/.parquet)."
+    ),
+]
+
+_LABELS = {"simulation": "free-run simulation", "one-step": "one-step-ahead prediction"}
+
+
+def _model_command(mode: str, doc: str) -> Callable[..., None]:
+    """``simulate`` / ``predict``: the same options, another mode of evaluation."""
+
+    @cli_errors
+    def command(
+        model_path: ModelPath,
+        data_paths: DataPaths,
+        rng: Range = None,
+        out: OutTable = None,
+        ts: SamplingTime = None,
+        time_column: TimeColumn = None,
+        experiment_column: ExperimentColumn = None,
+        force: Force = False,
+        json_out: Json = False,
+    ) -> None:
+        from blockid.data import write_table
+        from blockid.evaluation import evaluate
+        from blockid.models import load_model
+
+        refuse_to_overwrite(out, force)
+        model = load_model(model_path)
+        data = load_data(
+            data_paths,
+            list(model.inputs),
+            list(model.outputs),
+            ts or model.sampling_time,
+            time_column,
+            experiment_column,
+            rng,
+            "--range",
+        )
+        result = evaluate(model, data, mode)
+        if out is not None:
+            write_table(result.to_frame(), out, overwrite=force)
+        if json_out:
+            paths = [str(p) for p in data_paths]
+            print_json({"model": str(model_path), "data": paths, "range": rng, **result.to_dict()})
+            return
+        for note in result.warnings:
+            stderr.print(f"warning: {note}", markup=False)
+        where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+        stdout.print(
+            metrics_table(f"{_LABELS[mode]} on {where}", [(model.structure, result.metrics)])
+        )
+        if out is not None:
+            stdout.print(f"model output written to {out}")
+
+    command.__doc__ = doc
+    return command
+
+
+simulate = _model_command(
+    "simulation",
+    "Free-run simulation of a model on the inputs in DATA (outputs used for metrics).",
+)
+predict = _model_command(
+    "one-step",
+    "One-step-ahead prediction of a model on DATA (measured past outputs fed in).",
+)

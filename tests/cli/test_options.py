@@ -1,0 +1,256 @@
+"""The estimator flags come from the registry and reach the library as typed.
+
+Generated from :data:`blockid.fitting.registry.OPTIONS`: an option added there (and to a
+method) without reaching ``fit`` and ``compare`` fails a test here.
+"""
+
+import json
+import re
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+import blockid.fitting
+import blockid.workflows
+from blockid.blocks import DeadZone, Polynomial
+from blockid.cli._options import INTERNAL
+from blockid.cli.main import app
+from blockid.errors import ParameterError
+from blockid.fitting.registry import OPTIONS, STRUCTURES, option_flag
+from blockid.models import Hammerstein, Wiener, load_model
+
+runner = CliRunner()
+
+FLAGGED = [name for name in OPTIONS if name not in INTERNAL]
+
+
+def _text(name: str) -> object:
+    """A value of the option that is not its default, as the user types it."""
+    option = OPTIONS[name]
+    low = 0.0 if option.low is None else option.low
+    return {
+        "orders": "2",
+        "count": str(int(low) + 2),
+        "real": str(low + 0.5 if option.high is None else (low + option.high) / 2),
+        "forgetting": "0.98:200,1",
+        "numbers": "0.5,1",
+        "block": "polynomial:degree=2",
+        "bool": True,
+    }[option.kind]
+
+
+def _args(name: str, value: object) -> list[str]:
+    flag = option_flag(name)
+    if value is True:
+        return [flag]
+    if value is False:
+        return [f"--no-{flag[2:]}"]
+    return [flag, str(value)]
+
+
+def _where(name: str) -> tuple[str, str]:
+    """A structure and method that take the option."""
+    for structure in STRUCTURES.values():
+        for method in structure.method_names:
+            if name in structure.accepted(method):
+                return structure.name, method
+    raise AssertionError(f"no structure takes {name}")
+
+
+@pytest.fixture
+def csv(tmp_path):
+    path = tmp_path / "d.csv"
+    rng = np.random.default_rng(0)
+    pd.DataFrame({"u": rng.standard_normal(60), "y": rng.standard_normal(60)}).to_csv(
+        path, index=False
+    )
+    return path
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    """What the command hands to the library; the library call then stops the command."""
+    seen = {}
+
+    def fake(*args, **kwargs):
+        seen.update(args=args, kwargs=kwargs)
+        raise ParameterError("captured")
+
+    monkeypatch.setattr(blockid.fitting, "fit_model", fake)
+    monkeypatch.setattr(blockid.workflows, "compare_structures", fake)
+    return seen
+
+
+def test_every_flagged_option_is_used_and_the_internal_ones_are_options():
+    assert set(INTERNAL) <= set(OPTIONS)
+    for name in FLAGGED:
+        _where(name)
+
+
+@pytest.mark.parametrize(
+    ("name", "value"),
+    [(n, _text(n)) for n in FLAGGED] + [(n, False) for n in FLAGGED if OPTIONS[n].kind == "bool"],
+)
+def test_fit_passes_each_option_through_unchanged(csv, captured, name, value):
+    structure, method = _where(name)
+    args = ["fit", str(csv), "-u", "u", "-y", "y", "--structure", structure, "--json"]
+    r = runner.invoke(app, [*args, "--method", method, *_args(name, value)])
+    assert r.exit_code == 2 and r.stderr == "error: captured\n", r.output
+    assert captured["args"][1] == structure
+    assert captured["kwargs"] == {"method": method, name: value}
+
+
+@pytest.mark.parametrize("name", FLAGGED)
+def test_compare_passes_each_option_to_compare_structures(csv, captured, name):
+    value = _text(name)
+    r = runner.invoke(
+        app,
+        [
+            *("compare", str(csv), "-u", "u", "-y", "y"),
+            *("--estimation", "0:40", "--validation", "40:60"),
+            *_args(name, value),
+        ],
+    )
+    assert r.exit_code == 2 and r.stderr == "error: captured\n", r.output
+    # every option goes to the library, which gives each structure those it takes
+    assert captured["kwargs"] == {"method": None, "options": {name: value}}
+
+
+def test_fit_without_options_leaves_every_default_to_the_method(csv, captured):
+    r = runner.invoke(app, ["fit", str(csv), "-u", "u", "-y", "y", "--json"])
+    assert r.exit_code == 2, r.output
+    assert captured["args"][1] == "arx" and captured["kwargs"] == {"method": None}
+
+
+def test_fit_help_lists_every_flag_at_80_columns():
+    r = runner.invoke(app, ["fit", "--help"], env={"COLUMNS": "80"})
+    assert r.exit_code == 0
+    assert max(len(line) for line in r.stdout.splitlines()) <= 80
+    for name in FLAGGED:
+        flag = option_flag(name)
+        assert re.search(rf"(?<![\w-]){re.escape(flag)}(?![\w-])", r.stdout), flag
+        if OPTIONS[name].kind == "bool":
+            assert f"{flag} / --no-{flag[2:]}" in r.stdout
+    for structure in STRUCTURES.values():  # the structures and their methods
+        assert f"{structure.name}: " in r.stdout
+        assert ", ".join(structure.method_names) in r.stdout
+    assert "--record-history" not in r.stdout
+
+
+@pytest.mark.parametrize("args", [["-h"], ["fit", "-h"], ["reproduce", "windtunnel", "-h"]])
+def test_short_help(args):
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0 and r.stdout.startswith("Usage: ")
+
+
+def test_bad_option_value_is_one_line_naming_the_flag(csv):
+    r = runner.invoke(
+        app,
+        ["fit", str(csv), "-u", "u", "-y", "y", "--method", "rls", "--forgetting", "2", "--json"],
+    )
+    assert r.exit_code == 2 and r.stdout == ""
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: forgetting")
+    assert "--forgetting" in lines[0]
+
+
+def test_library_parameter_is_named_by_its_flag(tmp_path):
+    path = tmp_path / "one.csv"
+    path.write_text("t,u,y\n0,1,2\n")
+    r = runner.invoke(app, ["fit", str(path), "-u", "u", "-y", "y", "--time-column", "t", "--json"])
+    assert r.exit_code == 2
+    assert r.stderr.startswith("error: ") and r.stderr.rstrip().endswith("(option --ts)")
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        (["fit", "DATA", "-u", "u"], "Missing option '--output'"),
+        (["fit", "DATA", "-u", "u", "-y", "y", "--bogus"], "No such option: --bogus"),
+        (["fit", "DATA", "-u", "u", "-y", "y", "--ts", "abc"], "Invalid value for '--ts'"),
+        (["fit", "DATA", "-u", "u", "-y", "y", "--passes"], "'--passes' requires an argument"),
+        (["nonsense"], "No such command 'nonsense'"),
+    ],
+)
+def test_usage_errors_are_one_line_and_exit_2(csv, args, expected):
+    r = runner.invoke(app, [str(csv) if a == "DATA" else a for a in args])
+    assert r.exit_code == 2 and r.stdout == ""
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and expected in lines[0]
+    assert "Traceback" not in r.output
+
+
+# ------------------------------------------------------------ choosing the blocks
+LINEAR = {"na": 2, "nb": 2, "nk": 1, "a": [-1.2, 0.5], "b": [1.0, 0.4]}
+ORDERS = ["--na", "2", "--nb", "2", "--nk", "1", "--json"]
+
+
+def _record(tmp_path, plant, name):
+    u = np.random.default_rng(1).uniform(-2, 2, 2000)
+    path = tmp_path / name
+    pd.DataFrame({"u": u, "y": plant.simulate(u)[:, 0]}).to_csv(path, index=False)
+    return path
+
+
+def test_fit_hammerstein_with_a_dead_zone_input_block(tmp_path):
+    plant = Hammerstein("u", "y", input_block=DeadZone(-0.5, 0.4), **LINEAR)
+    path = _record(tmp_path, plant, "h.csv")
+    out = tmp_path / "m.json"
+    args = ["fit", str(path), "-u", "u", "-y", "y", "--structure", "hammerstein"]
+    r = runner.invoke(app, [*args, "--input-block", "dead-zone", *ORDERS, "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    model = load_model(out)
+    assert isinstance(model.input_block, DeadZone)
+    assert json.loads(out.read_text())["model"]["chain"][0]["kind"] == "dead-zone"
+    assert model.parameters["lower"] == pytest.approx(-0.5, abs=1e-6)
+    assert model.parameters["upper"] == pytest.approx(0.4, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    "block",
+    [
+        "polynomial:degree=2",
+        "polynomial:degree=2;constant=false",
+    ],
+)
+def test_fit_wiener_with_a_quadratic_output_block(tmp_path, block):
+    plant = Wiener("u", "y", output_block=Polynomial([1.0, 0.3], constant=False), **LINEAR)
+    path = _record(tmp_path, plant, "w.csv")
+    args = ["fit", str(path), "-u", "u", "-y", "y", "--structure", "wiener"]
+    r = runner.invoke(app, [*args, "--output-block", block, *ORDERS])
+    assert r.exit_code == 0, r.output
+    assert len(json.loads(r.stdout)["model"]["parameters"]["q"]) == 2
+
+
+NEW_OPTION = """
+import dataclasses, sys
+from blockid.fitting import registry
+registry.OPTIONS["smoothing"] = registry.Option("smoothing", "real", "A new option.", low=0.0)
+arx = registry.STRUCTURES["arx"]
+batch = dataclasses.replace(arx.methods[0], options=arx.methods[0].options + ("smoothing",))
+registry.STRUCTURES["arx"] = dataclasses.replace(arx, methods=(batch, *arx.methods[1:]))
+
+import blockid.fitting
+from typer.testing import CliRunner
+from blockid.cli.main import app
+
+seen = {}
+def fake(data, structure, **kwargs):
+    seen.update(kwargs)
+    raise blockid.errors.ParameterError("captured")
+blockid.fitting.fit_model = fake
+help = CliRunner().invoke(app, ["fit", "-h"], env={"COLUMNS": "80"}).stdout
+assert "--smoothing X" in help and "A new option." in help, help
+r = CliRunner().invoke(app, ["fit", sys.argv[1], "-u", "u", "-y", "y", "--smoothing", "0.5", "--json"])
+assert r.exit_code == 2 and seen == {"method": None, "smoothing": "0.5"}, (r.output, seen)
+"""
+
+
+def test_a_new_registry_option_is_a_flag_without_touching_the_cli(csv):
+    """Declared in the registry only, before the command line is imported."""
+    import subprocess
+    import sys
+
+    subprocess.run([sys.executable, "-c", NEW_OPTION, str(csv)], check=True)
