@@ -118,3 +118,33 @@ def test_non_finite_step_is_reported(rng):
     v[30] = np.inf  # the a-priori error of sample 30 is not finite
     status, *_ = _run(u, v, np.full(6, 0.01), 2, 1, 1, 1.0, 0.1, 1e5)
     assert status == (30, k.REASON_STEP)
+
+
+def test_a_pass_continued_from_carried_history_equals_one_pass(rng):
+    # orders[5] = start: samples before it are history (u, v, x, f1, f2 as given)
+    na, nb, nk, N, cut = 2, 2, 3, 400, 211
+    u, v = _plant(rng, N, nb=nb, nk=nk, noise=0.01)
+    theta0 = np.full(4 + nb - 1 + na, 0.01)
+    status, theta, P, x, f1, f2 = _run(u, v, theta0, na, nb, nk, 1.0, 0.1, 1e5)
+    assert status == (OK, k.REASON_OK)
+    n0 = max(na, nk + nb - 1, 1)
+    L = max(n0, nk + 1)
+    params, no_hist = np.array([1.0, 0.1, 1e12]), np.zeros((0, 0))
+    th, Pc = theta0.copy(), 1e5 * np.eye(theta0.size)
+    first = [np.empty(cut) for _ in range(3)]
+    orders = np.array([nb, na, nk, n0, 1], dtype=np.int64)
+    k.backlash_aw_rls_run(th, Pc, u[:cut], v[:cut], orders, params, *first, no_hist)
+    rest = [np.empty(N - cut + L) for _ in range(3)]
+    for carried, signal in zip(rest, first, strict=True):
+        carried[:L] = signal[-L:]
+    orders = np.array([nb, na, nk, L, 1, L], dtype=np.int64)
+    err = np.full(N - cut + L, np.nan)
+    status = k.backlash_aw_rls_run(
+        th, Pc, u[cut - L :], v[cut - L :], orders, params, *rest, no_hist, err
+    )
+    assert status == (OK, k.REASON_OK)
+    np.testing.assert_array_equal(th, theta)
+    np.testing.assert_array_equal(Pc, P)
+    np.testing.assert_array_equal(rest[0][L:], x[cut:])
+    assert np.all(np.isfinite(err[L:])) and np.all(np.isnan(err[:L]))
+    assert k.backlash_rest(theta0, u[0]) == 0.5 * (0.01 * u[0] + 0.01 + 0.01 * u[0] - 0.01)

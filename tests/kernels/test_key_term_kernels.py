@@ -191,3 +191,34 @@ def test_non_finite_step_is_reported_with_its_sample(rng):
         u, y, "hammerstein", np.full(n, 0.01), 2, 2, 2, 2, 3, np.ones(100), 1e4, 1e9
     )
     assert status == (42, k.REASON_STEP)
+
+
+@pytest.mark.parametrize("structure", list(BLOCKS))
+def test_a_pass_continued_from_carried_history_equals_one_pass(rng, structure):
+    # orders[9] = start: samples before it are history (u, y, w, x as given)
+    na, nb, nk, r1, r2, N, cut = 2, 2, 2, 2, 3, 300, 117
+    u, y = _hw_data(rng, N)
+    n = _n_params(structure, na, nb, r1, r2)
+    has_in, has_out = BLOCKS[structure]
+    lam = np.where(np.arange(N) < 150, 0.97, 1.0)
+    limits, no_hist = np.array([1e2 * n, 1e12]), np.zeros((0, n))
+    n0 = L = max(na, nk + nb - 1, 1)
+    status, theta, P, w, x = _run_kernel(
+        u, y, structure, np.full(n, 0.01), na, nb, nk, r1, r2, lam, 1e2, 1e2 * n
+    )
+    assert status == (OK, k.REASON_OK)
+    th, Pc = np.full(n, 0.01), 1e2 * np.eye(n)
+    orders = np.array([r1, nb, na, r2, nk, has_in, has_out, n0, 1], dtype=np.int64)
+    w1, x1 = np.empty(cut), np.empty(cut)
+    k.key_term_run(th, Pc, u[:cut], y[:cut], lam[:cut], orders, limits, w1, x1, no_hist)
+    w2, x2 = np.empty(N - cut + L), np.empty(N - cut + L)
+    w2[:L], x2[:L] = w1[-L:], x1[-L:]
+    orders = np.append(orders, L)
+    orders[7] = L  # the first update: at once
+    err = np.full(N - cut + L, np.nan)
+    args = (u[cut - L :], y[cut - L :], lam[cut - L :], orders, limits, w2, x2, no_hist, err)
+    assert k.key_term_run(th, Pc, *args) == (OK, k.REASON_OK)
+    np.testing.assert_array_equal(th, theta)
+    np.testing.assert_array_equal(Pc, P)
+    np.testing.assert_array_equal(x2[L:], x[cut:])
+    assert np.all(np.isnan(err[:L])) and np.all(np.isfinite(err[L:]))

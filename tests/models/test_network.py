@@ -90,4 +90,4 @@ def test_bad_option_values_are_reported_per_subsystem(rng):
     spec = parse_subsystem("S1: u1 -> v1 | arx method=rls forgetting=none")
     assert spec.options == {"forgetting": "none"}
     fit = fit_network(data, [spec])  # "none": the method's default forgetting (1)
-    assert fit.settings["subsystems"]["S1"]["forgetting"] == "1"
+    assert fit.settings["subsystems"]["S1"]["forgetting"] == "1.0"

@@ -29,8 +29,14 @@ branches; that is the paper's algorithm, kept as is.
 
 Before the first sample the backlash is at rest in the middle of its estimated dead
 band at the first input (the convention of
-:meth:`blockid.models.BacklashModel.simulate`; paper A does not say); parameters are
-updated from sample ``n0 = max_lag`` on.
+:meth:`blockid.models.BacklashModel.simulate`; paper A does not say; see
+:func:`backlash_rest`); parameters are updated from sample ``n0 = max_lag`` on.
+
+Continuation (online learning, :mod:`blockid.fitting.online`): with a sixth entry
+``start`` in ``orders``, samples ``t < start`` are history: their ``u, v, x, f1, f2``
+are used as given and nothing is computed or updated for them. The history must reach
+back as far as the pass does, ``start >= max(n0, nk + 1)`` (before the record: ``x``
+at rest, :func:`backlash_rest`); a pass split into chunks so gives the result of one.
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ __all__ = [
     "REASON_EXPLODED",
     "REASON_ZERO_SLOPE",
     "backlash_aw_rls_run",
+    "backlash_rest",
 ]
 
 REASON_OK = 0
@@ -57,7 +64,15 @@ REASON_ZERO_SLOPE = 3  # theta_1 or theta_3 is 0: the dead-band edges of (A7) ar
 
 
 @njit(cache=True)
-def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist):
+def backlash_rest(theta, u0):
+    """``x(-1)``: the backlash of estimate ``theta`` at rest in the middle of its dead band
+    at input ``u0`` (the convention of BacklashModel.simulate),
+    ``(mL (u0 + cL) + mR (u0 - cR)) / 2``."""
+    return 0.5 * (theta[0] * u0 + theta[1] + theta[2] * u0 - theta[3])
+
+
+@njit(cache=True)
+def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist, err=None):
     """One pass of AW-RLS (A6–A8) over one experiment, in place.
 
     Parameters
@@ -67,13 +82,17 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist):
     u, v : ndarray, shape (N,)
         Backlash input and measured output of the linear block.
     orders : ndarray of int64
-        ``[nb, na, nk, n0, hist_stride]``.
+        ``[nb, na, nk, n0, hist_stride]``, optionally followed by ``start`` (default 0):
+        samples before it are history, used as given (module docstring).
     params : ndarray of float
         ``[eps1, eps2, x_limit]``.
     x, f1, f2 : ndarray, shape (N,)
         Receive the internal variables ``x_hat``, ``f1_hat``, ``f2_hat``.
     hist : ndarray, shape (M, n)
         Receives ``theta`` after every ``hist_stride``-th update (M may be 0).
+    err : ndarray, shape (N,), optional
+        Receives the a-priori error of (A8), ``target(t) - phi_hat(t)^T theta(t-1)``, of
+        every updated sample (other entries untouched).
 
     Returns
     -------
@@ -84,6 +103,7 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist):
     """
     nb, na, nk, n0, stride = orders[0], orders[1], orders[2], orders[3], orders[4]
     eps1, eps2, x_limit = params[0], params[1], params[2]
+    start = orders[5] if orders.shape[0] > 5 else 0
     N = u.shape[0]
     n = theta.shape[0]
     phi = np.empty(n)
@@ -91,10 +111,9 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist):
     out = np.empty(2)
     n_hist = hist.shape[0]
     row = 0
-    # the backlash starts at rest in the middle of its (estimated) dead band at u(0),
-    # the convention of BacklashModel.simulate: x(-1) = (mL (u + cL) + mR (u - cR)) / 2
-    x_rest = 0.5 * (theta[0] * u[0] + theta[1] + theta[2] * u[0] - theta[3]) if N > 0 else 0.0
-    for t in range(N):
+    # the backlash starts at rest in the middle of its (estimated) dead band at u(0)
+    x_rest = backlash_rest(theta, u[0]) if N > 0 else 0.0
+    for t in range(start, N):
         if t >= n0:
             d = t - nk  # the key term's sample
             x_before = x[d - 1] if d >= 1 else x_rest
@@ -112,6 +131,8 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist):
             ok = rls_step(theta, P, phi, target, g, eps2, 1.0 + eps1, 1.0, np.inf, out)
             if not ok or not np.isfinite(out[0]):
                 return t, REASON_STEP
+            if err is not None:
+                err[t] = out[0]
             if row < n_hist and (t - n0 + 1) % stride == 0:
                 for i in range(n):
                     hist[row, i] = theta[i]

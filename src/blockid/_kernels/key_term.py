@@ -28,6 +28,13 @@ The internal variables are computed from sample 0, the parameters updated only f
 sample ``n0 = max_lag`` on, where every regressor entry refers to a sample of the
 record.
 
+Continuation (online learning, :mod:`blockid.fitting.online`): with a tenth entry
+``start`` in ``orders``, samples ``k < start`` are history: their ``u, y, w, x`` are
+used as given and nothing is computed or updated for them. A pass over a record can
+so be split into chunks, each preceded by the last ``max_lag`` samples of the one
+before (``n0`` and ``lam`` then counted in the chunk's own indices), with the same
+result as one pass.
+
 Parameter vector (B4): ``[f_0..f_r1, p_0..p_r1, b_1..b_{nb-1}, a_1..a_na, q_2..q_r2]``
 (``b_0..b_{nb-1}`` without an input block; MATLAB order convention, ``nb`` counts
 ``b_0``).
@@ -40,7 +47,15 @@ from numba import njit
 
 from blockid._kernels.rls import OK, rls_step
 
-__all__ = ["OK", "REASON_OK", "REASON_STEP", "REASON_EXPLODED", "key_term_run"]
+__all__ = [
+    "OK",
+    "REASON_OK",
+    "REASON_STEP",
+    "REASON_EXPLODED",
+    "key_term_run",
+    "key_term_step",
+    "window_commit",
+]
 
 #: Failure reasons returned next to the sample index.
 REASON_OK = 0
@@ -49,7 +64,7 @@ REASON_EXPLODED = 2  # |x_hat| exceeded the limit: the internal model diverged
 
 
 @njit(cache=True)
-def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist):
+def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist, err=None):
     """One pass of key-term RLS (B5) over one experiment, in place.
 
     Parameters
@@ -61,7 +76,9 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist):
     lam : ndarray, shape (N,)
         Forgetting factor of every sample (entries before ``n0`` are not used).
     orders : ndarray of int64
-        ``[r1, nb, na, r2, nk, has_input_block, has_output_block, n0, hist_stride]``.
+        ``[r1, nb, na, r2, nk, has_input_block, has_output_block, n0, hist_stride]``,
+        optionally followed by ``start`` (default 0): samples before it are history,
+        used as given (module docstring).
     limits : ndarray of float
         ``[trace_max, x_limit]``: trace bound of ``P`` (used while ``lam < 1``) and the
         bound on ``|x_hat|`` beyond which the internal model counts as diverged.
@@ -70,6 +87,9 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist):
         output block).
     hist : ndarray, shape (M, n)
         Receives ``theta`` after every ``hist_stride``-th update (M may be 0).
+    err : ndarray, shape (N,), optional
+        Receives the a-priori error ``y(k) - Phi_hat(k)^T theta(k-1)`` of every updated
+        sample (other entries untouched).
 
     Returns
     -------
@@ -81,6 +101,7 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist):
     r1, nb, na, r2, nk = orders[0], orders[1], orders[2], orders[3], orders[4]
     has_in, has_out, n0, stride = orders[5] != 0, orders[6] != 0, orders[7], orders[8]
     trace_max, x_limit = limits[0], limits[1]
+    start = orders[9] if orders.shape[0] > 9 else 0
     N = u.shape[0]
     n = theta.shape[0]
     n_in = 2 * (r1 + 1) if has_in else 0
@@ -93,7 +114,7 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist):
     out = np.empty(2)
     n_hist = hist.shape[0]
     row = 0
-    for k in range(N):
+    for k in range(start, N):
         # w_hat(k) from the newest estimates                               (B1, B5)
         uk = u[k]
         if has_in:
@@ -147,8 +168,53 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist):
         ok = rls_step(theta, P, phi, y[k], g, lk, 1.0, 1.0 / lk, bound, out)
         if not ok or not np.isfinite(out[0]):
             return k, REASON_STEP
+        if err is not None:
+            err[k] = out[0]
         if row < n_hist and (k - n0 + 1) % stride == 0:
             for i in range(n):
                 hist[row, i] = theta[i]
             row += 1
     return OK, REASON_OK
+
+
+@njit(cache=True)
+def window_commit(status, theta, P, saved_theta, saved_P, window):
+    """After a one-sample continuation over ``window`` (rows: signals, last column the
+    new sample): on success shift every row left by one (the oldest sample drops out),
+    on failure restore ``theta`` and ``P`` from the saved copies."""
+    if status == OK:
+        for r in range(window.shape[0]):
+            for j in range(window.shape[1] - 1):
+                window[r, j] = window[r, j + 1]
+    else:
+        theta[:] = saved_theta
+        P[:, :] = saved_P
+
+
+@njit(cache=True)
+def key_term_step(theta, P, window, uk, yk, lam_k, n0, orders, limits, saved, hist):
+    """One sample of key-term RLS continued from a window (the online per-sample path).
+
+    ``window`` has rows ``u, y, w_hat, x_hat`` and ``L + 1`` columns: the last ``L =
+    orders[9]`` samples, then a free slot that receives ``uk, yk``. Runs
+    :func:`key_term_run` over the window with ``start = L``, the first update at
+    ``n0`` (``orders[7]``) and ``lam_k`` for the new sample, then shifts the window on
+    success or restores ``theta``, ``P`` (from ``saved = (theta copy, P copy)``
+    buffers, ``saved[0]`` of shape (n + n*n,)) on failure. Returns ``(status, reason,
+    e)`` with the a-priori error ``e`` of the new sample (NaN without an update).
+    """
+    L = window.shape[1] - 1
+    n = theta.shape[0]
+    window[0, L] = uk
+    window[1, L] = yk
+    orders[7] = n0
+    lam = np.ones(L + 1)
+    lam[L] = lam_k
+    err = np.full(L + 1, np.nan)
+    saved[:n] = theta
+    saved[n:] = P.ravel()
+    status, reason = key_term_run(
+        theta, P, window[0], window[1], lam, orders, limits, window[2], window[3], hist, err
+    )
+    window_commit(status, theta, P, saved[:n], saved[n:].reshape(n, n), window)
+    return status, reason, err[L]

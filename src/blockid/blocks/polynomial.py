@@ -123,22 +123,27 @@ class Polynomial(_PlottableStaticBlock):
         constant term is refused after a linear block, B3)."""
         return cls.template(degree, constant=constant)
 
+    @property
+    def _linear_index(self) -> int:
+        """Position of the coefficient of ``u`` in :attr:`coefficients`."""
+        return 1 if self.constant else 0
+
     def free_mask(self, after_linear: bool) -> np.ndarray:
-        """After a linear block a polynomial without constant fixes ``q_1 = 1`` (B3)."""
+        """After a linear block the coefficient of ``u`` is fixed to 1 (``q_1 = 1``, B3)."""
         mask = np.ones(self.coefficients.size, dtype=bool)
-        if after_linear and not self.constant:
-            mask[0] = False
+        if after_linear and self.coefficients.size > self._linear_index:
+            mask[self._linear_index] = False
         return mask
 
     def check_normalised(self, after_linear: bool) -> None:
-        if after_linear and self.constant:
+        if not after_linear:
+            return
+        k = self._linear_index
+        if self.coefficients.size <= k or self.coefficients[k] != 1.0:
+            got = self.coefficients[k] if self.coefficients.size > k else "none"
             raise ParameterError(
-                "an output polynomial after a linear block must be a Polynomial without "
-                "constant term (B3): use Polynomial(q, constant=False)"
-            )
-        if after_linear and self.coefficients[0] != 1.0:
-            raise ParameterError(
-                f"q_1 is fixed to 1 (normalisation B3); got {self.coefficients[0]}"
+                f"q_1 is fixed to 1 (normalisation B3): the coefficient of the linear term "
+                f"must be 1 after a linear block; got {got}"
             )
 
     def identity(self) -> Polynomial | None:

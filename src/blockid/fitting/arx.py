@@ -9,7 +9,10 @@ Before a recursive estimator runs, every regressor column is divided by its RMS 
 the estimation data. This changes nothing in exact arithmetic except the effective
 ``P(0)`` (which becomes scale-aware), so that "large initial covariance" means large
 relative to the data: RLS with forgetting 1 then reproduces batch least squares to
-about 1e-8 whatever the units of the signals.
+about 1e-8 whatever the units of the signals. Online learning
+(:mod:`blockid.fitting.online`) cannot know that RMS in advance: it divides each column
+by a given scale of the signal it is a lag of, or by nothing, which ``scaling`` selects
+here too (:func:`regressor_scale`).
 
 The fitted model is checked before it is returned: finite parameters, a stable
 ``A(z)`` (unless ``allow_unstable``), and, for the recursive methods, convergence: the
@@ -38,7 +41,7 @@ from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
 
-__all__ = ["ARX_METHODS", "fit_arx", "make_estimator"]
+__all__ = ["ARX_METHODS", "fit_arx", "make_estimator", "regressor_scale", "signal_scales"]
 
 #: Method names accepted by :func:`fit_arx` (and ``blockid fit --method``).
 ARX_METHODS = ("batch", "rls", "aw-rls", "hierarchical-rls")
@@ -73,6 +76,46 @@ def make_estimator(
     )
 
 
+def signal_scales(scaling: Any, n_inputs: int, n_outputs: int) -> Any:
+    """Check ``scaling`` of :func:`fit_arx`: ``"rms"``, ``"none"``, or a pair
+    ``(input_scales, output_scales)`` (a number or one per signal), returned as two
+    arrays of positive finite numbers."""
+    if isinstance(scaling, str) and scaling in ("rms", "none"):
+        return scaling
+    try:
+        su, sy = scaling
+        su = np.broadcast_to(np.asarray(su, dtype=float), (n_inputs,)).copy()
+        sy = np.broadcast_to(np.asarray(sy, dtype=float), (n_outputs,)).copy()
+    except (TypeError, ValueError):
+        su = sy = np.array([np.nan])
+    both = np.concatenate((su, sy))
+    if not (np.all(np.isfinite(both)) and np.all(both > 0)):
+        raise ParameterError(
+            f"scaling must be 'rms', 'none' or a pair (input scales, output scales) of "
+            f"positive numbers ({n_inputs} input(s), {n_outputs} output(s)), got {scaling!r}"
+        )
+    return su, sy
+
+
+def regressor_scale(model: ARX, i: int, scaling: Any, Phi: np.ndarray | None = None) -> np.ndarray:
+    """Divisors of the regressor columns of output ``i`` before a recursive estimator runs.
+
+    ``"rms"``: every column's RMS over ``Phi`` (1 for an all-zero column); ``"none"``:
+    1; ``(input_scales, output_scales)`` from :func:`signal_scales`: the scale of the
+    signal a column is a lag of (columns as :meth:`~blockid.models.ARX.regressors`).
+    """
+    if isinstance(scaling, str):
+        if scaling == "none":
+            return np.ones(model.n_parameters(i))
+        scale = np.sqrt(np.mean(Phi**2, axis=0))
+        scale[scale == 0] = 1.0
+        return scale
+    su, sy = scaling
+    parts = [np.full(model.na[i, j], sy[j]) for j in range(len(model.outputs))]
+    parts += [np.full(model.nb[i, m], su[m]) for m in range(len(model.inputs))]
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
 def _advice(method: str) -> str:
     if method == "hierarchical-rls":
         return (
@@ -95,7 +138,7 @@ def _check_converged(
             f"output {name!r}: {method} did not converge: its one-step MSE on the estimation "
             f"data, {mse:.4g}, is {mse / max(mse_best, floor):.3g} times the least-squares "
             f"optimum {mse_best:.4g}. {_advice(method)}; for a plant that really varies in "
-            "time, switch this check off (--no-convergence-check)"
+            "time, switch this check off (convergence_check=False)"
         )
 
 
@@ -114,6 +157,7 @@ def fit_arx(
     allow_unstable: bool = False,
     passes: int = 1,
     max_mse_ratio: float | None = 2.0,
+    scaling: Any = "rms",
 ) -> FitResult:
     """Identify an ARX model from a :class:`~blockid.data.Dataset`.
 
@@ -145,6 +189,12 @@ def fit_arx(
         Convergence check of the recursive methods (None to skip, e.g. for a plant that
         really varies in time): raise when the one-step MSE on the estimation data is
         more than this multiple of the least-squares optimum.
+    scaling : "rms", "none" or (input_scales, output_scales)
+        What a recursive method divides the regressor columns by (and what
+        ``initial_covariance`` is relative to): their RMS over the estimation data
+        (default), nothing, or the given scale of the signal each column is a lag of
+        (a number or one per signal), as online learning does
+        (:mod:`blockid.fitting.online`).
     """
     if method not in ARX_METHODS:
         raise ParameterError(
@@ -157,6 +207,7 @@ def fit_arx(
     if center:
         u_off = np.mean(np.vstack([e.u for e in data.experiments]), axis=0)
         y_off = np.mean(np.vstack([e.y for e in data.experiments]), axis=0)
+    scaling = signal_scales(scaling, len(data.inputs), len(data.outputs))
     model = ARX(
         data.inputs,
         data.outputs,
@@ -201,8 +252,7 @@ def fit_arx(
         if method == "batch":
             theta = est.fit(Phi, target).coef_
         else:
-            scale = np.sqrt(np.mean(Phi**2, axis=0))
-            scale[scale == 0] = 1.0
+            scale = regressor_scale(model, i, scaling, Phi)
             try:
                 for _ in range(int(passes)):
                     start = 0
@@ -224,7 +274,7 @@ def fit_arx(
         raise EstimationError(
             f"the identified ARX model is unstable (largest pole magnitude {rho:.4g} >= 1): "
             "its free-run simulation would diverge. Check the orders and delays, use more or "
-            "better-exciting data, or pass --allow-unstable if you only need one-step prediction"
+            "better-exciting data, or pass allow_unstable=True if you only need one-step prediction"
         )
     y_hat = [model.predict(e.u, e.y) for e in data.experiments]
     y_all = np.vstack([e.y[model.max_lag :] for e in data.experiments])

@@ -24,7 +24,7 @@ internal signal, unstable linear block after a pass) and a model that fails
 Several experiments are processed one after another, each starting with the internal
 signals at rest; ``theta`` and ``P`` are carried over, also from pass to pass. The
 passes, checks and read-back are run by :func:`blockid.fitting.recursive.fit_recursive`,
-to which this module describes the algorithm (:class:`_BacklashAWRLS`).
+to which this module describes the algorithm (:class:`BacklashAWRLS`).
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ from blockid.fitting.recursive import (
     Signals,
     check_siso,
     fit_recursive,
+    given_scale_signals,
     int_at_least,
     largest_lag,
     normalised_signals,
@@ -50,7 +51,7 @@ from blockid.fitting.recursive import (
 from blockid.fitting.result import FitResult
 from blockid.models.block import BacklashModel
 
-__all__ = ["fit_backlash_aw_rls"]
+__all__ = ["BacklashAWRLS", "fit_backlash_aw_rls"]
 
 
 def _names(na: int, nb: int) -> list[str]:
@@ -137,7 +138,7 @@ def _check_branches_excited(switching: list[tuple[np.ndarray, ...]]) -> None:
             )
 
 
-class _BacklashAWRLS(RecursiveAlgorithm):
+class BacklashAWRLS(RecursiveAlgorithm):
     """AW-RLS (A8) with internal-variable estimation (A7) on the centred, normalised
     signals; ``theta`` is ordered as in (A6)."""
 
@@ -186,7 +187,6 @@ class _BacklashAWRLS(RecursiveAlgorithm):
 
     def model(self, theta, data):
         """Read back (A6): the backlash from ``theta_1..theta_4``, then ``b, a``."""
-        na, nb, nk = self.orders
         if not np.all(np.isfinite(theta)):
             raise EstimationError(
                 "AW-RLS: the linear block's static gain B(1) is 0, so the backlash offset cannot "
@@ -194,6 +194,12 @@ class _BacklashAWRLS(RecursiveAlgorithm):
                 "docs/convergence.md"
             )
         _check_branches_excited(self.switching)
+        return self.read_back(theta, data)
+
+    def read_back(self, theta, data):
+        """The model of a finite ``theta`` (data units), without :meth:`model`'s check
+        that the last pass drove both branches (online learning has no passes)."""
+        na, nb, nk = self.orders
         try:
             block = _read_backlash(theta)
             return BacklashModel(
@@ -235,6 +241,7 @@ def fit_backlash_aw_rls(
     tol: float = 1e-6,
     normalize: bool = True,
     record_history: bool = False,
+    scales: tuple[float, float] | None = None,
 ) -> FitResult:
     """Identify a backlash + linear model (paper A's S2) by AW-RLS (A6–A8).
 
@@ -276,6 +283,11 @@ def fit_backlash_aw_rls(
     record_history : bool
         Keep the trajectory of ``theta`` (in the data's units) in ``result.history``
         (``"theta"``, ``"names"``, ``"update"``).
+    scales : (float, float), optional
+        Fixed scales ``(s_u, s_v)`` used instead of the measured spreads, without
+        centring: the recursion runs on ``u / s_u`` and ``v / s_v`` (``normalize`` is
+        then not used), as online learning with ``input_scale``, ``output_scale`` does
+        (:mod:`blockid.fitting.online`).
 
     Returns
     -------
@@ -299,7 +311,7 @@ def fit_backlash_aw_rls(
     >>> {k: round(v, 4) for k, v in fit.model.input_block.parameters.items()}
     {'m_left': 0.9, 'c_left': 0.8, 'm_right': 0.9, 'c_right': 0.85}
     """
-    method = _BacklashAWRLS.method
+    method = BacklashAWRLS.method
     check_siso(data, method)
     na = int_at_least("na", na, 0)
     nb = int_at_least("nb", nb, 1)
@@ -314,11 +326,14 @@ def fit_backlash_aw_rls(
         len(_names(na, nb)),
         what=f"backlash model na={na}, nb={nb}, nk={nk}",
     )
-    signals = normalised_signals(data, normalize, center=True)
+    if scales is None:
+        signals = normalised_signals(data, normalize, center=True)
+    else:
+        signals = given_scale_signals(data, scales)
     return fit_recursive(
         data,
         signals,
-        _BacklashAWRLS((na, nb, nk), (eps1, eps2), signals),
+        BacklashAWRLS((na, nb, nk), (eps1, eps2), signals),
         initial_parameters=initial_parameters,
         initial_covariance=mu,
         passes=passes,

@@ -131,16 +131,28 @@ class ModelEstimator:
         dataset = _as_dataset(data, y, inputs, outputs)
         result = fit_model(dataset, self.structure, method=self.method, **self.options)
         self.result_ = result
-        self.model_ = result.model
+        self._model = result.model
         self.n_samples_ = result.n_samples
         self._online = None
         return self
 
-    def _check_fitted(self) -> None:
-        if getattr(self, "model_", None) is None:
+    @property
+    def model_(self) -> Any:
+        """The identified model: of :meth:`fit`, or of the newest online estimate (built
+        when asked for, so that an online estimate that has no valid model yet, such as
+        a backlash whose slopes are not positive early in a record, does not stop
+        learning)."""
+        if getattr(self, "_online", None) is not None:
+            return self._online.model()
+        model = getattr(self, "_model", None)
+        if model is None:
             raise ParameterError(
                 f"this {type(self).__name__} has no model yet: call fit (or partial_fit) first"
             )
+        return model
+
+    def _check_fitted(self) -> None:
+        self.model_  # noqa: B018 - raises when there is none
 
     def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
         """Free-run simulation of the identified model."""
@@ -188,7 +200,6 @@ class ModelEstimator:
             self._online = self._online_backend((dataset.inputs, dataset.outputs))
         for exp in dataset.experiments:
             self._online.partial_fit(exp.u, exp.y)
-        self.model_ = self._online.model()
         self.n_samples_ = self._online.n_samples
         return self
 

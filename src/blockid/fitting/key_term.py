@@ -14,7 +14,7 @@ computed sample by sample from the newest parameters and takes one RLS step with
 forgetting factor; passes over the data repeat until the parameters stop changing.
 The compiled pass is :func:`blockid._kernels.key_term.key_term_run`; the passes, checks
 and read-back are run by :func:`blockid.fitting.recursive.fit_recursive`, to which this
-module describes the algorithm (:class:`_KeyTermRLS`).
+module describes the algorithm (:class:`KeyTermRLS`).
 
 The same algorithm with a block removed gives paper B's comparison models:
 ``"hammerstein"`` (no ``q``; ``x = y`` is measured), ``"wiener"`` (``w = u``, ``b_0``
@@ -59,16 +59,18 @@ from blockid.fitting.recursive import (
     Signals,
     check_siso,
     fit_recursive,
+    given_scale_signals,
     int_at_least,
     largest_lag,
     normalised_signals,
     positive_number,
 )
+from blockid.fitting.registry import get_structure
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
-from blockid.models.block import BlockModel, Hammerstein, HammersteinWiener, Wiener
+from blockid.models.block import BlockModel
 
-__all__ = ["KEY_TERM_STRUCTURES", "fit_key_term_rls"]
+__all__ = ["KEY_TERM_STRUCTURES", "KeyTermRLS", "fit_key_term_rls"]
 
 #: Structures :func:`fit_key_term_rls` identifies: (input block?, output block?).
 KEY_TERM_STRUCTURES = {
@@ -111,7 +113,7 @@ def _unscale(structure: str, na: int, nb: int, r1: int, r2: int, su: float, sy: 
     return np.concatenate(parts)
 
 
-class _KeyTermRLS(RecursiveAlgorithm):
+class KeyTermRLS(RecursiveAlgorithm):
     """Key-term RLS (B5) for one structure, on ``u / su`` and ``y / sy``.
 
     ``theta`` is ordered as in (B4): ``f_0..f_r1, p_0..p_r1`` (input block), ``b``,
@@ -194,7 +196,7 @@ class _KeyTermRLS(RecursiveAlgorithm):
             q = np.concatenate(([1.0], theta[pos:]))
             kwargs["output_block"] = Polynomial(q, constant=False)
         u_name, y_name = data.inputs[0], data.outputs[0]
-        if self.structure == "arx":
+        if not (self.has_in or self.has_out):  # both blocks removed: plain ARX
             return ARX(
                 [u_name],
                 [y_name],
@@ -205,14 +207,18 @@ class _KeyTermRLS(RecursiveAlgorithm):
                 b={y_name: {u_name: b}},
                 sampling_time=data.sampling_time,
             )
-        cls = {"hammerstein-wiener": HammersteinWiener, "hammerstein": Hammerstein}.get(
-            self.structure, Wiener
+        cls = get_structure(self.structure).model_class()
+        return cls.cascade(
+            u_name,
+            y_name,
+            input_block=kwargs.pop("input_block", None),
+            output_block=kwargs.pop("output_block", None),
+            **kwargs,
         )
-        return cls(u_name, y_name, **kwargs)
 
     def model_to_check(self, model):
         """An ARX result is checked as the same linear model without blocks."""
-        if self.structure != "arx":
+        if self.has_in or self.has_out:
             return model
         na, nb, nk, _, _ = self.orders
         y_name, u_name = model.outputs[0], model.inputs[0]
@@ -260,6 +266,7 @@ def fit_key_term_rls(
     initial_parameters: Any = 0.01,
     normalize: bool = True,
     record_history: bool = False,
+    scales: tuple[float, float] | None = None,
 ) -> FitResult:
     """Identify a block-oriented model by paper B's key-term RLS (B4, B5).
 
@@ -302,6 +309,11 @@ def fit_key_term_rls(
         :data:`~blockid.fitting.recursive.HISTORY_ROWS` rows, in
         the data's units) in ``result.history``: ``"theta"`` (rows), ``"names"``,
         ``"update"`` (update count of every row, counted over all passes).
+    scales : (float, float), optional
+        Fixed scales ``(s_u, s_y)`` used instead of the measured spreads: the recursion
+        runs on ``u / s_u`` and ``y / s_y`` (``normalize`` is then not used). This is
+        what online learning with ``input_scale``, ``output_scale`` does
+        (:mod:`blockid.fitting.online`), which cannot measure a spread in advance.
 
     Returns
     -------
@@ -335,7 +347,7 @@ def fit_key_term_rls(
     >>> fit.settings["converged"], np.round(fit.model.a, 4).tolist()
     (True, [-0.9, -0.01, 0.105])
     """
-    method = _KeyTermRLS.method
+    method = KeyTermRLS.method
     schedule = ForgettingSchedule.parse(forgetting)  # once, before any data work
     if structure not in KEY_TERM_STRUCTURES:
         raise ParameterError(
@@ -356,8 +368,11 @@ def fit_key_term_rls(
     data.check_orders(
         largest_lag(na, nb, nk), n, what=f"key-term RLS {structure} na={na}, nb={nb}, nk={nk}"
     )
-    signals = normalised_signals(data, normalize)
-    algorithm = _KeyTermRLS(structure, (na, nb, nk, r1, r2), schedule, mu, signals)
+    if scales is None:
+        signals = normalised_signals(data, normalize)
+    else:
+        signals = given_scale_signals(data, scales)
+    algorithm = KeyTermRLS(structure, (na, nb, nk, r1, r2), schedule, mu, signals)
     return fit_recursive(
         data,
         signals,

@@ -41,6 +41,7 @@ from blockid.fitting.checks import check_model
 from blockid.fitting.result import FitResult
 
 __all__ = [
+    "given_scale_signals",
     "HISTORY_ROWS",
     "RecursiveAlgorithm",
     "Signals",
@@ -435,3 +436,19 @@ def one_step_metrics(model: Any, data: Dataset) -> dict[str, dict[str, float]]:
     lag = model.max_lag
     y = np.vstack([e.y[lag:] for e in data.experiments])
     return metrics_by_output(y, np.vstack([yh[lag:] for yh in y_hat]), model.outputs)
+
+
+def given_scale_signals(data: Dataset, scales: Any) -> Signals:
+    """The signals divided by given scales ``(s_u, s_y)`` instead of measured spreads
+    (no offsets): what a recursion that cannot see the whole record first, such as
+    :mod:`blockid.fitting.online`, runs on."""
+    try:
+        su, sy = scales
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"scales must be a pair (input scale, output scale), got {scales!r}"
+        ) from None
+    su, sy = positive_number("input scale", su), positive_number("output scale", sy)
+    raw = normalised_signals(data, False)
+    records = [(name, u / su, y / sy) for name, u, y in raw.records]
+    return Signals(records, (0.0, su), (0.0, sy), True)

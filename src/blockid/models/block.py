@@ -628,6 +628,11 @@ class BlockModel(ChainModel):
                 raise OrderError(f"a {cls.structure} model has no {what[3:]}")
         if has_out and blocks[-1].role != "static":
             raise OrderError("the output block must be a static block")
+        if has_out and isinstance(blocks[-1], Polynomial) and blocks[-1].constant:
+            raise OrderError(
+                "the output block must be a Polynomial without constant term (B3): use "
+                "Polynomial(q, constant=False) (the output offset carries the constant)"
+            )
 
     @classmethod
     def default_blocks(cls, r1: int = 3, r2: int = 3) -> tuple[Block | None, Block | None]:

@@ -1,0 +1,331 @@
+"""Online learning (fitting/online.py): any chunking of a record ends where the offline
+one-pass fit with the matching scaling ends, bit for bit."""
+
+import numpy as np
+import pytest
+
+from blockid import ARXEstimator, HammersteinWienerEstimator
+from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
+from blockid.data import Dataset
+from blockid.errors import EstimationError, ParameterError
+from blockid.fitting.arx import fit_arx
+from blockid.fitting.backlash import fit_backlash_aw_rls
+from blockid.fitting.key_term import fit_key_term_rls
+from blockid.fitting.online import online_estimator
+from blockid.models import ARX, BacklashModel, Hammerstein, HammersteinWiener, Wiener
+
+# paper B's orders and a stable third-order linear block
+N1 = TwoSegmentPolynomial.from_segments(
+    positive=[0, 0.3, 0.1, -0.05], negative=[0, 0.15, -0.05, 0.03]
+)
+N2 = Polynomial([1.0, 0.2, 0.05], constant=False)
+LINEAR = dict(na=3, nb=3, nk=8, a=np.real(np.poly([0.7, 0.5, -0.3]))[1:], b=[1.0, 0.5, 0.2])
+ORDERS = dict(na=3, nb=3, nk=8)
+PLANTS = {
+    "hammerstein-wiener": HammersteinWiener("u", "y", input_block=N1, output_block=N2, **LINEAR),
+    "hammerstein": Hammerstein("u", "y", input_block=N1, **LINEAR),
+    "wiener": Wiener("u", "y", output_block=N2, **LINEAR),
+}
+BACKLASH = BacklashModel(
+    "u", "y", input_block=Backlash(0.9, 0.8, 0.9, 0.85), na=2, nb=1, nk=1, a=[-1.0, 0.17]
+)
+# two inputs, two outputs, unequal orders (every lag bookkeeping path)
+ARX_ORDERS = dict(na=[[2, 1], [1, 2]], nb=[[2, 1], [1, 2]], nk=[[1, 2], [1, 1]])
+TITO = ARX(
+    ["u1", "u2"],
+    ["y1", "y2"],
+    **ARX_ORDERS,
+    a={"y1": {"y1": [-0.5, 0.1], "y2": [0.05]}, "y2": {"y1": [0.1], "y2": [-0.3, 0.05]}},
+    b={"y1": {"u1": [1.0, 0.3], "u2": [0.2]}, "y2": {"u1": [0.4], "u2": [1.0, -0.2]}},
+)
+ARX_METHODS = {
+    "rls": {"forgetting": "0.98:100,0.999"},
+    "aw-rls": {},
+    "hierarchical-rls": {"forgetting": 0.98},
+}
+
+
+def _record(plant, n, amplitude=1.0, seed=1, noise=0.0):
+    rng = np.random.default_rng(seed)
+    u = amplitude * rng.uniform(-1.0, 1.0, (n, len(plant.inputs)))
+    y = plant.simulate(u)
+    return u, y + noise * rng.standard_normal(y.shape)
+
+
+def _dataset(plant, u, y):
+    return Dataset.from_arrays(u, y, inputs=list(plant.inputs), outputs=list(plant.outputs))
+
+
+def _vector(online):
+    return np.array(list(online.estimate().values()))
+
+
+def _three_ways(structure, method, options, plant, u, y, seed=0):
+    """Estimates after the whole record, random chunks, and sample-by-sample updates."""
+    names = (list(plant.inputs), list(plant.outputs))
+    whole = online_estimator(structure, method, options, *names).partial_fit(u, y)
+    chunked = online_estimator(structure, method, options, *names)
+    cuts = np.sort(np.random.default_rng(seed).choice(np.arange(4, len(u)), 12, replace=False))
+    for a, b in zip(np.r_[0, 1, 2, 3, cuts], np.r_[1, 2, 3, cuts, len(u)], strict=True):
+        chunked.partial_fit(u[a:b], y[a:b])  # incl. chunks of one sample within max_lag
+    single = online_estimator(structure, method, options, *names)
+    for k in range(len(u)):
+        single.update(u[k], y[k])
+    for est in (whole, chunked, single):
+        assert est.n_samples == len(u)
+    return whole, chunked, single
+
+
+def _same(estimates, reference, names=None):
+    for est in estimates:
+        if names is not None:
+            assert list(est.estimate()) == names
+        np.testing.assert_allclose(_vector(est), reference, rtol=1e-9, atol=1e-12)
+        np.testing.assert_array_equal(_vector(est), reference)  # in fact bit for bit
+
+
+def _offline_history(fit, *args, **kwargs):
+    """The one-pass offline estimate (recursion order, data units), also when the fit
+    refuses its model (one pass of H-W key-term RLS does not converge)."""
+    try:
+        return fit(*args, passes=1, record_history=True, **kwargs).history
+    except EstimationError as exc:
+        return exc.history
+
+
+# ---------------------------------------------------------------------- equivalence
+@pytest.mark.parametrize("method", list(ARX_METHODS))
+def test_arx_any_chunking_equals_the_offline_one_pass_fit(method):
+    options = {**ARX_ORDERS, **ARX_METHODS[method]}
+    u, y = _record(TITO, 1500, noise=0.01)
+    data = _dataset(TITO, u, y)
+    offline = fit_arx(data, method=method, scaling="none", max_mse_ratio=None, **options).model
+    reference = np.concatenate([offline.parameter_vector(i) for i in range(2)])
+    estimates = _three_ways("arx", method, options, TITO, u, y)
+    _same(estimates, reference)
+    assert isinstance(estimates[0].model(), ARX)
+    assert np.max(np.abs(reference - np.concatenate([TITO.parameter_vector(i) for i in range(2)])))
+    assert estimates[0].parameters() == offline.to_dict()["parameters"]
+
+
+def test_arx_with_given_scales_equals_fit_arx_with_those_scales():
+    options = {**ARX_ORDERS, "forgetting": 0.995, "initial_covariance": 1e3}
+    u, y = _record(TITO, 800, amplitude=50.0, noise=0.5)
+    scales = ([40.0, 30.0], [60.0, 70.0])
+    data = _dataset(TITO, u, y)
+    offline = fit_arx(data, method="rls", scaling=scales, max_mse_ratio=None, **options).model
+    reference = np.concatenate([offline.parameter_vector(i) for i in range(2)])
+    online = {**options, "input_scale": scales[0], "output_scale": scales[1]}
+    _same(_three_ways("arx", "rls", online, TITO, u, y), reference)
+    raw = fit_arx(data, method="rls", scaling="none", max_mse_ratio=None, **options).model
+    assert not np.array_equal(raw.parameter_vector(0), offline.parameter_vector(0))
+
+
+@pytest.mark.parametrize("structure", list(PLANTS))
+def test_key_term_any_chunking_equals_the_offline_one_pass_fit(structure):
+    plant = PLANTS[structure]
+    u, y = _record(plant, 2500)
+    options = {**ORDERS, "forgetting": "0.98:200,1"}
+    data = _dataset(plant, u, y)
+    history = _offline_history(fit_key_term_rls, data, structure, normalize=False, **options)
+    estimates = _three_ways(structure, "key-term-rls", options, plant, u, y)
+    _same(estimates, history["theta"][-1], history["names"])
+    assert type(estimates[0].model()) is type(plant)
+    if structure != "hammerstein-wiener":  # the offline fit accepts its one-pass model
+        offline = fit_key_term_rls(data, structure, passes=1, normalize=False, **options)
+        assert estimates[1].parameters() == offline.model.to_dict()["parameters"]
+
+
+def test_key_term_with_given_scales_equals_the_offline_fit_with_those_scales():
+    plant = PLANTS["hammerstein"]
+    u, y = _record(plant, 1500, amplitude=3.0)
+    data = _dataset(plant, u, y)
+    history = _offline_history(
+        fit_key_term_rls, data, "hammerstein", scales=(2.0, 0.5), r1=3, **ORDERS
+    )
+    options = {**ORDERS, "r1": 3, "input_scale": 2.0, "output_scale": 0.5, "normalize": True}
+    _same(_three_ways("hammerstein", "key-term-rls", options, plant, u, y), history["theta"][-1])
+
+
+@pytest.mark.parametrize("scales", [None, (3.0, 2.0)])
+def test_backlash_any_chunking_equals_the_offline_one_pass_fit(scales):
+    u, y = _record(BACKLASH, 2000, amplitude=5.0)
+    data = _dataset(BACKLASH, u, y)
+    kwargs = {"normalize": False} if scales is None else {"scales": scales}
+    offline = fit_backlash_aw_rls(data, record_history=True, **kwargs)
+    options = {} if scales is None else {"input_scale": scales[0], "output_scale": scales[1]}
+    estimates = _three_ways("backlash", "aw-rls", options, BACKLASH, u, y)
+    _same(estimates, offline.history["theta"][-1], offline.history["names"])
+    model = estimates[2].model()
+    assert isinstance(model, BacklashModel)
+    np.testing.assert_array_equal(model.free_parameters(), offline.model.free_parameters())
+    np.testing.assert_allclose(model.free_parameters(), BACKLASH.free_parameters(), atol=1e-5)
+
+
+def test_a_starting_model_sets_theta0_as_initial_parameters_do_offline():
+    plant = PLANTS["hammerstein-wiener"]
+    u, y = _record(plant, 1200)
+    start = online_estimator("hammerstein-wiener", "key-term-rls", {"initial": plant}, "u", "y")
+    theta0 = np.concatenate((N1.f, N1.p, LINEAR["b"][1:], LINEAR["a"], N2.coefficients[1:]))
+    np.testing.assert_array_equal(_vector(start), theta0)  # B4 order, orders from the model
+    assert start.model().parameters == plant.parameters
+    history = _offline_history(
+        fit_key_term_rls,
+        _dataset(plant, u, y),
+        "hammerstein-wiener",
+        normalize=False,
+        initial_parameters=theta0,
+    )
+    _same([start.partial_fit(u, y)], history["theta"][-1])
+
+
+# ---------------------------------------------------------------------- predictions
+def test_update_returns_the_prediction_of_the_model_before_the_update():
+    u, y = _record(TITO, 300, noise=0.05)
+    online = online_estimator(
+        "arx", "rls", {**ARX_ORDERS, "forgetting": 0.99}, *[list(TITO.inputs), list(TITO.outputs)]
+    )
+    lag = TITO.max_lag
+    for k in range(len(u)):
+        before = online.model()
+        prediction = online.update(u[k], y[k])
+        assert prediction.shape == (2,)
+        if k < lag:
+            assert np.all(np.isnan(prediction))  # no regressor yet
+        elif k % 7 == 0:
+            expected = before.predict(u[: k + 1], y[: k + 1])[-1]
+            np.testing.assert_allclose(prediction, expected, rtol=1e-12, atol=1e-12)
+    # a chunk keeps the same predictions
+    chunked = online_estimator(
+        "arx", "rls", {**ARX_ORDERS, "forgetting": 0.99}, *[list(TITO.inputs), list(TITO.outputs)]
+    )
+    chunked.partial_fit(u[:100], y[:100])
+    before = chunked.model()
+    chunked.partial_fit(u[100:101], y[100:101])
+    np.testing.assert_allclose(
+        chunked.predictions_[0], before.predict(u[:101], y[:101])[-1], rtol=1e-12
+    )
+
+
+def test_key_term_predictions_are_the_a_priori_ones_and_shrink():
+    plant = PLANTS["hammerstein"]
+    u, y = _record(plant, 2000)
+    online = online_estimator("hammerstein", "key-term-rls", {**ORDERS, "r1": 3}, "u", "y")
+    predictions = np.array([online.update(u[k], y[k])[0] for k in range(len(u))])
+    assert np.all(np.isnan(predictions[:10])) and np.all(np.isfinite(predictions[10:]))
+    early = np.abs(y[10:200, 0] - predictions[10:200]).mean()
+    late = np.abs(y[-200:, 0] - predictions[-200:]).mean()
+    assert late < 0.05 * early  # measured 0.017
+    whole = online_estimator("hammerstein", "key-term-rls", {**ORDERS, "r1": 3}, "u", "y")
+    np.testing.assert_array_equal(whole.partial_fit(u, y).predictions_[:, 0], predictions)
+
+
+# ---------------------------------------------------------------------- long run, memory
+def test_long_hammerstein_wiener_run_is_finite_and_close_to_the_truth():
+    # one pass with lambda = 1 keeps the first, wrong internal estimates for ever (the
+    # offline fit repeats passes instead); online, a forgetting factor below 1 does it
+    plant = PLANTS["hammerstein-wiener"]
+    u, y = _record(plant, 50_000)
+    online = online_estimator(
+        "hammerstein-wiener", "key-term-rls", {**ORDERS, "forgetting": 0.999}, "u", "y"
+    )
+    sizes = []
+    for a in range(0, 50_000, 5000):
+        online.partial_fit(u[a : a + 5000], y[a : a + 5000])
+        sizes.append(sum(v.nbytes for v in vars(online).values() if isinstance(v, np.ndarray)))
+    model = online.model()
+    assert np.all(np.isfinite(model.free_parameters()))
+    assert np.max(np.abs(model.free_parameters() - plant.free_parameters())) < 1e-3
+    assert len(set(sizes[1:])) == 1  # the state does not grow with the record
+
+
+# ---------------------------------------------------------------------- divergence
+def test_divergence_names_the_sample_and_leaves_the_last_good_state():
+    plant = PLANTS["hammerstein"]
+    u, y = _record(plant, 400)
+    bad = u.copy()
+    bad[140] = 1e200  # u^3 overflows: the regressor of sample 140 + nk is not finite
+    options = {**ORDERS, "r1": 3}
+    online = online_estimator("hammerstein", "key-term-rls", options, "u", "y")
+    online.partial_fit(u[:100], y[:100])
+    good = _vector(online)
+    with pytest.raises(EstimationError, match="at sample 148") as info:
+        online.partial_fit(bad[100:200], y[100:200])
+    assert info.value.sample == 148
+    assert online.n_samples == 100
+    np.testing.assert_array_equal(_vector(online), good)
+    # the stream goes on from the last good state: as if the bad chunk had not come
+    online.partial_fit(u[100:], y[100:])
+    clean = online_estimator("hammerstein", "key-term-rls", options, "u", "y")
+    np.testing.assert_array_equal(_vector(online), _vector(clean.partial_fit(u, y)))
+
+    single = online_estimator("hammerstein", "key-term-rls", options, "u", "y")
+    for k in range(148):
+        single.update(bad[k], y[k])
+    before = _vector(single)
+    with pytest.raises(EstimationError, match="at sample 148"):
+        single.update(bad[148], y[148])
+    np.testing.assert_array_equal(_vector(single), before)
+    assert single.n_samples == 148
+
+
+def test_arx_divergence_rolls_back_every_output():
+    u, y = _record(TITO, 200, noise=0.01)
+    y[150, 1] = 1e300  # only output y2's recursion fails (y1's regressor has no y2 lag)
+    orders = {**ARX_ORDERS, "na": [[2, 0], [1, 2]]}
+    online = online_estimator("arx", "rls", orders, ["u1", "u2"], ["y1", "y2"])
+    online.partial_fit(u[:100], y[:100])
+    good = _vector(online)
+    # sample 150 only throws theta far; its square in the regressor of 151 overflows
+    with pytest.raises(EstimationError, match="output 'y2' diverged at sample 151"):
+        online.partial_fit(u[100:], y[100:])
+    np.testing.assert_array_equal(_vector(online), good)  # y1 rolled back too
+
+
+# ---------------------------------------------------------------------- options
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"passes": 3}, "one pass"),
+        ({"normalize": True}, "input_scale and output_scale"),
+        ({"center": True}, "center=True"),
+        ({"input_scale": 2.0}, "both input_scale and output_scale"),
+        ({"eps1": 1.0}, "eps1 not used by hammerstein-wiener"),
+        ({"initial": PLANTS["hammerstein"]}, "must be a HammersteinWiener"),
+        ({"initial": PLANTS["hammerstein-wiener"], "initial_parameters": 0.1}, "not both"),
+    ],
+)
+def test_options_a_stream_cannot_honour_are_refused(options, message):
+    with pytest.raises(ParameterError, match=message):
+        online_estimator("hammerstein-wiener", "key-term-rls", options, "u", "y")
+
+
+def test_a_non_recursive_method_cannot_learn_online():
+    with pytest.raises(ParameterError, match="not recursive"):
+        online_estimator("arx", "batch", {}, ["u"], ["y"])
+
+
+# ---------------------------------------------------------------------- ModelEstimator
+def test_model_estimator_learns_online_end_to_end():
+    plant = PLANTS["hammerstein-wiener"]
+    u, y = _record(plant, 3000)
+    est = HammersteinWienerEstimator(method="key-term-rls", forgetting=0.999, **ORDERS)
+    est.partial_fit(_dataset(plant, u[:2000], y[:2000]))
+    assert isinstance(est.model_, HammersteinWiener) and est.n_samples_ == 2000
+    for k in range(2000, 3000):
+        prediction, error = est.update(u[k], y[k])
+    assert prediction.shape == error.shape == (1,)
+    np.testing.assert_allclose(error, y[-1] - prediction)
+    assert est.n_samples_ == 3000
+    whole = online_estimator(
+        "hammerstein-wiener", "key-term-rls", {**ORDERS, "forgetting": 0.999}, "u", "y"
+    )
+    np.testing.assert_array_equal(_vector(est._online), _vector(whole.partial_fit(u, y)))
+    assert est.online_model_.parameters == whole.model().parameters
+
+
+def test_partial_fit_after_fit_with_a_batch_method_is_refused_clearly():
+    u, y = _record(TITO, 300, noise=0.01)
+    est = ARXEstimator(method="batch", **ARX_ORDERS).fit(_dataset(TITO, u, y))
+    with pytest.raises(ParameterError, match="method='batch' of arx is not recursive"):
+        est.partial_fit(_dataset(TITO, u, y))
