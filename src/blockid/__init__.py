@@ -36,6 +36,7 @@ _WHERE = {
     # models
     "ARX": "blockid.models",
     "ChainModel": "blockid.models",
+    "LinearFeedback": "blockid.models",
     "load_model": "blockid.models",
     "save_model": "blockid.models",
     # estimators (regressor level)
@@ -51,6 +52,8 @@ _WHERE = {
     "HammersteinWienerEstimator": "blockid.fitting.estimator",
     "WienerEstimator": "blockid.fitting.estimator",
     "evaluate": "blockid.evaluation",
+    "identify": "blockid.fitting.identify",
+    "false_nearest_neighbours": "blockid.fitting.orders",
     "fit_arx": "blockid.fitting",
     "fit_model": "blockid.fitting",
     "metrics_by_output": "blockid.evaluation",

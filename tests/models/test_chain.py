@@ -88,7 +88,9 @@ def test_wiener_hammerstein_is_refined_from_a_perturbed_start_to_the_truth():
     rng = np.random.default_rng(1)
     u = rng.uniform(-1.0, 1.0, 3000)
     data = Dataset.from_arrays(u, truth.simulate(u), ["u"], ["y"])
-    start = truth.with_free_parameters(truth.free_parameters() * (1 + 0.05 * rng.standard_normal(8)))
+    start = truth.with_free_parameters(
+        truth.free_parameters() * (1 + 0.05 * rng.standard_normal(8))
+    )
     fit = refine(start, data, tail_fraction=0.0)
     np.testing.assert_allclose(fit.model.free_parameters(), truth.free_parameters(), atol=1e-7)
     assert fit.model.structure == "wiener-hammerstein"
@@ -112,7 +114,14 @@ def test_chain_orders_and_names():
     assert model.linear_orders() == (3, 3, 1)  # the product of the two linear blocks
     # q_1 = 1 after the first linear block and b_0 = 1 after the static block are fixed
     assert model.free_parameter_names() == [
-        "a1_1", "a1_2", "b1_0", "b1_1", "coefficients_2", "coefficients_3", "a2_1", "b2_1",
+        "a1_1",
+        "a1_2",
+        "b1_0",
+        "b1_1",
+        "coefficients_2",
+        "coefficients_3",
+        "a2_1",
+        "b2_1",
     ]
     assert model.free_parameters().size == 8
     assert model.max_lag == 2
@@ -122,8 +131,15 @@ def test_chains_that_make_no_sense_are_refused():
     with pytest.raises(errors.OrderError, match="needs a linear block"):
         ChainModel("u", "y", [Polynomial([1.0, 0.5])])
     with pytest.raises(errors.OrderError, match="put it first"):
-        ChainModel("u", "y", [LinearBlock(1, 1, 1, a=[-0.5], b=[1.0]), Backlash(1, 0, 1, 0),
-                              LinearBlock(1, 1, 1, a=[-0.5], b=[1.0])])
+        ChainModel(
+            "u",
+            "y",
+            [
+                LinearBlock(1, 1, 1, a=[-0.5], b=[1.0]),
+                Backlash(1, 0, 1, 0),
+                LinearBlock(1, 1, 1, a=[-0.5], b=[1.0]),
+            ],
+        )
     with pytest.raises(errors.OrderError, match="b_0 is fixed to 1"):
         ChainModel("u", "y", [Polynomial([0.0, 1.0]), LinearBlock(1, 1, 1, b=[2.0])])
     with pytest.raises(errors.OrderError, match="linear block, static block, linear block"):

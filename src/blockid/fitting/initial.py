@@ -72,7 +72,7 @@ from blockid.errors import BlockidError, EstimationError, OrderError, ParameterE
 from blockid.estimators import BatchLeastSquares
 from blockid.fitting.checks import STABILITY_MARGIN, simulation_mse
 from blockid.fitting.registry import STRUCTURES
-from blockid.models.block import BlockModel, ChainModel
+from blockid.models.block import BlockModel
 
 __all__ = ["initial_estimate", "resolve_structure", "scaled_block"]
 
@@ -131,12 +131,14 @@ def _build(
     return like.with_blocks(blocks, ranges=None)  # type: ignore[return-value]
 
 
-def _cascade(like: BlockModel, block: Block) -> ChainModel:
-    """``block`` then the linear block of ``like``: to fit an input block on its own."""
+def _cascade(
+    like: BlockModel, block: Block, a: np.ndarray | None = None, b: np.ndarray | None = None
+) -> BlockModel:
+    """``block`` then a linear block of ``like``'s orders, without output block: to fit an
+    input block on its own (also for a Hammerstein-Wiener template)."""
     g = like.linear
-    return ChainModel(
-        like.inputs, like.outputs, [block, LinearBlock(g.na, g.nb, g.nk, unit_b0=True)]
-    )
+    return BlockModel(like.inputs, like.outputs, input_block=block, na=g.na, nb=g.nb, nk=g.nk,
+                      a=a, b=b)  # fmt: skip
 
 
 def _signals(data: Dataset) -> tuple[list[np.ndarray], list[np.ndarray]]:
@@ -285,7 +287,7 @@ def _profile_fit(
     a, b = _arx_fit(w, z, template.na, template.nb, template.nk)
     if not b[0] > 1e-12 * max(np.max(np.abs(b)), 1e-300):
         return None
-    return _build(template, scaled_block(unit, b[0]), None, a, b / b[0])
+    return _cascade(template, scaled_block(unit, b[0]), a, b / b[0])
 
 
 def _family_fit(
@@ -299,7 +301,7 @@ def _family_fit(
         block = family.build(vector)
     except (EstimationError, ParameterError):  # e.g. an edge beyond the data, a slope <= 0
         return None
-    return _build(template, block, None, a, b)
+    return _cascade(template, block, a, b)
 
 
 def _candidate(

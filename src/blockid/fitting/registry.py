@@ -20,6 +20,9 @@ hammerstein            simulation-error, key-term-rls              simulation-er
 wiener                 simulation-error, key-term-rls              simulation-error
 hammerstein-wiener     simulation-error, key-term-rls              simulation-error
 backlash               simulation-error, aw-rls                    simulation-error
+output-error           simulation-error                            simulation-error
+wiener-hammerstein     simulation-error                            simulation-error
+feedback               simulation-error                            simulation-error
 =====================  ==========================================  ==================
 
 Modules are named as text and imported only when a fit runs, so that importing the
@@ -243,7 +246,9 @@ OPTIONS: dict[str, Option] = _options(
     Option("nb", "orders", "Input coefficients nb (b_0..b_nb-1), N or ARX matrix.", metavar="N"),
     Option("nk", "orders", "Input delay nk in samples, N or ARX matrix.", metavar="N"),
     Option("r1", "count", "Degree of the two-segment input polynomial (B1).", low=1),
-    Option("r2", "count", "Degree of the output polynomial (B3).", low=1),
+    Option(
+        "r2", "count", "Degree of the output polynomial (B3; the middle block of L1-N-L2).", low=1
+    ),
     Option(
         "input_block",
         "block",
@@ -318,6 +323,9 @@ OPTIONS: dict[str, Option] = _options(
         "record_history",
         "bool",
         "Keep the parameter trajectory of a recursive method.",
+    ),
+    Option(
+        "r", "count", "Degree r of the feedback polynomial N(y) = c_2 y^2 + .. + c_r y^r.", low=1
     ),
     Option("max_nfev", "count", "Simulation-error fit: limit on simulations.", low=1),
     Option(
@@ -524,6 +532,54 @@ STRUCTURES: dict[str, Structure] = {
                 ),
             ),
             common=_ORDERS + ("center", "refine"),
+        ),
+        Structure(
+            "output-error",
+            "blockid.models.block:OutputError",
+            "linear output-error model B/A, fitted on free-run simulation error",
+            (
+                Method(
+                    "simulation-error",
+                    "blockid.fitting.simulation_error:fit_simulation_error",
+                    _SIMULATION_ERROR,
+                    "minimise the free-run simulation error from a least-squares ARX start",
+                    passes=("structure",),
+                ),
+            ),
+            common=_ORDERS + ("center",),
+            center_default=True,
+        ),
+        Structure(
+            "wiener-hammerstein",
+            "blockid.models.block:WienerHammerstein",
+            "linear, static polynomial, linear (L1-N-L2), from the split of the BLA",
+            (
+                Method(
+                    "simulation-error",
+                    "blockid.fitting.wiener_hammerstein:fit_wiener_hammerstein",
+                    ("r2",) + _SIMULATION_ERROR,
+                    "split the best linear approximation's poles and zeros, score every "
+                    "split, refine the best on free-run simulation error",
+                ),
+            ),
+            common=_ORDERS + ("center",),
+            center_default=True,
+        ),
+        Structure(
+            "feedback",
+            "blockid.models.feedback:LinearFeedback",
+            "linear block with a polynomial of the output fed back to its input (Lur'e "
+            "form: Duffing oscillator, Silverbox)",
+            (
+                Method(
+                    "simulation-error",
+                    "blockid.fitting.feedback:fit_feedback",
+                    ("r",) + _SIMULATION_ERROR,
+                    "equation-error start, then minimise the free-run simulation error",
+                ),
+            ),
+            common=_ORDERS + ("center",),
+            center_default=True,
         ),
     )
 }

@@ -123,6 +123,8 @@ def simulate_with_sensitivities(
     outputs, the dependence of that start on the parameters of the blocks after it is
     included: ``dx/dθ = -(∂N/∂θ) / N'(x)``.
     """
+    if not isinstance(model, ChainModel):  # a model with its own Jacobian (LinearFeedback)
+        return model.simulate_with_sensitivities(u, y_initial)
     u_arr, _ = model._check_signals(u)
     s = np.ascontiguousarray(u_arr[:, 0] - model.input_offset)
     columns = model.block_columns()
@@ -346,7 +348,7 @@ def refine(
         If the start is unstable, not finite or its simulation explodes, or if the
         result fails :func:`~blockid.fitting.checks.check_model`.
     """
-    if not isinstance(model, ChainModel):
+    if not isinstance(model, ChainModel) and not hasattr(model, "simulate_with_sensitivities"):
         raise ParameterError(
             f"refinement on simulation error works on block-oriented models, got "
             f"{type(model).__name__}; fit an ARX model with method batch instead"

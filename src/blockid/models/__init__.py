@@ -9,9 +9,11 @@ from blockid.models.block import (
     ChainModel,
     Hammerstein,
     HammersteinWiener,
+    OutputError,
     Wiener,
     WienerHammerstein,
 )
+from blockid.models.feedback import LinearFeedback
 from blockid.models.network import Network
 from blockid.models.serialization import (
     load_model,
@@ -21,6 +23,7 @@ from blockid.models.serialization import (
 )
 
 __all__ = [
+    "LinearFeedback",
     "Network",
     "BLOCK_STRUCTURES",
     "BacklashModel",
@@ -28,6 +31,7 @@ __all__ = [
     "ChainModel",
     "Hammerstein",
     "HammersteinWiener",
+    "OutputError",
     "Wiener",
     "WienerHammerstein",
     "ARX",

@@ -55,6 +55,7 @@ __all__ = [
     "Wiener",
     "HammersteinWiener",
     "BacklashModel",
+    "OutputError",
     "WienerHammerstein",
     "BLOCK_STRUCTURES",
 ]
@@ -814,6 +815,21 @@ class BacklashModel(BlockModel):
         super()._check_shape(blocks)
         if not isinstance(blocks[0], Backlash):
             raise OrderError("a backlash model's input block must be a Backlash")
+
+
+class OutputError(BlockModel):
+    """Linear output-error model ``y = z^-nk B/A u`` (no nonlinear block), identified on
+    its free-run simulation error rather than its one-step error as ARX is.
+
+    .. math:: y(k) = z^{-n_k} \\frac{B(z^{-1})}{A(z^{-1})} u(k) + e(k)
+    """
+
+    structure = "output-error"
+    requires_input_block = False
+    requires_output_block = False
+
+    def __init__(self, input: Any, output: Any, **kwargs: Any):
+        super().__init__(input, output, **kwargs)
 
 
 class WienerHammerstein(ChainModel):

@@ -1,0 +1,124 @@
+"""``blockid orders``: the false-nearest-neighbours test paper A chose its orders with.
+
+Parses, calls :func:`blockid.fitting.orders.false_nearest_neighbours`, prints its table
+and recommendation (or one JSON document with ``--json``).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import typer
+
+from blockid.cli._common import (
+    DataPaths,
+    ExperimentColumn,
+    Inputs,
+    Json,
+    SamplingTime,
+    TimeColumn,
+    cli_errors,
+    load_data,
+    print_json,
+    stdout,
+)
+from blockid.errors import BlockidError
+from blockid.fitting.orders import DEFAULTS
+
+__all__ = ["orders"]
+
+#: This command's flags of the library parameters (for the one-line errors).
+_FLAGS = {name: "--" + name.replace("_", "-") for name in ("max_na", "max_nb", "max_nk")}
+_FLAGS.update(threshold="--threshold", noise="--noise", outputs="--output")
+
+
+def _count(flag: str, what: str) -> Any:
+    return typer.Option(flag, metavar="N", help=what)
+
+
+@cli_errors
+def orders(
+    data_paths: DataPaths,
+    inputs: Inputs,
+    output: Annotated[
+        str, typer.Option("--output", "-y", metavar="NAME", help="Output column to test.")
+    ],
+    estimation: Annotated[
+        str | None,
+        typer.Option("--estimation", metavar="START:STOP", help="Samples to use (default: all)."),
+    ] = None,
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    experiment_column: ExperimentColumn = None,
+    max_na: Annotated[int, _count("--max-na", "Output lags tried: 0..N.")] = DEFAULTS["max_na"],
+    max_nb: Annotated[int, _count("--max-nb", "Input coefficients tried: 1..N.")] = DEFAULTS[
+        "max_nb"
+    ],
+    max_nk: Annotated[int, _count("--max-nk", "Input delays tried: 0..N.")] = DEFAULTS["max_nk"],
+    threshold: Annotated[
+        float,
+        typer.Option(metavar="PERCENT", help="Pass mark: share of false neighbours."),
+    ] = DEFAULTS["threshold"],
+    noise: Annotated[
+        float,
+        typer.Option(metavar="FRACTION", help="Noise bound, fraction of each signal's spread."),
+    ] = DEFAULTS["noise"],
+    json_out: Json = False,
+) -> None:
+    """Choose na, nb, nk by false nearest neighbours (the test paper A used).
+
+    Prints the share of false nearest neighbours for every candidate number of output
+    lags na and input coefficients nb (at its best delay), the shares over the delay nk
+    at the recommended orders, and the recommendation: the smallest na + nb whose share
+    is at most the threshold. Several inputs share one nb and one nk.
+    """
+    from blockid.fitting.orders import false_nearest_neighbours
+
+    data = load_data(data_paths, inputs, [output], ts, time_column, experiment_column, estimation)
+    try:
+        evidence = false_nearest_neighbours(
+            data, max_na=max_na, max_nb=max_nb, max_nk=max_nk, threshold=threshold, noise=noise
+        )
+    except BlockidError as exc:
+        name = _FLAGS.get(exc.parameter or "")
+        if name is None or name in str(exc):
+            raise
+        raise type(exc)(f"{exc} (option {name})") from None
+    if json_out:
+        print_json(evidence.to_dict())
+        return
+    _print(evidence)
+
+
+def _print(ev: Any) -> None:
+    from rich.table import Table
+
+    best_delay = ev.percent.argmin(axis=2)
+    table = Table(
+        title=f"false nearest neighbours, % of {ev.settings['n_scored']} samples: "
+        f"{', '.join(ev.inputs)} -> {ev.output} (at the best delay nk)",
+        title_justify="left",
+    )
+    table.add_column("na \\ nb", justify="right")
+    for nb in ev.nb:
+        table.add_column(f"nb={nb}", justify="right")
+    for i, na in enumerate(ev.na):
+        cells = [
+            f"{ev.percent[i, j, best_delay[i, j]]:.1f} (nk {ev.nk[best_delay[i, j]]})"
+            for j in range(len(ev.nb))
+        ]
+        table.add_row(f"na={na}", *cells)
+    stdout.print(table)
+    na, nb, nk = ev.recommended
+    scan = ", ".join(f"nk={k}: {v:.1f}" for k, v in ev.delay_scan().items())
+    stdout.print(f"delay scan at na={na}, nb={nb} (% false): {scan}", markup=False)
+    evidence = ev.evidence()
+    fewer = ", ".join(f"{k}: {v:.1f} %" for k, v in evidence["one_lag_less"].items())
+    stdout.print(
+        f"recommended: na={na} nb={nb} nk={nk} ({evidence['percent']:.1f} % false neighbours"
+        + (f"; one lag less, {fewer}" if fewer else "")
+        + f"; pass mark {ev.pass_mark:.3g} %)",
+        markup=False,
+    )
+    for note in evidence["notes"]:
+        stdout.print(f"note: {note}", markup=False)
