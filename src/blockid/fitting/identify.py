@@ -353,6 +353,38 @@ def _nonlinear_candidates(
     return unique
 
 
+def _key(candidate: Candidate) -> tuple:
+    """A candidate without its iteration settings (a screened and a final fit of the same
+    candidate share it)."""
+    opts = {k: v for k, v in candidate.options.items() if k not in ("max_nfev", "tail_fraction")}
+    return candidate.structure, tuple(sorted(opts.items()))
+
+
+def _refit(winner: Score, data: Dataset) -> Any:
+    """The winner fitted on all estimation data.
+
+    A block-oriented model is refined on simulation error from the finalist's estimate
+    (its offsets kept): the search already paid for the start. ARX is refitted.
+    """
+    from blockid.fitting.dispatch import fit_model
+
+    structure = winner.candidate.structure
+    if STRUCTURES[structure].block_oriented and winner.model is not None:
+        from dataclasses import replace
+
+        from blockid.fitting.simulation_error import refine
+
+        try:
+            fit = refine(winner.model, data)
+            settings = {**fit.settings, "started_from": "the search's finalist"}
+            return replace(fit, settings=settings)
+        except BlockidError:
+            pass  # fall back to a fit from scratch
+    opts = {k: v for k, v in winner.candidate.options.items() if k not in ("max_nfev",)}
+    opts.pop("tail_fraction", None)
+    return fit_model(data, structure, **opts)
+
+
 def identify(
     data: Dataset,
     validation: Dataset | None = None,
@@ -407,7 +439,6 @@ def identify(
     -------
     IdentifyResult
     """
-    from blockid.fitting.dispatch import fit_model
 
     if not isinstance(data, Dataset):
         raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
@@ -506,9 +537,9 @@ def identify(
     ranked_final = _ranked(finals, tie) or screened
     winner = ranked_final[0]
 
-    # refit on all estimation data
+    # refit on all estimation data: block models start from the finalist (warm start)
     search.tell("refit", 0, 1, winner.candidate.label)
-    fit = fit_model(data, winner.candidate.structure, **winner.candidate.options)
+    fit = _refit(winner, data)
     search.tell("refit", 1, 1, winner.candidate.label)
 
     from blockid.evaluation.validate import evaluate
@@ -526,6 +557,8 @@ def identify(
             "the model (optimistic)"
         )
     ok = _ranked(search.scores, tie)
+    finals_seen = {_key(s.candidate) for s in ok if s.stage == "final"}
+    ok = [s for s in ok if s.stage == "final" or _key(s.candidate) not in finals_seen]
     ranked = [winner] + [s for s in ok if s is not winner]
     rejected = [s for s in search.scores if not s.ok]
     return IdentifyResult(

@@ -1,0 +1,197 @@
+"""``blockid identify``: choose structure, orders and nonlinearity from the data alone.
+
+The search runs in :func:`blockid.fitting.identify.identify`; this command reads the
+data, shows progress on a terminal, prints the ranked table (or one JSON document) and
+saves the chosen model.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from blockid.cli._common import (
+    DataPaths,
+    ExperimentColumn,
+    Force,
+    Inputs,
+    Json,
+    Outputs,
+    SamplingTime,
+    TimeColumn,
+    cli_errors,
+    load_data,
+    metrics_table,
+    print_json,
+    print_model,
+    refuse_to_overwrite,
+    stderr,
+    stdout,
+)
+
+__all__ = ["identify"]
+
+
+def _progress(enabled: bool) -> tuple[Any, Any]:
+    """A rich progress bar on a terminal (stderr), or nothing."""
+    if not enabled:
+        return None, None
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    bar = Progress(
+        TextColumn("{task.description:<15}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(),
+        TextColumn("{task.fields[label]}", style="dim"),
+        console=stderr,
+        transient=True,
+    )
+    tasks: dict[str, Any] = {}
+
+    def update(stage: str, done: int, total: int, label: str) -> None:
+        if stage not in tasks:
+            tasks[stage] = bar.add_task(stage, total=total, label="")
+        bar.update(tasks[stage], completed=done, total=total, label=label[:60])
+
+    return bar, update
+
+
+@cli_errors
+def identify(
+    data_paths: DataPaths,
+    inputs: Inputs,
+    outputs: Outputs,
+    estimation: Annotated[
+        str | None,
+        typer.Option(
+            metavar="START:STOP", help="Estimation samples: the only ones used to choose."
+        ),
+    ] = None,
+    validation: Annotated[
+        str | None,
+        typer.Option(metavar="START:STOP", help="Validation samples of DATA, reported on."),
+    ] = None,
+    validation_data: Annotated[
+        list[Path] | None,
+        typer.Option("--validation-data", metavar="FILE", help="Validation data file(s)."),
+    ] = None,
+    structures: Annotated[
+        str | None,
+        typer.Option(metavar="S,S", help="Structures to search (default: all registered)."),
+    ] = None,
+    budget: Annotated[
+        float, typer.Option(metavar="SECONDS", help="Time for the search (the refit is extra).")
+    ] = 600.0,
+    out: Annotated[
+        Path | None, typer.Option("--out", "-o", metavar="FILE", help="Model file to write.")
+    ] = None,
+    plot: Annotated[
+        Path | None, typer.Option("--plot", metavar="DIR", help="Write PNG figures here.")
+    ] = None,
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    experiment_column: ExperimentColumn = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    force: Force = False,
+    json_out: Json = False,
+) -> None:
+    """Search structures, orders, delays and nonlinearities; keep the best by free-run
+    simulation on a held-back part of the ESTIMATION data; refit it on all of them.
+
+    Validation data (--validation or --validation-data) are only reported on.
+    """
+    from blockid.errors import ParameterError
+    from blockid.fitting.identify import identify as run_identify
+    from blockid.models import save_model
+
+    if validation and validation_data:
+        raise ParameterError("give --validation or --validation-data, not both")
+    refuse_to_overwrite(out, force)
+    est = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
+    val = None
+    if validation:
+        val = load_data(
+            data_paths, inputs, outputs, ts, time_column, experiment_column, validation,
+            "--validation",
+        )  # fmt: skip
+        _refuse_overlap(estimation, validation)
+    elif validation_data:
+        val = load_data(validation_data, inputs, outputs, ts, time_column, experiment_column)
+    names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
+    bar, update = _progress(not (quiet or json_out) and sys.stderr.isatty())
+    if bar is not None:
+        with bar:
+            result = run_identify(est, val, structures=names, budget=budget, progress=update)
+    else:
+        result = run_identify(est, val, structures=names, budget=budget)
+    record = result.fit.estimation_record()
+    record["identify"] = {k: v for k, v in result.to_dict().items() if k != "models"}
+    if out is not None:
+        save_model(result.model, out, record, overwrite=force)
+    if plot is not None:
+        from blockid.plotting.figures import fit_figures
+
+        fit_figures(result.fit, est, plot)
+    if json_out:
+        print_json(result.to_dict())
+        return
+    _print(result)
+    if out is not None:
+        stdout.print(f"model written to {out}")
+
+
+def _refuse_overlap(estimation: str | None, validation: str) -> None:
+    from blockid.data import parse_range
+    from blockid.errors import ParameterError
+
+    e0, e1 = parse_range(estimation or ":", "--estimation")
+    v0, v1 = parse_range(validation, "--validation")
+    e1 = float("inf") if e1 is None else e1
+    v1 = float("inf") if v1 is None else v1
+    if max(e0 or 0, v0 or 0) < min(e1, v1):
+        raise ParameterError(
+            f"--estimation {estimation or ':'} and --validation {validation} overlap: the "
+            "model would be scored on data it was fitted on; give disjoint ranges"
+        )
+
+
+def _print(result: Any) -> None:
+    from rich.markup import escape
+    from rich.table import Table
+
+    table = Table(
+        title=f"candidates ranked by free-run RMSE on the hold-out ({result.holdout})",
+        title_justify="left",
+    )
+    for col in ("", "structure and options", "stage", "RMSE", "fit %", "params", "s"):
+        table.add_column(col, justify="left" if col in ("", "structure and options") else "right")
+    for i, s in enumerate(result.ranked[:15]):
+        table.add_row(
+            "*" if i == 0 else "",
+            escape(s.candidate.label),
+            s.stage,
+            f"{s.rmse:.4g}",
+            f"{s.fit_percent:.1f}",
+            str(s.n_parameters),
+            f"{s.seconds:.1f}",
+        )
+    stdout.print(table)
+    stdout.print("* the selected model, refitted on all estimation data")
+    if result.rejected:
+        stdout.print(f"{len(result.rejected)} candidate(s) rejected, e.g.:")
+        for s in result.rejected[:5]:
+            stdout.print(f"  {s.candidate.label}: {s.reason}", markup=False, soft_wrap=True)
+    print_model(result.model)
+    where = "the validation data" if result.on == "validation" else "the ESTIMATION data"
+    rows = [(result.selected.candidate.structure, result.simulation.metrics)]
+    stdout.print(metrics_table(f"free-run simulation on {where}", rows))
+    if result.one_step is not None:
+        rows = [(result.selected.candidate.structure, result.one_step.metrics)]
+        stdout.print(metrics_table(f"one-step prediction on {where}", rows))
+    for note in result.notes:
+        stdout.print(f"note: {note}", markup=False, soft_wrap=True)
+    stdout.print(f"search took {result.seconds:.1f} s")
