@@ -363,6 +363,10 @@ def refine(
             f"the model maps {list(model.inputs)} to {list(model.outputs)} but the data have "
             f"inputs {list(data.inputs)} and outputs {list(data.outputs)}; select those signals"
         )
+    # Optimise the model as it simulates the estimation data: the ranges recorded on
+    # earlier data (a warm start) would bound inversions and bend polynomial blocks onto
+    # their tangents; the result records its own ranges on these data at the end.
+    model = model.replace(ranges=None)
     theta0 = model.free_parameters()
     n_par = theta0.size
     data.check_orders(model.max_lag, n_par, what=f"{model.structure} model")

@@ -241,18 +241,40 @@ class ChainModel(Model):
         u, _ = self._check_signals(u)
         return u[:, 0] - self.input_offset
 
+    def _apply_at(self, i: int, s: np.ndarray) -> np.ndarray:
+        """Block ``i`` on signal ``s``, from rest; a block that extrapolates unreliably
+        (``warn_extrapolation``: polynomials) continues along its tangent beyond the input
+        range recorded in estimation, instead of running away (a cubic does)."""
+        block = self.blocks[i]
+        out = block.run(s)
+        if not (block.warn_extrapolation and block.role == "static"):
+            return out
+        seen = self.ranges.get(self._range_key(i))
+        if seen is None:
+            return out
+        edge = np.clip(s, seen[0], seen[1])
+        outside = edge != s
+        if not outside.any():
+            return out
+        tangent = np.asarray(block(edge[outside]), dtype=float) + block.derivative(
+            edge[outside]
+        ) * (s[outside] - edge[outside])
+        out = np.array(out, dtype=float, copy=True)
+        out[outside] = tangent
+        return out
+
     def _run(self, s: np.ndarray, stop: int) -> np.ndarray:
         """The signal entering block ``stop`` (blocks before it from rest)."""
-        for block in self.blocks[:stop]:
-            s = _apply(block, s)
+        for i in range(stop):
+            s = self._apply_at(i, s)
         return s
 
     def block_inputs(self, u: Any) -> list[np.ndarray]:
         """The signal entering every block (relative to the input offset), from rest."""
         s, out = self._u(u), []
-        for block in self.blocks:
+        for i in range(len(self.blocks)):
             out.append(s)
-            s = _apply(block, s)
+            s = self._apply_at(i, s)
         return out
 
     def internal(self, u: Any) -> np.ndarray:
@@ -297,8 +319,8 @@ class ChainModel(Model):
         return (y + self.output_offset)[:, None]
 
     def _run_from(self, s: np.ndarray, start: int) -> np.ndarray:
-        for block in self.blocks[start:]:
-            s = _apply(block, s)
+        for i in range(start, len(self.blocks)):
+            s = self._apply_at(i, s)
         return s
 
     def predict(self, u: Any, y: Any) -> np.ndarray:
@@ -440,7 +462,7 @@ class ChainModel(Model):
             key = self._range_key(i)
             if key in self.ranges and getattr(block, "warn_extrapolation", False):
                 notes += self._leaves(key, s, i)
-            s = _apply(block, s)
+            s = self._apply_at(i, s)
         return notes
 
     def _leaves(self, key: str, values: np.ndarray, i: int) -> list[str]:
@@ -464,7 +486,8 @@ class ChainModel(Model):
         return [
             f"{what} leaves the range seen in estimation [{lo:.4g}, {hi:.4g}] in "
             f"{int(out.sum())} of {values.size} samples (by up to {100 * worst:.0f} % "
-            "of that range): the model extrapolates there"
+            "of that range): the model extrapolates there (along the block's tangent at the "
+            "range's end)"
         ]
 
     # ------------------------------------------------------------------ files
