@@ -21,6 +21,7 @@ from blockid.errors import BlockidError, ParameterError
 from blockid.fitting.registry import OPTIONS, option_flag
 
 __all__ = [
+    "busy",
     "DataPaths",
     "ExperimentColumn",
     "Force",
@@ -135,6 +136,16 @@ Json = Annotated[bool, typer.Option("--json", help="Print one JSON document on s
 Seed = Annotated[
     int, typer.Option(metavar="N", help="Random seed: the same seed gives the same run.")
 ]
+
+
+def busy(what: str, quiet: bool = False) -> Any:
+    """A spinner with elapsed time on a terminal while ``what`` runs; nothing when stderr
+    is piped or ``quiet`` (JSON output stays clean: the spinner writes to stderr only)."""
+    import contextlib
+
+    if quiet or not sys.stderr.isatty():
+        return contextlib.nullcontext()
+    return stderr.status(f"{what} ...", spinner="dots")
 
 
 def refuse_to_overwrite(out: Path | None, force: bool) -> None:

@@ -21,6 +21,7 @@ from blockid.cli._common import (
     Outputs,
     SamplingTime,
     TimeColumn,
+    busy,
     cli_errors,
     load_data,
     metrics_table,
@@ -95,7 +96,8 @@ def fit(
     if plot is not None and "record_history" in accepted_options(structure, method):
         options["record_history"] = True  # parameter trajectories for the figure
     try:
-        result = fit_model(data, structure, method=method, **options)
+        with busy(f"fitting {structure} ({method or 'default method'})", quiet=json_out):
+            result = fit_model(data, structure, method=method, **options)
     except EstimationError as exc:
         if plot is not None:
             from blockid.plotting.figures import failed_fit_figures
@@ -177,7 +179,8 @@ def compare(
     est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
     val = data.select(*parse_range(validation, "--validation"), what="--validation")
     names = {} if structures is None else {"structures": _names(structures)}
-    result = compare_structures(est, val, **names, method=method, options=given(options))
+    with busy("identifying and comparing the structures", quiet=json_out):
+        result = compare_structures(est, val, **names, method=method, options=given(options))
     if json_out:
         print_json(result.to_dict())
         return
