@@ -240,6 +240,19 @@ def _check_passes(case, default, changed, value):
         assert changed.settings["passes_run"] > 1 and changed.settings["converged"] is True
 
 
+def _check_standard_errors(case, default, changed, value):
+    # the same estimate, now with standard errors shaped like the model's parameters
+    _same(default, changed)
+    assert "standard_errors" not in default.settings
+    errors_ = changed.settings["standard_errors"]
+    params = changed.model.to_dict()["parameters"]
+    assert set(errors_) == set(params)
+    for name, value_ in params.items():
+        assert np.shape(errors_[name]) == np.shape(value_)
+    cov = np.asarray(changed.settings["covariance"]["matrix"], dtype=float)
+    assert cov.shape[0] == cov.shape[1] > 0 and np.allclose(cov, cov.T)
+
+
 def _check_tol(case, default, changed, value):
     assert changed.settings["tol"] == value
     assert changed.settings["converged"] is True and default.settings["converged"] is True
@@ -446,6 +459,7 @@ EXPECT: dict[str, Expect] = {
         _passes_extra,
     ),
     "tol": Expect(1e-2, _check_tol, {"passes": 100}),
+    "standard_errors": Expect(True, _check_standard_errors),
     "normalize": Expect(False, _check_normalize),
     "eps1": Expect(5.0, _check_eps("eps1")),
     "eps2": Expect(0.5, _check_eps("eps2")),

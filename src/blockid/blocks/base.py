@@ -115,6 +115,21 @@ class Block(ABC):
         except (TypeError, ValueError) as exc:  # a user block's own check
             raise ParameterError(f"{self.kind}: {exc}") from None
 
+    def vector_names(self, rename: dict[str, str] | None = None) -> list[str]:
+        """A name for every entry of :meth:`to_vector`: ``name`` for a number, ``name_j``
+        for the entries of a list (``rename`` maps parameter names to display names)."""
+        rename = rename or {}
+        names: list[str] = []
+        for key, value in self.parameters.items():
+            if isinstance(value, bool):
+                continue
+            base = rename.get(key, key)
+            if isinstance(value, list | tuple):
+                names += [f"{base}_{j}" for j in range(len(value))]
+            else:
+                names.append(base)
+        return names
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds of :meth:`to_vector` for the simulation-error fit."""
         n = self.to_vector().size

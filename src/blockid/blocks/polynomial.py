@@ -236,6 +236,12 @@ class Polynomial(_PlottableStaticBlock):
         powers = np.vander(u, self.degree + 1, increasing=True)
         return powers if self.constant else powers[:, 1:]
 
+    def vector_names(self, rename: dict[str, str] | None = None) -> list[str]:
+        """``c_l`` by power ``l`` (``q_1, q_2, ..`` without constant)."""
+        base = (rename or {}).get("coefficients", "coefficients")
+        first = 0 if self.constant else 1
+        return [f"{base}_{j + first}" for j in range(self.coefficients.size)]
+
     def to_vector(self) -> np.ndarray:
         """Parameter vector: the coefficients (a copy)."""
         return self.coefficients.copy()

@@ -371,6 +371,11 @@ class PiecewiseLinear(_PlottableStaticBlock):
         phi[rows, j + 1] = t
         return phi
 
+    def vector_names(self, rename: dict[str, str] | None = None) -> list[str]:
+        """``values_0 .. values_{n-1}`` (the breakpoints are not estimated)."""
+        base = (rename or {}).get("values", "values")
+        return [f"{base}_{j}" for j in range(self.values.size)]
+
     def to_vector(self) -> np.ndarray:
         """Parameter vector: the values at the breakpoints (a copy)."""
         return self.values.copy()

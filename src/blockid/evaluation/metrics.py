@@ -4,11 +4,18 @@ All functions take measured ``y`` and model output ``y_hat`` of equal shape, (N,
 (N, ny), and return one value per output column. :func:`metrics_by_output` collects
 them as JSON-ready objects keyed by metric, then output name, e.g.
 ``{"rmse": {"y1": 0.031, "y2": 0.0004}}``.
+
+A metric that is undefined on the data (the fit percent of an output that is constant
+over the scored samples) is NaN in these objects: a number, so tables print it and
+comparisons skip it. JSON has no NaN, so every JSON writer passes its document through
+:func:`json_safe`, which writes it as ``null``; :func:`undefined_notes` words the note
+that goes with it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -23,6 +30,8 @@ __all__ = [
     "fit_percent",
     "METRICS",
     "metrics_by_output",
+    "json_safe",
+    "undefined_notes",
 ]
 
 
@@ -68,15 +77,22 @@ def max_absolute_error(y: Any, y_hat: Any) -> np.ndarray:
 def fit_percent(y: Any, y_hat: Any) -> np.ndarray:
     """NRMSE fit ``100 (1 - |y - y_hat| / |y - mean(y)|)``; 100 is perfect, can be negative.
 
+    For an output that is constant over the samples, ``|y - mean(y)|`` is zero and the
+    fit is undefined: NaN (``null`` in JSON, see :func:`undefined_notes`), unless the
+    model reproduces it exactly (100). It used to be ``-inf``, which no JSON writer
+    accepts and which says nothing more than "undefined".
+
     >>> fit_percent([0.0, 2.0], [0.0, 2.0]).tolist()
     [100.0]
+    >>> fit_percent([1.0, 1.0], [1.0, 1.5]).tolist()
+    [nan]
     """
     y, y_hat = _pair(y, y_hat)
     den = np.linalg.norm(y - y.mean(axis=0), axis=0)
     num = np.linalg.norm(y - y_hat, axis=0)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = 100.0 * (1.0 - num / den)
-    return np.where(den > 0, out, np.where(num > 0, -np.inf, 100.0))
+    return np.where(den > 0, out, np.where(num > 0, np.nan, 100.0))
 
 
 #: Metric name (as in JSON output) -> function.
@@ -106,3 +122,43 @@ def metrics_by_output(
         name: dict(zip(outputs, (float(v) for v in fn(y, y_hat)), strict=True))
         for name, fn in METRICS.items()
     }
+
+
+def undefined_notes(metrics: Mapping[str, Mapping[str, float]]) -> list[str]:
+    """One note per metric and output that is undefined (NaN) in ``metrics``.
+
+    >>> undefined_notes({"fit_percent": {"y": float("nan")}, "mse": {"y": 0.1}})
+    ["fit_percent of output 'y' is undefined (null): the output is constant over the scored samples"]
+    """
+    notes = []
+    for name, values in metrics.items():
+        for output, value in values.items():
+            if value is None or (isinstance(value, float) and math.isnan(value)):
+                why = (
+                    "the output is constant over the scored samples"
+                    if name == "fit_percent"
+                    else "not defined on these samples"
+                )
+                notes.append(f"{name} of output {output!r} is undefined (null): {why}")
+    return notes
+
+
+def json_safe(value: Any) -> Any:
+    """A copy of a JSON-ready document with every NaN or infinite float as ``None``.
+
+    JSON has no NaN or infinity (``json.dumps(..., allow_nan=False)`` refuses them);
+    an undefined metric is written as ``null`` instead. Dictionaries, lists and tuples
+    are copied; NumPy scalars become Python numbers.
+
+    >>> json_safe({"fit_percent": {"y": float("nan")}, "mse": [1.0, float("inf")]})
+    {'fit_percent': {'y': None}, 'mse': [1.0, None]}
+    """
+    if isinstance(value, Mapping):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

@@ -10,7 +10,7 @@ import pandas as pd
 
 from blockid.data.dataset import Dataset
 from blockid.errors import DataError, ParameterError
-from blockid.evaluation.metrics import metrics_by_output
+from blockid.evaluation.metrics import json_safe, metrics_by_output, undefined_notes
 
 __all__ = ["MODES", "ModelOutput", "evaluate"]
 
@@ -37,7 +37,8 @@ class ModelOutput:
         "fit_percent": ...}`` over all experiments, initial samples excluded.
     warnings : list of str
         E.g. that the data drive a block-oriented model outside the ranges it was
-        estimated on (its polynomial blocks extrapolate there).
+        estimated on (its polynomial blocks extrapolate there), or that a metric is
+        undefined (the fit percent of a constant output).
     """
 
     mode: str
@@ -56,14 +57,16 @@ class ModelOutput:
         return frame
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (no sample arrays)."""
-        return {
-            "mode": self.mode,
-            "n_samples": int(sum(len(y) for y in self.outputs)),
-            "initial_samples_per_experiment": self.skip,
-            "metrics": self.metrics,
-            "warnings": self.warnings,
-        }
+        """JSON-ready summary (no sample arrays); an undefined metric is ``null``."""
+        return json_safe(
+            {
+                "mode": self.mode,
+                "n_samples": int(sum(len(y) for y in self.outputs)),
+                "initial_samples_per_experiment": self.skip,
+                "metrics": self.metrics,
+                "warnings": self.warnings,
+            }
+        )
 
 
 def evaluate(model: Any, data: Dataset, mode: str = "simulation") -> ModelOutput:
@@ -97,7 +100,7 @@ def evaluate(model: Any, data: Dataset, mode: str = "simulation") -> ModelOutput
     y = np.vstack([exp.y[skip:] for exp in data.experiments])
     y_hat = np.vstack([out[skip:] for out in outputs])
     metrics = metrics_by_output(y, y_hat, data.outputs)
-    warnings: list[str] = []
+    warnings: list[str] = undefined_notes(metrics)
     for model_part in getattr(model, "subsystems", [(None, model)]):
         sub = model_part[1]
         if hasattr(sub, "extrapolation"):

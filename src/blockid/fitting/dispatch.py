@@ -89,23 +89,30 @@ def fit_model(
         One of ``METHODS[structure]``; the default is the converging one.
     **options
         Orders (``na``, ``nb``, ``nk``, ``r1``, ``r2``), blocks (``input_block``,
-        ``output_block``: a block or its name), ``center``, ``refine`` and method
+        ``output_block``: a block or its name), ``center``, ``refine``,
+        ``standard_errors`` (parameter covariance into ``settings``) and method
         settings, as declared in :mod:`blockid.fitting.registry`; values may be text.
         An option the method does not use is an error, not silently ignored. ``None``
         values are dropped (the method's default applies).
     """
     decl, method, options = resolve_options(structure, method, options)
+    uncertainty = bool(options.pop("standard_errors", False))
     refine = bool(options.pop("refine", False))
     if not decl.block_oriented:
-        return _run(decl, method, data, options)
-    center = options.pop("center", None)
-    if center if center is not None else decl.center_default:
-        result = _centered(data, decl, method, refine, options)
+        result = _run(decl, method, data, options)
     else:
-        result = _fit_block(data, decl, method, refine, options)
-    if not result.model.ranges:  # the one place ranges are recorded for every method
-        model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
-        result = replace(result, model=model)
+        center = options.pop("center", None)
+        if center if center is not None else decl.center_default:
+            result = _centered(data, decl, method, refine, options)
+        else:
+            result = _fit_block(data, decl, method, refine, options)
+        if not result.model.ranges:  # the one place ranges are recorded for every method
+            model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
+            result = replace(result, model=model)
+    if uncertainty:
+        from blockid.evaluation.uncertainty import with_standard_errors
+
+        result = with_standard_errors(result, data)
     return result
 
 

@@ -269,6 +269,11 @@ OPTIONS: dict[str, Option] = _options(
     ),
     Option("refine", "bool", "Refine the estimate on free-run simulation error afterwards."),
     Option(
+        "standard_errors",
+        "bool",
+        "Standard errors and covariance of the parameters in the result and model file.",
+    ),
+    Option(
         "allow_unstable",
         "bool",
         "Keep an ARX model with poles on or outside the unit circle.",
@@ -425,7 +430,7 @@ class Structure:
 
 _ORDERS = ("na", "nb", "nk")
 _RECURSIVE = ("initial_covariance", "passes")
-_ARX = _ORDERS + ("center", "allow_unstable")
+_ARX = _ORDERS + ("center", "allow_unstable", "standard_errors")
 _SIMULATION_ERROR = ("max_nfev", "tail_fraction", "patience", "ftol", "xtol", "gtol")
 _PAPER = ("passes", "tol", "initial_covariance", "initial_parameters", "normalize")
 
@@ -500,14 +505,14 @@ STRUCTURES: dict[str, Structure] = {
             "blockid.models.block:Hammerstein",
             "static input block, then a linear block (N1-L)",
             _block_methods(("r1", "input_block"), _key_term(("r1",))),
-            common=_ORDERS + ("center", "refine"),
+            common=_ORDERS + ("center", "refine", "standard_errors"),
         ),
         Structure(
             "wiener",
             "blockid.models.block:Wiener",
             "linear block, then a static output block (L-N2)",
             _block_methods(("r2", "output_block"), _key_term(("r2",))),
-            common=_ORDERS + ("center", "refine"),
+            common=_ORDERS + ("center", "refine", "standard_errors"),
             center_default=True,
         ),
         Structure(
@@ -515,7 +520,7 @@ STRUCTURES: dict[str, Structure] = {
             "blockid.models.block:HammersteinWiener",
             "input block, linear block, output block (N1-L-N2, paper B)",
             _block_methods(("r1", "r2", "input_block", "output_block"), _key_term(("r1", "r2"))),
-            common=_ORDERS + ("center", "refine"),
+            common=_ORDERS + ("center", "refine", "standard_errors"),
         ),
         Structure(
             "backlash",
@@ -531,7 +536,7 @@ STRUCTURES: dict[str, Structure] = {
                     recursive=True,
                 ),
             ),
-            common=_ORDERS + ("center", "refine"),
+            common=_ORDERS + ("center", "refine", "standard_errors"),
         ),
         Structure(
             "output-error",
@@ -546,7 +551,7 @@ STRUCTURES: dict[str, Structure] = {
                     passes=("structure",),
                 ),
             ),
-            common=_ORDERS + ("center",),
+            common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
         ),
         Structure(
@@ -562,7 +567,7 @@ STRUCTURES: dict[str, Structure] = {
                     "split, refine the best on free-run simulation error",
                 ),
             ),
-            common=_ORDERS + ("center",),
+            common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
         ),
         Structure(
@@ -578,7 +583,7 @@ STRUCTURES: dict[str, Structure] = {
                     "equation-error start, then minimise the free-run simulation error",
                 ),
             ),
-            common=_ORDERS + ("center",),
+            common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
         ),
     )

@@ -561,18 +561,10 @@ def _apply(block: Block, s: np.ndarray) -> np.ndarray:
 
 def _vector_names(block: Block, prefix: str | None, i: int) -> list[str]:
     """Names of a nonlinear block's vector entries: ``f_0, f_1, ..``, ``q_1, ..``, ``c_left``."""
-    rename = _SPEC_NAMES.get(block.kind, {}) if i == 0 else {}
-    names = []
-    for key, value in block.parameters.items():
-        if isinstance(value, bool):
-            continue
-        if isinstance(value, list | tuple):
-            base = prefix or rename.get(key, key)
-            first = 1 if block.parameters.get("constant") is False else 0  # powers
-            names += [f"{base}_{j + first}" for j in range(len(value))]
-        else:
-            names.append(key)
-    return names
+    rename = dict(_SPEC_NAMES.get(block.kind, {})) if i == 0 else {}
+    if prefix:
+        rename = {key: prefix for key in block.parameters}
+    return block.vector_names(rename)
 
 
 class BlockModel(ChainModel):

@@ -1,0 +1,164 @@
+"""``blockid fleet``: one model per record for many records, in parallel on dask.
+
+Parses, expands the file patterns, calls :func:`blockid.workflows.fleet.fit_fleet` and
+prints its summary (one JSON document with ``--json``). Progress goes to a terminal's
+stderr only. dask is optional: without it the command says how to install it.
+"""
+
+from __future__ import annotations
+
+import glob
+import inspect
+import os
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from blockid.cli._common import (
+    Force,
+    Inputs,
+    Json,
+    Outputs,
+    SamplingTime,
+    TimeColumn,
+    cli_errors,
+    print_json,
+    stderr,
+    stdout,
+)
+from blockid.cli._options import (
+    DEFAULT_STRUCTURE,
+    Method,
+    Structure,
+    given,
+    structures_help,
+    with_fit_options,
+)
+from blockid.errors import ParameterError
+
+__all__ = ["fleet"]
+
+Patterns = Annotated[
+    list[str],
+    typer.Argument(
+        metavar="RECORDS",
+        help="Data files or quoted patterns ('logs/*.csv'); one record per file.",
+    ),
+]
+OutDir = Annotated[
+    Path,
+    typer.Option("--out", "-o", metavar="DIR", help="Folder of the model files and summary."),
+]
+Workers = Annotated[
+    int | None,
+    typer.Option(
+        metavar="N",
+        min=1,
+        help="Worker processes of the local cluster (default: the number of cores).",
+        show_default=False,
+    ),
+]
+Scheduler = Annotated[
+    str | None,
+    typer.Option(
+        metavar="ADDRESS",
+        help="Use a running dask cluster, e.g. tcp://host:8786 (data on shared storage).",
+    ),
+]
+
+
+def _expand(patterns: list[str]) -> list[str]:
+    files: list[str] = []
+    for pattern in patterns:
+        found = sorted(glob.glob(pattern)) if glob.has_magic(pattern) else [pattern]
+        if not found:
+            raise ParameterError(f"no file matches {pattern!r}")
+        files += [f for f in found if f not in files]
+    return files
+
+
+@with_fit_options
+@cli_errors
+def fleet(
+    patterns: Patterns,
+    inputs: Inputs,
+    outputs: Outputs,
+    out: OutDir,
+    structure: Structure = DEFAULT_STRUCTURE,
+    method: Method = None,
+    workers: Workers = None,
+    scheduler: Scheduler = None,
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    force: Force = False,
+    json_out: Json = False,
+    **options: Any,
+) -> None:
+    """Fit one model per record, many records in parallel (dask.distributed).
+
+    Every record (one data file) is fitted with the same structure, method and options,
+    as 'blockid fit' would, one task per record on a local cluster of --workers
+    processes or on a running cluster (--scheduler). Writes DIR/<record>.json per
+    record and DIR/summary.csv and DIR/summary.parquet (file, structure, method,
+    status, error, seconds, samples, rmse and fit % per output). A record that fails is
+    an error row; the others go on. A rerun skips records whose model file exists,
+    unless --force. Exit status 1 when some record failed.
+    """
+    from blockid.workflows.fleet import fit_fleet
+
+    files = _expand(patterns)
+    read = {"sampling_time": ts, "time_column": time_column}
+    bar, on_result = None, None
+    if not json_out and sys.stderr.isatty():  # progress on a terminal only
+        from rich.progress import Progress
+
+        bar = Progress(console=stderr, transient=True)
+        task = bar.add_task("fitting records", total=len(files))
+        on_result = lambda row: bar.advance(task)  # noqa: E731
+        bar.start()
+    try:
+        result = fit_fleet(
+            files,
+            out,
+            structure,
+            inputs,
+            outputs,
+            method=method,
+            options=given(options),
+            read_options={k: v for k, v in read.items() if v is not None},
+            workers=workers or os.cpu_count() or 1,
+            scheduler=scheduler,
+            force=force,
+            on_result=on_result,
+        )
+    except ImportError as exc:  # dask missing: the library says what to install
+        stderr.print(f"error: {exc}", markup=False)
+        raise typer.Exit(code=2) from None
+    finally:
+        if bar is not None:
+            bar.stop()
+    if json_out:
+        print_json(result.to_dict())
+    else:
+        _print(result)
+    if result.counts()["error"]:
+        raise typer.Exit(code=1)
+
+
+fleet.__doc__ = f"{inspect.cleandoc(fleet.__doc__ or '')}\n\n{structures_help()}"
+
+
+def _print(result: Any) -> None:
+    counts = result.counts()
+    stdout.print(
+        f"{len(result.rows)} records: {counts['ok']} fitted, {counts['error']} failed, "
+        f"{counts['skipped']} skipped (model file exists; --force refits) in "
+        f"{result.seconds:.1f} s on {result.workers} worker(s); models and summary in "
+        f"{result.out_dir}/",
+        markup=False,
+    )
+    for row in result.rows:
+        if row["status"] == "error":
+            stdout.print(f"failed: {row['file']}: {row['error']}", markup=False)

@@ -1,0 +1,204 @@
+"""``blockid report`` and the ``--report FILE`` option of ``compare`` and ``identify``.
+
+The report is built by :func:`blockid.reporting.build_report`; this module parses the
+command line, runs the comparison and writes the file (atomically, an existing file
+only with ``--force``).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from blockid.cli._common import (
+    DataPaths,
+    ExperimentColumn,
+    Force,
+    Inputs,
+    Json,
+    Outputs,
+    SamplingTime,
+    TimeColumn,
+    cli_errors,
+    load_data,
+    print_json,
+    refuse_to_overwrite,
+    stderr,
+    stdout,
+)
+from blockid.cli._options import given, with_fit_options
+from blockid.fitting.registry import COMPARED_BY_DEFAULT, STRUCTURES
+
+__all__ = ["ReportFile", "command_words", "report", "write_report_option"]
+
+#: ``--report FILE`` of ``compare`` and ``identify``.
+ReportFile = Annotated[
+    Path | None,
+    typer.Option(
+        "--report",
+        metavar="FILE",
+        help="Also write a self-contained HTML report (figures embedded) to FILE.",
+    ),
+]
+
+
+def command_words() -> list[str]:
+    """The command line that is running, as words starting with ``blockid``.
+
+    ``sys.argv`` when the ``blockid`` script (or ``python -m blockid``) runs; otherwise
+    (the command called in-process, as by a test runner) rebuilt from the parsed
+    parameters that were given on the command line, which runs the same.
+    """
+    script = Path(sys.argv[0])
+    if script.name in ("blockid", "blockid.exe") or script.parent.name == "blockid":
+        return ["blockid", *sys.argv[1:]]
+    try:
+        from typer._click.globals import get_current_context
+    except ImportError:  # pragma: no cover - older typer depends on click
+        from click import get_current_context  # type: ignore[no-redef]
+    ctx = get_current_context(silent=True)
+    if ctx is None:
+        return ["blockid", *sys.argv[1:]]
+    words = ["blockid", *ctx.command_path.split()[1:]]
+    for param in ctx.command.params:
+        source = ctx.get_parameter_source(param.name)
+        if source is None or source.name != "COMMANDLINE":
+            continue
+        value = ctx.params.get(param.name)
+        if param.param_type_name == "argument":
+            words += [str(v) for v in (value if isinstance(value, list | tuple) else [value])]
+            continue
+        name = max(param.opts, key=len)
+        if getattr(param, "is_flag", False):
+            off = param.secondary_opts
+            words.append(off[0] if (value is False and off) else name)
+        elif isinstance(value, list | tuple):
+            for v in value:
+                words += [name, str(v)]
+        else:
+            words += [name, str(value)]
+    return words
+
+
+def write_report_option(
+    path: Path,
+    *,
+    data_paths: Sequence[Path],
+    estimation: Any,
+    validation: Any = None,
+    compare: Any = None,
+    identify: Any = None,
+    data: Any = None,
+    estimation_range: str | None = None,
+    validation_range: str | None = None,
+    force: bool = False,
+    announce: bool = True,
+) -> Path:
+    """Build the report of a ``compare`` / ``identify`` run and write it to ``path``.
+
+    Call :func:`~blockid.cli._common.refuse_to_overwrite` on ``path`` before the work;
+    this writes atomically and replaces an existing file only with ``force``. With
+    ``announce``, says where the report went on stderr (stdout may be ``--json``).
+    """
+    from blockid.reporting import build_report, collect_provenance, write_report
+
+    provenance = collect_provenance(data_paths, command_words())
+    html = build_report(
+        compare=compare,
+        identify=identify,
+        data=data,
+        estimation=estimation,
+        validation=validation,
+        estimation_range=estimation_range,
+        validation_range=validation_range,
+        provenance=provenance,
+    )
+    written = write_report(html, path, overwrite=force)
+    if announce:
+        stderr.print(f"report written to {written}", markup=False)
+    return written
+
+
+def _names(text: str) -> list[str]:
+    return [name.strip() for name in text.split(",") if name.strip()]
+
+
+@with_fit_options
+@cli_errors
+def report(
+    data_paths: DataPaths,
+    inputs: Inputs,
+    outputs: Outputs,
+    estimation: Annotated[str, typer.Option(metavar="START:STOP", help="Estimation samples.")],
+    validation: Annotated[str, typer.Option(metavar="START:STOP", help="Validation samples.")],
+    structures: Annotated[
+        str | None,
+        typer.Option(
+            metavar="NAME,NAME..",
+            help=f"Comma-separated structures to compare, of {', '.join(STRUCTURES)} "
+            f"(default: {', '.join(COMPARED_BY_DEFAULT)}).",
+            show_default=False,
+        ),
+    ] = None,
+    method: Annotated[
+        str | None,
+        typer.Option(
+            metavar="NAME", help="Method for the structures that offer it (others: their default)."
+        ),
+    ] = None,
+    out: Annotated[
+        Path, typer.Option("--out", "-o", metavar="FILE", help="HTML report file to write.")
+    ] = Path("report.html"),
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    experiment_column: ExperimentColumn = None,
+    force: Force = False,
+    json_out: Json = False,
+    **options: Any,
+) -> None:
+    """Compare structures as 'blockid compare' does and write one HTML report.
+
+    The report is a single file that opens in any browser without a network: the data
+    with the estimation and validation ranges, the free-run and one-step scores of every
+    model (failures with their reasons), measured against simulated output and the
+    residual on the validation range, the identified nonlinear blocks (with confidence
+    bands when the fit has parameter standard errors), the parameter trajectories of the
+    recursive methods, and the command, data file hashes and versions that made it.
+    """
+    from blockid.data import parse_range
+    from blockid.workflows import compare_structures
+
+    refuse_to_overwrite(out, force)
+    data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+    est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
+    val = data.select(*parse_range(validation, "--validation"), what="--validation")
+    names = {} if structures is None else {"structures": _names(structures)}
+    opts = {"record_history": True, **given(options)}  # trajectories of recursive methods
+    result = compare_structures(est, val, **names, method=method, options=opts)
+    path = write_report_option(
+        out,
+        data_paths=data_paths,
+        compare=result,
+        data=data,
+        estimation=est,
+        validation=val,
+        estimation_range=estimation,
+        validation_range=validation,
+        force=force,
+        announce=False,
+    )
+    if json_out:
+        print_json({"report": str(path), "bytes": path.stat().st_size, **result.to_dict()})
+        return
+    failed = [m.structure for m in result.models if m.error]
+    stdout.print(
+        f"report written to {path} ({path.stat().st_size / 1e3:.0f} kB; "
+        f"{len(result.models) - len(failed)} model(s)"
+        + (f", failed: {', '.join(failed)}" if failed else "")
+        + ")",
+        markup=False,
+    )

@@ -1,0 +1,375 @@
+"""Online identification of a running plant: samples read from a text stream as they come.
+
+:func:`stream_identification` feeds the samples of a text stream (CSV with a header
+line, or JSON lines with one object per sample) one at a time to the online learner of
+:func:`~blockid.fitting.online.online_estimator` and yields what happened, sample by
+sample: the one-step prediction and its error (:class:`Step`), the estimates every
+``every`` samples (:class:`Estimates`), a failed sample (:class:`Failure`) and, at the
+end of the input, the final estimate (:class:`Final`). Nothing reads ahead: a line is
+parsed, learned from and reported before the next is asked for, so a plant's pipe
+gets an answer per sample. the :class:`JsonLines` writer gives these events as the JSON lines of
+``blockid stream``.
+
+Equivalence. The final estimate is that of the online learner over the samples
+learned, which by the contract of :mod:`blockid.fitting.online` is the one-pass
+offline fit of the same record with the same options (``passes=1``; the paper methods
+with ``normalize=False``, or with ``scales=(input_scale, output_scale)`` when those
+are given) — as long as no sample was skipped.
+
+Failures (a choice). A row that cannot be read (a missing column, text where a number
+belongs, NaN) and a sample at which the recursion diverges are reported as a
+:class:`Failure` and skipped: the learner keeps the state it had before that sample
+(:class:`~blockid.errors.EstimationError` leaves it so) and the stream goes on, or
+ends there with ``stop_on_error``. ``k`` counts the data rows of the stream from 0,
+skipped ones included, so that it names the row of the user's record; the learner's
+own count (``n_samples``) counts the samples learned.
+
+The model read back at the end has no estimation ranges (``fit`` records them by
+simulating the whole record, which a stream does not keep).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any, NamedTuple
+
+from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
+from blockid.fitting.online import online_estimator
+from blockid.fitting.registry import get_structure
+
+__all__ = [
+    "FORMATS",
+    "Estimates",
+    "Failure",
+    "Final",
+    "Row",
+    "Step",
+    "JsonLines",
+    "read_samples",
+    "recursive_method",
+    "stream_identification",
+]
+
+#: Text formats of a stream: CSV with a header line, or one JSON object per line.
+FORMATS = ("csv", "jsonl")
+
+
+class Row(NamedTuple):
+    """One data row of the stream: its line number (from 1), the input and output values,
+    or ``problem`` (why the row cannot be used; the values are then empty)."""
+
+    line: int
+    u: tuple[float, ...]
+    y: tuple[float, ...]
+    problem: str | None = None
+
+
+class Step(NamedTuple):
+    """Sample ``k`` learned: the one-step prediction made before the update (NaN before
+    the first update) and its error ``y - prediction``, one value per output."""
+
+    k: int
+    prediction: tuple[float, ...]
+    error: tuple[float, ...]
+
+
+class Estimates(NamedTuple):
+    """The estimate after sample ``k``, named as in model files; ``parameters`` is None
+    (and ``note`` says why) when no model can be read back yet, ``estimate`` then holds
+    the recursion's vector by entry name."""
+
+    k: int
+    parameters: dict[str, Any] | None
+    estimate: dict[str, float] | None = None
+    note: str | None = None
+
+
+class Failure(NamedTuple):
+    """Row ``k`` (line ``line`` of the stream) was skipped: it could not be read, or the
+    recursion diverged at it."""
+
+    k: int
+    line: int
+    message: str
+
+
+class Final(NamedTuple):
+    """The end of the stream: the final estimate (as :class:`Estimates`), the samples
+    learned, the model (None when it cannot be read back) and whether the stream
+    stopped at a failure."""
+
+    n_samples: int
+    parameters: dict[str, Any] | None
+    model: Any
+    stopped: bool = False
+    estimate: dict[str, float] | None = None
+    note: str | None = None
+
+
+# ---------------------------------------------------------------------- reading
+def _values(texts: list[Any], names: Sequence[str], where: str) -> tuple[tuple, str | None]:
+    """The numbers of ``texts`` (the values of ``names``), or why not.
+
+    Finiteness is left to the learner's ``update`` (its :class:`DataError` is reported
+    as a failure of the row too)."""
+    try:
+        return tuple([float(t) for t in texts]), None
+    except (TypeError, ValueError):
+        pass
+    for name, text in zip(names, texts, strict=True):
+        try:
+            float(text)
+        except (TypeError, ValueError):
+            return (), f"{where}: {name!r} is {text!r}, not a number"
+    raise AssertionError  # pragma: no cover - one of them failed above
+
+
+def _csv_rows(lines: Iterable[str], inputs: Sequence[str], outputs: Sequence[str]) -> Iterator[Row]:
+    reader = csv.reader(lines)
+    header: list[str] | None = None
+    for fields in reader:
+        if not fields or (len(fields) == 1 and not fields[0].strip()):
+            continue  # blank lines
+        if header is None:
+            header = [f.strip() for f in fields]
+            missing = [n for n in (*inputs, *outputs) if n not in header]
+            if missing:
+                raise DataError(
+                    f"the stream's header line has columns {', '.join(header)}; "
+                    f"{', '.join(missing)} missing"
+                )
+            iu = [header.index(n) for n in inputs]
+            iy = [header.index(n) for n in outputs]
+            width = len(header)
+            continue
+        line = reader.line_num
+        if len(fields) != width:
+            yield Row(line, (), (), f"line {line} has {len(fields)} fields, the header {width}")
+            continue
+        try:  # the common case first: every field a number
+            yield Row(
+                line, tuple([float(fields[i]) for i in iu]), tuple([float(fields[i]) for i in iy])
+            )
+        except ValueError:
+            where = f"line {line}"
+            _, problem = _values([fields[i] for i in iu], inputs, where)
+            if problem is None:
+                _, problem = _values([fields[i] for i in iy], outputs, where)
+            yield Row(line, (), (), problem)
+    if header is None:
+        raise DataError("the stream is empty: no header line (CSV needs one naming the columns)")
+
+
+def _json_rows(
+    lines: Iterable[str], inputs: Sequence[str], outputs: Sequence[str]
+) -> Iterator[Row]:
+    for line, text in enumerate(lines, start=1):
+        if not text.strip():
+            continue
+        where = f"line {line}"
+        try:
+            record = json.loads(text)
+        except json.JSONDecodeError as exc:
+            yield Row(line, (), (), f"{where} is not JSON ({exc.msg})")
+            continue
+        if not isinstance(record, dict):
+            yield Row(line, (), (), f"{where} is a JSON {type(record).__name__}, not an object")
+            continue
+        missing = [n for n in (*inputs, *outputs) if n not in record]
+        if missing:
+            yield Row(line, (), (), f"{where} has no {', '.join(map(repr, missing))}")
+            continue
+        u, problem = _values([record[n] for n in inputs], inputs, where)
+        y, other = _values([record[n] for n in outputs], outputs, where)
+        if problem or other:
+            yield Row(line, (), (), problem or other)
+        else:
+            yield Row(line, u, y)
+
+
+def read_samples(
+    lines: Iterable[str], inputs: Sequence[str], outputs: Sequence[str], fmt: str = "csv"
+) -> Iterator[Row]:
+    """The data rows of a text stream, one :class:`Row` per line, read as they come.
+
+    ``fmt`` is ``"csv"`` (a header line naming the columns, comma separated, quoting
+    as the ``csv`` module reads it) or ``"jsonl"`` (one object per line; other keys
+    are ignored). Blank lines are skipped. A header without the named columns raises
+    :class:`~blockid.errors.DataError`; a bad row is a :class:`Row` with ``problem``.
+
+    >>> rows = read_samples(["t,u,y", "0,1.5,2", "1,x,3"], ["u"], ["y"])
+    >>> [(r.line, r.u, r.y, r.problem) for r in rows]
+    [(2, (1.5,), (2.0,), None), (3, (), (), "line 3: 'u' is 'x', not a number")]
+    """
+    if fmt not in FORMATS:
+        raise ParameterError(f"format {fmt!r} is unknown; use one of {', '.join(FORMATS)}")
+    reader = _csv_rows if fmt == "csv" else _json_rows
+    return reader(lines, list(inputs), list(outputs))
+
+
+# ---------------------------------------------------------------------- learning
+def recursive_method(structure: str, method: str | None = None) -> str:
+    """``method``, or the structure's first recursive method (the one a stream uses
+    unless told), from the registry."""
+    if method is not None:
+        return method
+    decl = get_structure(structure)
+    for m in decl.methods:
+        if m.recursive:
+            return m.name
+    raise ParameterError(
+        f"{structure} has no recursive method ({', '.join(decl.method_names)}): it cannot "
+        "learn online",
+        parameter="structure",
+    )
+
+
+def _read_back(online: Any) -> tuple[dict[str, Any] | None, Any, dict | None, str | None]:
+    try:
+        model = online.model()
+    except BlockidError as exc:
+        return None, None, online.estimate(), " ".join(str(exc).split())
+    return model.to_dict()["parameters"], model, None, None
+
+
+def stream_identification(
+    lines: Iterable[str],
+    structure: str,
+    inputs: Sequence[str],
+    outputs: Sequence[str],
+    *,
+    method: str | None = None,
+    options: dict[str, Any] | None = None,
+    initial: Any = None,
+    fmt: str = "csv",
+    every: int = 0,
+    stop_on_error: bool = False,
+) -> Iterator[Step | Estimates | Failure | Final]:
+    """Learn ``structure`` online from the samples of a text stream (module docstring).
+
+    Parameters
+    ----------
+    lines : iterable of str
+        The stream (a file object such as ``sys.stdin``, or a list of lines).
+    structure, method : str
+        As in :func:`~blockid.fitting.fit_model`; the method must be recursive
+        (default: the structure's first recursive method, :func:`recursive_method`).
+    inputs, outputs : sequence of str
+        Columns (CSV) or keys (JSON lines) of the model's signals.
+    options : dict
+        The method's options (registry; values may be text), plus ``input_scale`` and
+        ``output_scale`` (:mod:`blockid.fitting.online`).
+    initial : model, optional
+        Start from this model's parameters (``theta(0)``).
+    fmt : {"csv", "jsonl"}
+        The stream's format.
+    every : int
+        Yield :class:`Estimates` after every ``every``-th sample learned (0: never).
+    stop_on_error : bool
+        End the stream at the first :class:`Failure` (the :class:`Final` then has
+        ``stopped=True``) instead of skipping the sample.
+
+    The options are checked before the first line is read: a wrong one raises
+    :class:`~blockid.errors.ParameterError` at the first ``next()``.
+
+    Examples
+    --------
+    >>> lines = ["u,y"] + [f"{u},{0.5 * u}" for u in (1.0, -1.0, 2.0, 0.5)]
+    >>> events = list(stream_identification(lines, "arx", ["u"], ["y"],
+    ...                                     options={"na": 0, "nb": 1, "nk": 0}))
+    >>> [type(e).__name__ for e in events]
+    ['Step', 'Step', 'Step', 'Step', 'Final']
+    >>> events[-1].n_samples, round(events[-1].parameters["y"]["b"]["u"][0], 6)
+    (4, 0.5)
+    """
+    if every < 0:
+        raise ParameterError(f"every must be >= 0, got {every}", parameter="every")
+    opts = dict(options or {})
+    if initial is not None:
+        opts["initial"] = initial
+    method = recursive_method(structure, method)
+    online = online_estimator(structure, method, opts, inputs, outputs)
+    update = online.update
+    k = -1
+    stopped = False
+    for row in read_samples(lines, inputs, outputs, fmt):
+        k += 1
+        if row.problem is None:
+            try:
+                pred = update(row.u, row.y).tolist()
+            except (EstimationError, DataError) as exc:
+                message = " ".join(str(exc).split())
+            else:
+                yield Step(k, pred, [a - b for a, b in zip(row.y, pred, strict=True)])
+                if every and online.n_samples % every == 0:
+                    parameters, _, estimate, note = _read_back(online)
+                    yield Estimates(k, parameters, estimate, note)
+                continue
+        else:
+            message = row.problem
+        yield Failure(k, row.line, message)
+        if stop_on_error:
+            stopped = True
+            break
+    parameters, model, estimate, note = _read_back(online)
+    yield Final(online.n_samples, parameters, model, stopped, estimate, note)
+
+
+# ---------------------------------------------------------------------- writing
+def _value(x: float) -> str:
+    return repr(x) if math.isfinite(x) else "null"  # repr: what json.dumps writes
+
+
+def _dumps(doc: Any) -> str:
+    return json.dumps(doc, allow_nan=False)
+
+
+class JsonLines:
+    """The JSON line (without newline) of an event, as ``blockid stream`` writes them.
+
+    ``{"k": 3, "prediction": {"y": 0.1}, "error": {"y": -0.02}}`` per sample (``null``
+    before the first update); ``{"k": .., "parameters": {..}}`` every ``every``
+    samples; ``{"k": .., "line": .., "error_message": ".."}`` for a skipped row; and
+    ``{"final": true, "parameters": {..}, "n_samples": ..}`` at the end
+    (``"stopped": true`` when it stopped at a failure). The per-sample line is written
+    without :func:`json.dumps` (the same text, a few microseconds less).
+
+    >>> line = JsonLines(["y"])
+    >>> line(Step(0, [float("nan")], [float("nan")]))
+    '{"k": 0, "prediction": {"y": null}, "error": {"y": null}}'
+    >>> line(Step(1, [0.5], [0.25]))
+    '{"k": 1, "prediction": {"y": 0.5}, "error": {"y": 0.25}}'
+    """
+
+    def __init__(self, outputs: Sequence[str]) -> None:
+        self.keys = [_dumps(name) for name in outputs]  # output names, quoted once
+
+    def __call__(self, event: Step | Estimates | Failure | Final) -> str:
+        if type(event) is Step:  # the per-sample path
+            keys = self.keys
+            if len(keys) == 1:
+                q, p, e = keys[0], event.prediction[0], event.error[0]
+                p = repr(p) if p - p == 0.0 else "null"  # _value inlined: finite or null
+                e = repr(e) if e - e == 0.0 else "null"
+                return f'{{"k": {event.k}, "prediction": {{{q}: {p}}}, "error": {{{q}: {e}}}}}'
+            p = ", ".join(f"{q}: {_value(v)}" for q, v in zip(keys, event.prediction, strict=True))
+            e = ", ".join(f"{q}: {_value(v)}" for q, v in zip(keys, event.error, strict=True))
+            return f'{{"k": {event.k}, "prediction": {{{p}}}, "error": {{{e}}}}}'
+        if isinstance(event, Estimates):
+            return _dumps(_with_note({"k": event.k, "parameters": event.parameters}, event))
+        if isinstance(event, Failure):
+            return _dumps({"k": event.k, "line": event.line, "error_message": event.message})
+        doc = {"final": True, "parameters": event.parameters, "n_samples": event.n_samples}
+        if event.stopped:
+            doc["stopped"] = True
+        return _dumps(_with_note(doc, event))
+
+
+def _with_note(doc: dict[str, Any], event: Estimates | Final) -> dict[str, Any]:
+    if event.note is not None:
+        doc["estimate"] = event.estimate
+        doc["note"] = event.note
+    return doc
