@@ -273,8 +273,10 @@ class _Search:
                 raise ParameterError("its free-run simulation of the hold-out is not finite")
             score.model = model
             score.n_parameters = _n_parameters(model)
-        except (BlockidError, np.linalg.LinAlgError, FloatingPointError) as exc:
+        except BlockidError as exc:
             score.reason = str(exc).split(". ")[0][:300] or type(exc).__name__
+        except Exception as exc:  # noqa: BLE001 - one candidate must not end the search
+            score.reason = f"{type(exc).__name__}: {exc}"[:300]
         score.seconds = time.perf_counter() - t
         self.scores.append(score)
         return score
