@@ -22,7 +22,9 @@ data**, scored as the user will use the model: by free-run simulation.
 4. **Selection.** Ranked by hold-out RMSE; among near-ties (within ``tie`` = 2 % of the
    best RMSE) the one with the fewest parameters wins. The best few are fitted again
    with the full iteration budget, re-scored, and the winner (again parsimonious among
-   near-ties) is refitted on **all** estimation data.
+   near-ties) is offered a richer nonlinearity (each polynomial degree + 2, kept only
+   when the hold-out error falls by more than ``tie``) and refitted on **all**
+   estimation data, starting from its estimate.
 
 Validation data, when given, are used only after the choice, to report.
 """
@@ -317,34 +319,45 @@ def _screen(data: Dataset, samples: int) -> Dataset:
     return Dataset(data.inputs, data.outputs, data.sampling_time, exps, data.source)
 
 
+#: The search's plans per structure, most telling first: a structure's first plan is tried
+#: for every structure before any second plan, so that a short budget still sees every
+#: structure once. Delays are raised to 1 where the structure needs one.
+_PLANS: dict[str, list[dict[str, Any]]] = {
+    "output-error": [{}],
+    "feedback": [{"r": 3}],
+    "hammerstein": [
+        {"input_block": "polynomial:degree=3", "center": True},
+        {"input_block": "piecewise-linear:knots=7", "center": True},
+        {"r1": 3, "center": False},
+        {"r1": 3, "center": True},
+    ],
+    "wiener": [{"r2": 3}],
+    "hammerstein-wiener": [{"r1": 3, "r2": 3, "center": False}],
+    "wiener-hammerstein": [{"r2": 5}],
+    "backlash": [{}],
+}
+#: Structures whose fit needs a delay of at least one sample.
+_NEEDS_DELAY = ("feedback", "backlash")
+
+
 def _nonlinear_candidates(
     structures: Sequence[str], orders: list[tuple[int, int, int]], nfev: int
 ) -> list[Candidate]:
     fast = {"max_nfev": nfev, "tail_fraction": 0.0}
     out: list[Candidate] = []
+    usable = [s for s in structures if s in STRUCTURES and STRUCTURES[s].block_oriented]
+    rounds = max((len(_PLANS.get(s, [{}])) for s in usable), default=0)
     for na, nb, nk in orders:
-        o = {"na": na, "nb": nb, "nk": nk}
-        plans: dict[str, list[dict[str, Any]]] = {
-            "output-error": [{}],
-            "hammerstein": [
-                {"input_block": "polynomial:degree=3", "center": True},
-                {"r1": 3, "center": False},
-                {"r1": 3, "center": True},
-                {"input_block": "piecewise-linear:knots=7", "center": True},
-            ],
-            "wiener": [{"r2": 3}],
-            "hammerstein-wiener": [{"r1": 3, "r2": 3, "center": False}],
-            "wiener-hammerstein": [{"r2": 5, "nb": na + 1}],
-            "feedback": [{"r": 3}],
-            "backlash": [{"nk": max(nk, 1)}],
-        }
-        for structure in structures:
-            if structure not in STRUCTURES or not STRUCTURES[structure].block_oriented:
-                continue
-            accepted = STRUCTURES[structure].accepted(None)
-            for extra in plans.get(structure, [{}]):
-                opts = {**o, **extra, **fast}
-                opts = {k: v for k, v in opts.items() if k in accepted}
+        for r in range(rounds):
+            for structure in usable:
+                plans = _PLANS.get(structure, [{}])
+                if r >= len(plans):
+                    continue
+                o = {"na": na, "nb": nb, "nk": max(nk, 1) if structure in _NEEDS_DELAY else nk}
+                if structure == "wiener-hammerstein":  # the BLA of a chain: proper, nb = na + 1
+                    o["nb"] = na + 1
+                accepted = STRUCTURES[structure].accepted(None)
+                opts = {k: v for k, v in {**o, **plans[r], **fast}.items() if k in accepted}
                 out.append(Candidate(structure, opts))
     unique, seen = [], set()
     for c in out:
@@ -353,6 +366,22 @@ def _nonlinear_candidates(
             seen.add(key)
             unique.append(c)
     return unique
+
+
+def _grow(winner: Score, search: _Search, data: Dataset, tie: float) -> Score:
+    """Try the winner with a richer nonlinearity (each polynomial degree + 2, up to 9);
+    keep it only when the hold-out RMSE falls by more than ``tie``."""
+    best = winner
+    for key in ("r1", "r2", "r"):
+        degree = best.candidate.options.get(key)
+        if not isinstance(degree, int) or degree + 2 > 9 or search.left() <= 0:
+            continue
+        opts = {**best.candidate.options, key: degree + 2}
+        trial = search.run(Candidate(best.candidate.structure, opts), data, "grow")
+        search.tell("nonlinearity", 1, 1, trial.candidate.label)
+        if trial.ok and trial.rmse < best.rmse * (1.0 - tie):
+            best = trial
+    return best
 
 
 def _key(candidate: Candidate) -> tuple:
@@ -538,6 +567,8 @@ def identify(
         search.tell("finalists", i + 1, min(finalists, len(screened)), s.candidate.label)
     ranked_final = _ranked(finals, tie) or screened
     winner = ranked_final[0]
+    if STRUCTURES[winner.candidate.structure].block_oriented:
+        winner = _grow(winner, search, split.fit, tie)
 
     # refit on all estimation data: block models start from the finalist (warm start)
     search.tell("refit", 0, 1, winner.candidate.label)
@@ -559,8 +590,8 @@ def identify(
             "the model (optimistic)"
         )
     ok = _ranked(search.scores, tie)
-    finals_seen = {_key(s.candidate) for s in ok if s.stage == "final"}
-    ok = [s for s in ok if s.stage == "final" or _key(s.candidate) not in finals_seen]
+    finals_seen = {_key(s.candidate) for s in ok if s.stage in ("final", "grow")}
+    ok = [s for s in ok if s.stage in ("final", "grow") or _key(s.candidate) not in finals_seen]
     ranked = [winner] + [s for s in ok if s is not winner]
     rejected = [s for s in search.scores if not s.ok]
     return IdentifyResult(
