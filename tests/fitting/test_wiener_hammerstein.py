@@ -1,7 +1,6 @@
 """Wiener-Hammerstein from the split of the best linear approximation."""
 
 import numpy as np
-import pytest
 
 from blockid.blocks import LinearBlock, Polynomial
 from blockid.data import Dataset
