@@ -30,19 +30,47 @@ reproduce_app = typer.Typer(
 )
 
 FiguresDir = Annotated[
-    Path, typer.Option("--figures", metavar="DIR", help="Folder for the PNG figures.")
+    Path | None,
+    typer.Option("--plot", metavar="DIR", help="Folder for the PNG figures.", show_default=False),
 ]
+#: ``--figures``, the flag's old name, kept (hidden) so that scripts do not break.
+OldFiguresDir = Annotated[Path | None, typer.Option("--figures", hidden=True)]
+FolderForce = Annotated[
+    bool, typer.Option("--force", help="Write into a folder that is not empty (files replaced).")
+]
+
+
+def _folder(new: Path | None, old: Path | None, default: str, force: bool) -> Path:
+    """The output folder of ``--plot`` (or its hidden old name), refused when it holds
+    files and ``--force`` was not given: the run would replace them, as ``fit -o`` does
+    only with ``--force``."""
+    from blockid.errors import ParameterError
+
+    folder = new if new is not None else old if old is not None else Path(default)
+    if folder.exists() and not folder.is_dir():
+        raise ParameterError(f"{folder} is a file, not a folder; give another --plot DIR")
+    if folder.is_dir() and any(folder.iterdir()) and not force:
+        raise ParameterError(
+            f"{folder} exists and is not empty; pass --force to replace its files, or give "
+            "another --plot DIR"
+        )
+    return folder
 
 
 @cli_errors
 def demo(
-    output_dir: Annotated[
-        Path,
+    plot: Annotated[
+        Path | None,
         typer.Option(
-            "--output-dir", metavar="DIR", help="Folder for the data, models and figures."
+            "--plot",
+            metavar="DIR",
+            help="Folder for the data, models and figures [default: demo-output].",
+            show_default=False,
         ),
-    ] = Path("demo-output"),
+    ] = None,
+    output_dir: Annotated[Path | None, typer.Option("--output-dir", hidden=True)] = None,
     seed: Annotated[int, typer.Option(metavar="N", help="Random seed of the simulated plant.")] = 0,
+    force: FolderForce = False,
     json_out: Json = False,
 ) -> None:
     """Run the built-in example: paper B's experiment on the simulated excavator arm.
@@ -52,6 +80,7 @@ def demo(
     """
     from blockid.workflows.demo import run_demo
 
+    output_dir = _folder(plot, output_dir, "demo-output", force)
     result = run_demo(output_dir, seed=seed)
     if json_out:
         print_json(result.to_dict())
@@ -64,12 +93,18 @@ def demo(
 @cli_errors
 def reproduce_windtunnel(
     seed: Seed = 0,
-    figures: FiguresDir = Path("reproduce-windtunnel"),
+    plot: FiguresDir = None,
+    figures: OldFiguresDir = None,
+    force: FolderForce = False,
     json_out: Json = False,
 ) -> None:
-    """Paper A: block-oriented network vs conventional linear model (Table 2)."""
+    """Paper A: block-oriented network vs conventional linear model (Table 2).
+
+    Figures go to --plot DIR (default: reproduce-windtunnel).
+    """
     from blockid.workflows.reproduce_windtunnel import PAPER_TABLE, reproduce_windtunnel
 
+    figures = _folder(plot, figures, "reproduce-windtunnel", force)
     result = reproduce_windtunnel(seed=seed, figures_dir=figures)
     if json_out:
         print_json(result.to_dict())
@@ -141,7 +176,9 @@ def _errors(row: dict[str, Any]) -> tuple[str, ...]:
 @cli_errors
 def reproduce_electrohydraulic(
     seed: Seed = 0,
-    figures: FiguresDir = Path("reproduce-electrohydraulic"),
+    plot: FiguresDir = None,
+    figures: OldFiguresDir = None,
+    force: FolderForce = False,
     validation_bandwidth: Annotated[
         str,
         typer.Option(
@@ -152,9 +189,13 @@ def reproduce_electrohydraulic(
     ] = "0.5",
     json_out: Json = False,
 ) -> None:
-    """Paper B: Hammerstein-Wiener vs Hammerstein, Wiener and ARX (Table 2)."""
+    """Paper B: Hammerstein-Wiener vs Hammerstein, Wiener and ARX (Table 2).
+
+    Figures go to --plot DIR (default: reproduce-electrohydraulic).
+    """
     from blockid.workflows.reproduce_electrohydraulic import reproduce_electrohydraulic
 
+    figures = _folder(plot, figures, "reproduce-electrohydraulic", force)
     bandwidth = _bandwidth(validation_bandwidth)
     result = reproduce_electrohydraulic(
         seed=seed, figures_dir=figures, validation_bandwidth=bandwidth

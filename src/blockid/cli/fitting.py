@@ -39,6 +39,7 @@ from blockid.cli._options import (
     structures_help,
     with_fit_options,
 )
+from blockid.cli.report import ReportFile, write_report_option
 from blockid.fitting.registry import COMPARED_BY_DEFAULT, STRUCTURES
 
 __all__ = ["compare", "fit", "fit_network"]
@@ -164,6 +165,8 @@ def compare(
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,
     json_out: Json = False,
+    report: ReportFile = None,
+    force: Force = False,
     **options: Any,
 ) -> None:
     """Identify several structures and compare them on validation data.
@@ -175,12 +178,22 @@ def compare(
     from blockid.data import parse_range
     from blockid.workflows import compare_structures
 
+    refuse_to_overwrite(report, force)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
     est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
     val = data.select(*parse_range(validation, "--validation"), what="--validation")
     names = {} if structures is None else {"structures": _names(structures)}
+    opts = given(options)
+    if report is not None:  # trajectories and standard errors for the report's figures
+        opts = {"record_history": True, "standard_errors": True, **opts}
     with busy("identifying and comparing the structures", quiet=json_out):
-        result = compare_structures(est, val, **names, method=method, options=given(options))
+        result = compare_structures(est, val, **names, method=method, options=opts)
+    if report is not None:
+        write_report_option(
+            report, data_paths=data_paths, compare=result, data=data, estimation=est,
+            validation=val, estimation_range=estimation, validation_range=validation,
+            force=force,
+        )  # fmt: skip
     if json_out:
         print_json(result.to_dict())
         return

@@ -31,6 +31,7 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
+from blockid.cli.report import ReportFile, write_report_option
 
 __all__ = ["identify"]
 
@@ -92,6 +93,7 @@ def identify(
     plot: Annotated[
         Path | None, typer.Option("--plot", metavar="DIR", help="Write PNG figures here.")
     ] = None,
+    report: ReportFile = None,
     ts: SamplingTime = None,
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,
@@ -111,6 +113,7 @@ def identify(
     if validation and validation_data:
         raise ParameterError("give --validation or --validation-data, not both")
     refuse_to_overwrite(out, force)
+    refuse_to_overwrite(report, force)
     est = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
     val = None
     if validation:
@@ -136,6 +139,15 @@ def identify(
         from blockid.plotting.figures import fit_figures
 
         fit_figures(result.fit, est, plot)
+    if report is not None:
+        whole = None
+        if not validation_data:
+            whole = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+        write_report_option(
+            report, data_paths=[*data_paths, *(validation_data or [])], identify=result,
+            data=whole, estimation=est, validation=val, estimation_range=estimation,
+            validation_range=validation, force=force,
+        )  # fmt: skip
     if json_out:
         print_json(result.to_dict())
         return

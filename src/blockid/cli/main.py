@@ -21,7 +21,17 @@ from typing import Annotated, Any
 import typer
 from typer.core import TyperGroup
 
-from blockid.cli import examples, export, fitting, fleet_cli, identify, orders, running, streaming
+from blockid.cli import (
+    examples,
+    export,
+    fitting,
+    fleet_cli,
+    identify,
+    orders,
+    report,
+    running,
+    streaming,
+)
 from blockid.cli._common import stdout
 
 try:  # typer >= 0.20 carries its own copy of click
@@ -123,6 +133,7 @@ app.command("identify")(identify.identify)
 app.command("export")(export.export)
 app.command("stream")(streaming.stream)
 app.command("fleet")(fleet_cli.fleet)
+app.command("report")(report.report)
 app.command()(examples.demo)
 app.add_typer(examples.reproduce_app, name="reproduce")
 app.command("example-data")(examples.example_data)

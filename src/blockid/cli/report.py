@@ -177,7 +177,8 @@ def report(
     est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
     val = data.select(*parse_range(validation, "--validation"), what="--validation")
     names = {} if structures is None else {"structures": _names(structures)}
-    opts = {"record_history": True, **given(options)}  # trajectories of recursive methods
+    # trajectories of the recursive methods and standard errors, for the figures
+    opts = {"record_history": True, "standard_errors": True, **given(options)}
     result = compare_structures(est, val, **names, method=method, options=opts)
     path = write_report_option(
         out,

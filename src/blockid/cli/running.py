@@ -39,6 +39,15 @@ OutTable = Annotated[
     ),
 ]
 
+PlotDir = Annotated[
+    Path | None,
+    typer.Option(
+        "--plot",
+        metavar="DIR",
+        help="Write a figure (measured vs model output and the error, whole record) here.",
+    ),
+]
+
 _LABELS = {"simulation": "free-run simulation", "one-step": "one-step-ahead prediction"}
 
 
@@ -51,6 +60,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         data_paths: DataPaths,
         rng: Range = None,
         out: OutTable = None,
+        plot: PlotDir = None,
         ts: SamplingTime = None,
         time_column: TimeColumn = None,
         experiment_column: ExperimentColumn = None,
@@ -76,18 +86,25 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         result = evaluate(model, data, mode)
         if out is not None:
             write_table(result.to_frame(), out, overwrite=force)
+        where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+        figure = None
+        if plot is not None:
+            from blockid.plotting.runs import run_figure
+
+            figure = run_figure(result, plot, data_label=where)
         if json_out:
             paths = [str(p) for p in data_paths]
             print_json({"model": str(model_path), "data": paths, "range": rng, **result.to_dict()})
             return
         for note in result.warnings:
             stderr.print(f"warning: {note}", markup=False)
-        where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
         stdout.print(
             metrics_table(f"{_LABELS[mode]} on {where}", [(model.structure, result.metrics)])
         )
         if out is not None:
             stdout.print(f"model output written to {out}")
+        if figure is not None:
+            stdout.print(f"figure written to {figure}")
 
     command.__doc__ = doc
     return command

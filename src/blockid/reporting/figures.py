@@ -136,14 +136,17 @@ def comparison_figure(rows: Sequence[tuple[str, float, float | None]], output: s
 
 
 def validation_figure(
-    output: Any, first: int, models: Sequence[Any] = (), where: str = "validation data"
+    output: Any,
+    first: int,
+    bands: Sequence[tuple[np.ndarray, np.ndarray] | None] = (),
+    where: str = "validation data",
 ) -> Any:
     """Measured output and model output (top) and the residual (below) of every output
     and experiment of a :class:`~blockid.evaluation.ModelOutput`.
 
     ``first`` is the index of the range's first sample in each experiment (the time
-    axis is that of the record). ``models``: drawn models whose output's 95 % band is
-    shaded when given.
+    axis is that of the record). ``bands``: per experiment, the lower and upper edge
+    (N, ny) of a 95 % band on the model output, shaded when given.
     """
     data = output.data
     mode = "free-run simulation" if output.mode == "simulation" else "one-step prediction"
@@ -154,19 +157,7 @@ def validation_figure(
     ts = data.sampling_time
     for c, (exp, y_hat) in enumerate(zip(exps, output.outputs, strict=True)):
         t = _time(ts, first, exp.n_samples)
-        band = None
-        if models:
-            if output.mode == "simulation":
-
-                def run(m: Any, e: Any = exp, n0: int = output.skip) -> np.ndarray:
-                    return m.simulate(e.u, e.y[:n0])
-
-            else:
-
-                def run(m: Any, e: Any = exp) -> np.ndarray:
-                    return m.predict(e.u, e.y)
-
-            band = sampled_band(models, run)
+        band = bands[c] if c < len(bands) else None
         for j, name in enumerate(data.outputs):
             ax, ax_e = axes[2 * j, c], axes[2 * j + 1, c]
             _line(ax, t, exp.y[:, j], color="0.25", label="measured")
@@ -174,7 +165,7 @@ def validation_figure(
             if band is not None:
                 ax.fill_between(
                     t, band[0][:, j], band[1][:, j], color="C1", alpha=0.25, lw=0,
-                    label="95 % band (parameter standard errors)",
+                    label="95 % band",
                 )  # fmt: skip
             residual = exp.y[:, j] - y_hat[:, j]
             residual[: output.skip] = np.nan  # initial conditions copied from the data
@@ -182,17 +173,22 @@ def validation_figure(
             ax_e.axhline(0.0, color="0.5", lw=0.6)
             ax.set_ylabel(name, fontsize=8)
             ax_e.set_ylabel(f"residual\n{name}", fontsize=8)
-            fit = output.metrics["fit_percent"][name]
-            rmse = output.metrics["rmse"][name]
-            title = f"{mode} on the {where}: fit {fit:.1f} %, RMSE {rmse:.4g}"
-            if len(exps) > 1:
-                title = f"experiment {exp.name!r}: {title}"
-            ax.set_title(title, fontsize=9)
+            score = _score(output.metrics, name)
+            if len(exps) == 1:
+                ax.set_title(f"{mode} on the {where}: {score}", fontsize=9)
+            elif j == 0:  # scores pool every experiment: said once, above the columns
+                ax.set_title(f"experiment {exp.name!r}", fontsize=9)
+                pooled = "; ".join(f"{o} {_score(output.metrics, o)}" for o in data.outputs)
+                fig.suptitle(f"{mode} on the {where}: {pooled}", fontsize=9)
             ax.legend(fontsize=7, loc="upper right")
             for a in (ax, ax_e):
                 a.tick_params(labelsize=7)
         axes[-1, c].set_xlabel(_time_label(ts), fontsize=8)
     return fig
+
+
+def _score(metrics: dict[str, dict[str, float]], name: str) -> str:
+    return f"fit {metrics['fit_percent'][name]:.1f} %, RMSE {metrics['rmse'][name]:.4g}"
 
 
 def blocks_figure(model: Any, u: np.ndarray, models: Sequence[Any] = ()) -> tuple[Any, list[str]]:

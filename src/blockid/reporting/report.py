@@ -29,7 +29,12 @@ from blockid.data.ranges import parse_range
 from blockid.reporting import figures
 from blockid.reporting.html import figure, page, paragraph, section, table
 from blockid.reporting.provenance import Provenance
-from blockid.reporting.uncertainty import free_standard_errors, sampled_models
+from blockid.reporting.uncertainty import (
+    free_covariance,
+    free_standard_errors,
+    sampled_band,
+    sampled_models,
+)
 
 __all__ = ["build_report", "write_report"]
 
@@ -302,6 +307,39 @@ def _identify_search(identify: Any) -> str:
     return section("search", "Search of identify()", parts)
 
 
+def _output_bands(e: _Entry, draws: list[Any]) -> tuple[list[Any], str]:
+    """95 % bands of the free-run simulation per experiment, and what they are."""
+    output = e.simulation
+    record = (getattr(e.fit, "settings", None) or {}).get("covariance")
+    if record is not None:
+        from blockid.errors import BlockidError
+        from blockid.evaluation.uncertainty import ParameterCovariance, simulation_band
+
+        try:
+            cov = ParameterCovariance.from_dict(record)
+            bands = [
+                simulation_band(e.fit.model, cov, x.u, x.y[: output.skip])
+                for x in output.data.experiments
+            ]
+            return [(b.lower, b.upper) for b in bands], (
+                " Shaded: 95 % confidence band of the noise-free output, from the parameter "
+                "covariance linearised along the simulation (as 'blockid simulate --band')."
+            )
+        except (BlockidError, ValueError, KeyError, TypeError, np.linalg.LinAlgError):
+            pass
+    if draws:
+        bands = [
+            sampled_band(draws[:100], lambda m, x=x: m.simulate(x.u, x.y[: output.skip]))
+            for x in output.data.experiments
+        ]
+        if any(b is not None for b in bands):
+            return bands, (
+                f" Shaded: 95 % band of the simulated output over {min(len(draws), 100)} "
+                "parameter draws from the standard errors."
+            )
+    return [], " No uncertainty available for this model (no parameter standard errors)."
+
+
 def _outputs(entries: list[_Entry], ranges: dict[str, str | None], draws: dict[int, list]) -> str:
     parts = []
     for e in entries:
@@ -310,14 +348,8 @@ def _outputs(entries: list[_Entry], ranges: dict[str, str | None], draws: dict[i
         rng = ranges[e.on]
         first = 0 if rng is None else parse_range(rng, f"--{e.on}")[0]
         where = f"{e.on} range {rng}" if rng is not None else f"{e.on} data"
-        models = draws.get(id(e), [])[:100]
-        fig = figures.validation_figure(e.simulation, first, models, where)
-        band = (
-            f" Shaded: 95 % band of the simulated output over {len(models)} parameter draws "
-            "from the standard errors."
-            if models
-            else " No uncertainty available for this model (no parameter standard errors)."
-        )
+        bands, band = _output_bands(e, draws.get(id(e), []))
+        fig = figures.validation_figure(e.simulation, first, bands, where)
         parts.append(f"<h3>{_h(e.label)}</h3>")
         parts.append(
             figure(
@@ -349,9 +381,13 @@ def _blocks(
         u = np.concatenate([x.u[:, 0] for x in estimation.experiments])
         models = draws.get(id(e), [])
         fig, notes = figures.blocks_figure(model, u, models)
+        source = (
+            "the parameter covariance"
+            if free_covariance(e.fit) is not None
+            else "the standard errors (independent normals)"
+        )
         band = (
-            f"Shaded: 95 % band over {len(models)} parameter draws from the standard errors "
-            "(independent normals; indicative)."
+            f"Shaded: 95 % band over {len(models)} parameter draws from {source}."
             if models
             else _NO_UNCERTAINTY
         )
@@ -501,9 +537,12 @@ def build_report(
         where = "estimation data (no validation data were given)"
     draws = {}
     for e in entries:
-        se = None if e.fit is None else free_standard_errors(e.fit)
-        if se is not None:
-            draws[id(e)] = sampled_models(e.fit.model, se, n=_BAND_DRAWS)
+        if e.fit is None:
+            continue
+        cov = free_covariance(e.fit)
+        se = None if cov is not None else free_standard_errors(e.fit)
+        if cov is not None or se is not None:
+            draws[id(e)] = sampled_models(e.fit.model, se, n=_BAND_DRAWS, covariance=cov)
     import matplotlib
 
     with matplotlib.rc_context({"font.size": 8}):

@@ -1,13 +1,13 @@
 """Confidence bands from parameter standard errors, by sampling the parameters.
 
-A fit may carry standard errors of its parameters (``FitResult.standard_errors``,
-``FitResult.settings["standard_errors"]`` or ``model.standard_errors``). They are
-matched to the model's free parameter vector (:meth:`ChainModel.free_parameters`),
-parameter vectors are drawn from independent normals with those standard deviations
-(clipped to the parameter bounds), and the 2.5 and 97.5 percentiles of whatever the
-drawn models compute form a 95 % band. Independent draws ignore correlations between
-parameters, so the band is indicative: it says how far the curve can move, not a
-joint confidence region.
+A fit made with ``standard_errors=True`` carries the covariance of its free parameters
+in ``settings["covariance"]`` (:func:`blockid.evaluation.uncertainty.with_standard_errors`)
+and their standard errors in ``settings["standard_errors"]``. Parameter vectors are drawn
+from the normal distribution with that covariance (or, with standard errors only, from
+independent normals), clipped to the parameter bounds, and the 2.5 and 97.5 percentiles
+of whatever the drawn models compute (a static block's curve) form a 95 % band. The
+simulated output's band is the linearised one of
+:func:`blockid.evaluation.uncertainty.simulation_band` (``blockid simulate --band``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,13 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["BAND_PERCENTILES", "free_standard_errors", "sampled_band", "sampled_models"]
+__all__ = [
+    "BAND_PERCENTILES",
+    "free_covariance",
+    "free_standard_errors",
+    "sampled_band",
+    "sampled_models",
+]
 
 #: The percentiles of a 95 % band.
 BAND_PERCENTILES = (2.5, 97.5)
@@ -81,16 +87,44 @@ def free_standard_errors(fit: Any) -> np.ndarray | None:
     return se_arr
 
 
-def sampled_models(model: Any, se: np.ndarray, n: int = 200, seed: int = 0) -> list[Any]:
+def free_covariance(fit: Any) -> np.ndarray | None:
+    """The covariance of ``fit.model.free_parameters()`` stored by
+    :func:`blockid.evaluation.uncertainty.with_standard_errors` in
+    ``fit.settings["covariance"]``, or None (none stored, other parameter names, or a
+    parameter the data did not determine)."""
+    settings = getattr(fit, "settings", None)
+    record = settings.get("covariance") if isinstance(settings, Mapping) else None
+    model = getattr(fit, "model", None)
+    if not isinstance(record, Mapping) or not hasattr(model, "free_parameters"):
+        return None
+    if list(record.get("names", ())) != list(model.free_parameter_names()):
+        return None
+    matrix = np.array(
+        [[np.inf if v is None else float(v) for v in row] for row in record["matrix"]]
+    )
+    return matrix if np.all(np.isfinite(matrix)) else None
+
+
+def sampled_models(
+    model: Any,
+    se: np.ndarray | None = None,
+    n: int = 200,
+    seed: int = 0,
+    covariance: np.ndarray | None = None,
+) -> list[Any]:
     """Up to ``n`` copies of ``model`` with free parameters drawn from
-    ``N(theta, diag(se**2))`` inside the parameter bounds (draws the model refuses are
-    skipped)."""
+    ``N(theta, covariance)`` (or ``N(theta, diag(se**2))``) inside the parameter bounds
+    (draws the model refuses are skipped)."""
     rng = np.random.default_rng(seed)
     theta = np.asarray(model.free_parameters(), float)
     low, high = model.parameter_bounds()
+    if covariance is not None:
+        steps = rng.multivariate_normal(np.zeros(theta.size), covariance, n, method="eigh")
+    else:
+        steps = np.asarray(se, float) * rng.standard_normal((n, theta.size))
     out = []
-    for _ in range(n):
-        draw = np.clip(theta + se * rng.standard_normal(theta.size), low, high)
+    for step in steps:
+        draw = np.clip(theta + step, low, high)
         try:
             out.append(model.with_free_parameters(draw))
         except Exception:  # noqa: BLE001 - a draw the model refuses is left out

@@ -1,0 +1,223 @@
+"""The HTML report: self-contained, every figure a valid PNG, provenance recorded."""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import hashlib
+import platform
+import re
+import struct
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+IMG = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+
+
+def _png_size(raw: bytes) -> tuple[int, int]:
+    assert raw[:8] == b"\x89PNG\r\n\x1a\n", "not a PNG"
+    assert raw[12:16] == b"IHDR"
+    assert raw[-8:-4] == b"IEND", "truncated PNG"
+    return struct.unpack(">II", raw[16:24])
+
+
+def test_report_embeds_at_least_four_valid_png_figures(example_report):
+    html = example_report.html
+    images = IMG.findall(html)
+    assert len(images) >= 4
+    assert html.count("<img") == len(images), "every image is an embedded PNG"
+    for text in images:
+        raw = base64.b64decode(text, validate=True)
+        width, height = _png_size(raw)
+        assert width >= 300 and height >= 150
+        assert len(raw) > 5000, "a figure with content, not an empty canvas"
+
+
+def test_report_has_no_external_reference(example_report):
+    html = example_report.html.lower()
+    for needle in ("http://", "https://", 'src="//', "href=\"//", "<script", "<link", "@import",
+                   "url(", "<iframe", "<object", "<embed"):  # fmt: skip
+        assert needle not in html, needle
+    # links are anchors within the page only
+    assert all(h.startswith("#") for h in re.findall(r'href="([^"]*)"', html))
+    assert all(s.startswith("data:image/png;base64,") for s in re.findall(r'src="([^"]*)"', html))
+
+
+def test_report_records_command_hash_and_versions(example_report):
+    import numpy
+    import pandas
+    import scipy
+
+    from blockid import __version__
+
+    html = example_report.html
+    digest = hashlib.sha256(example_report.data.read_bytes()).hexdigest()
+    assert digest in html
+    assert f"blockid report {example_report.data}" in html
+    assert "--validation 1100:2200" in html and "--method key-term-rls" in html
+    for version in (__version__, numpy.__version__, scipy.__version__, pandas.__version__):
+        assert f"<td>{version}</td>" in html
+    assert platform.python_version() in html
+
+
+def test_report_sections_and_captions(example_report):
+    html = example_report.html
+    for title in ("Data overview", "Comparison of the models", "Measured and simulated output",
+                  "Identified nonlinearities", "Parameter trajectories of recursive estimators",
+                  "Provenance"):  # fmt: skip
+        assert f"<h2>{title}</h2>" in html
+    assert "free-run simulation on the validation range 1100:2200" in html
+    assert "estimation range 0:1100" in html
+    assert "Sampling time: 0.05 s" in html
+    # the command asks for standard errors: bands from the parameter covariance
+    assert "95 % confidence band of the noise-free output" in html
+    assert "parameter draws from the parameter covariance" in html
+    assert (
+        "recursive estimator key-term-rls, recorded at" in html
+    )  # a recursive estimator's trajectories
+    assert html.count("<figcaption>") == len(IMG.findall(html))
+
+
+def test_the_command_refuses_to_overwrite_without_force(example_report, report_app, report_args):
+    before = example_report.path.read_bytes()
+    args = ["report", str(example_report.data), *report_args, "-o", str(example_report.path)]
+    refused = CliRunner().invoke(report_app, args)
+    assert refused.exit_code == 2
+    assert "exists; pass --force" in refused.output
+    assert example_report.path.read_bytes() == before
+
+
+def test_the_command_json_and_force(example_report, report_app, report_args, tmp_path):
+    import json
+
+    out = tmp_path / "r.html"
+    out.write_text("old")
+    args = ["report", str(example_report.data), *report_args[:10], "--structures", "arx",
+            "--na", "2", "--nb", "2", "--nk", "1", "-o", str(out), "--force", "--json"]  # fmt: skip
+    result = CliRunner().invoke(report_app, args)
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    assert doc["report"] == str(out) and doc["bytes"] == out.stat().st_size
+    assert doc["models"][0]["structure"] == "arx"
+    assert out.read_text().startswith("<!DOCTYPE html>")
+
+
+# ------------------------------------------------------------------ library level
+@pytest.fixture(scope="module")
+def hammerstein():
+    from blockid.data import Dataset
+    from blockid.workflows import compare_structures
+    from blockid.workflows.examples import example_record
+
+    record = example_record("electrohydraulic")
+    data = Dataset.from_frame(record.frame, ["current"], ["velocity"], time_column="t")
+    est, val = data.select(*record.estimation), data.select(*record.validation)
+    options = dict(na=3, nb=3, nk=8, r1=3, passes=60, forgetting="0.98:200,1")
+    result = compare_structures(est, val, ["hammerstein"], method="key-term-rls", options=options)
+    assert result.models[0].fit is not None, result.models[0].error
+    return data, est, val, result
+
+
+def _with_errors(result, errors):
+    score = result.models[0]
+    fit = dataclasses.replace(score.fit, settings={**score.fit.settings, "standard_errors": errors})
+    return dataclasses.replace(result, models=[dataclasses.replace(score, fit=fit)])
+
+
+def test_confidence_bands_are_drawn_from_standard_errors(hammerstein):
+    from blockid.reporting import build_report
+
+    data, est, val, result = hammerstein
+    theta = result.models[0].fit.model.free_parameters()
+    banded = _with_errors(result, 0.02 * np.abs(theta) + 1e-4)
+    html = build_report(compare=banded, data=data, estimation=est, validation=val)
+    assert "95 % band over 200 parameter draws" in html
+    assert "95 % band of the simulated output" in html
+    assert "No uncertainty available" not in html
+    assert "validation data" in html  # no range text given: said so, not invented
+
+
+def test_standard_errors_in_the_shape_of_the_parameters_are_matched(hammerstein):
+    from blockid.reporting.uncertainty import free_standard_errors
+
+    fit = hammerstein[3].models[0].fit
+    model = fit.model
+    shaped = {
+        k: (np.full(len(v), 0.5).tolist() if isinstance(v, list) else 0.5)
+        for k, v in model.parameters.items()
+    }
+    shaped["a"] = [0.1, 0.2, 0.3]
+    se = free_standard_errors(_with_errors(hammerstein[3], shaped).models[0].fit)
+    names = model.free_parameter_names()
+    assert se is not None and se.size == len(names)
+    assert [se[names.index(f"a_{j}")] for j in (1, 2, 3)] == [0.1, 0.2, 0.3]
+    by_name = {n: 0.25 for n in names}
+    assert np.all(free_standard_errors(_with_errors(hammerstein[3], by_name).models[0].fit) == 0.25)
+    assert free_standard_errors(_with_errors(hammerstein[3], [1.0, 2.0]).models[0].fit) is None
+    assert free_standard_errors(fit) is None
+
+
+def test_report_of_an_identify_result(hammerstein):
+    from blockid.evaluation import evaluate
+    from blockid.fitting.identify import Candidate, IdentifyResult, Score
+    from blockid.reporting import build_report
+
+    data, est, val, result = hammerstein
+    fit = result.models[0].fit
+    chosen = Score(Candidate("hammerstein", {"na": 3, "nb": 3, "nk": 8}), rmse=0.02,
+                   fit_percent=75.0, n_parameters=13, stage="final", model=fit.model)  # fmt: skip
+    rejected = Score(Candidate("wiener", {"r2": 3}), stage="screen", reason="unstable")
+    identified = IdentifyResult(
+        selected=chosen, fit=fit, ranked=[chosen], rejected=[rejected],
+        simulation=evaluate(fit.model, val, "simulation"),
+        one_step=evaluate(fit.model, val, "one-step"), one_step_error=None,
+        on="validation", seconds=1.5, holdout="last 25 % of the record held out (825:)",
+    )  # fmt: skip
+    html = build_report(
+        identify=identified, data=data, estimation=est, validation=val,
+        estimation_range="0:1100", validation_range="1100:2200",
+    )  # fmt: skip
+    assert "<h2>Search of identify()</h2>" in html
+    assert "identify: hammerstein(na=3, nb=3, nk=8)" in html
+    assert "<td>unstable</td>" in html
+    assert "free-run simulation on the validation range 1100:2200" in html
+    assert len(IMG.findall(html)) == 3  # data, output, blocks (one model: no bar chart)
+    apart = build_report(identify=identified, estimation=est, validation=val)  # no record
+    assert "Measured estimation data" in apart and "Measured validation data" in apart
+    assert "free-run simulation on the validation data" in apart
+
+
+def test_provenance_hashes_and_command(tmp_path):
+    from blockid.reporting import collect_provenance
+
+    path = tmp_path / "d.csv"
+    path.write_bytes(b"t,u,y\n0,1,2\n")
+    prov = collect_provenance([path, path], ["/usr/local/bin/blockid", "report", "d.csv"])
+    assert prov.command == "blockid report d.csv"
+    assert len(prov.files) == 1 and prov.files[0].size == 12
+    assert prov.files[0].sha256 == hashlib.sha256(b"t,u,y\n0,1,2\n").hexdigest()
+    assert {"blockid", "numpy", "scipy", "numba", "pandas", "python", "platform"} <= set(
+        prov.versions
+    )
+    assert prov.date.endswith("+00:00")
+
+
+def test_build_report_needs_a_result(hammerstein):
+    from blockid.errors import ParameterError
+    from blockid.reporting import build_report
+
+    with pytest.raises(ParameterError, match="compare or an identify"):
+        build_report(estimation=hammerstein[1])
+
+
+def test_the_command_module_imports_no_heavy_library():
+    code = (
+        "import sys, blockid.cli.report\n"
+        "heavy = [m for m in ('pandas', 'scipy', 'numba', 'matplotlib') if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
