@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/blockid demo --output-dir $(DEMO_DIR)
+	$(BIN)/blockid demo --plot $(DEMO_DIR) --force
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
@@ -33,3 +33,11 @@ clean:
 
 convergence: $(STAMP)
 	$(BIN)/python benchmarks/convergence_study.py
+
+# Mutation benchmark of the core (about an hour on two cores; not part of `make test`).
+# Runs on a snapshot of HEAD in a temporary folder; see docs/testing.md.
+.PHONY: mutate
+mutate: $(STAMP)
+	test -x $(BIN)/mutmut || $(BIN)/python -m pip install --quiet -e ".[test,mutation]"
+	nice -n 10 $(BIN)/python mutation/run.py
+	nice -n 10 $(BIN)/python mutation/kernels.py

@@ -5,17 +5,24 @@ every command (and of the root) is looked up in :data:`CHECKS`, which runs the c
 through typer's ``CliRunner`` with a non-default value, the library functions the
 command calls wrapped in recorders (the long workflows replaced by fakes), and asserts
 that the value arrived or had its documented effect. A command option without an entry
-fails a test here. The estimator flags of ``fit`` and ``compare``, generated from the
-registry, are checked by ``test_options.py`` and left out here.
+fails a test here. The estimator flags of ``fit``, ``compare``, ``stream`` and ``fleet``,
+generated from the registry, are left out here (``test_options.py`` checks them for
+``fit`` and ``compare``). ``identify`` gets one small real search result instead of a
+search; ``fleet`` runs the real :func:`~blockid.workflows.fleet.fit_fleet` with
+dask.distributed's cluster and client replaced by in-process fakes (no workers start).
 """
 
 from __future__ import annotations
 
+import functools
+import importlib
 import json
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+from unittest import mock
 
 import numpy as np
 import pandas as pd
@@ -29,6 +36,8 @@ import blockid.fitting
 import blockid.fitting.network
 import blockid.fitting.orders
 import blockid.plotting.figures
+import blockid.plotting.runs
+import blockid.reporting
 import blockid.workflows
 import blockid.workflows.demo
 import blockid.workflows.examples
@@ -37,12 +46,26 @@ import blockid.workflows.reproduce_windtunnel
 from blockid import __version__
 from blockid.cli._options import cli_options
 from blockid.cli.main import app
+from blockid.data import Dataset
 from blockid.models import ARX, load_model, save_model
 
+# by their module paths: the package attributes of these names may be the functions
+_identify_cli = importlib.import_module("blockid.cli.identify")
+_identify_module = importlib.import_module("blockid.fitting.identify")
+_export_module = importlib.import_module("blockid.models.export")
+_stream_module = importlib.import_module("blockid.workflows.stream")
+_fleet_module = importlib.import_module("blockid.workflows.fleet")
+_real_identify = _identify_module.identify
+
 runner = CliRunner()
+#: What the faked report builder returns (tests/reporting checks the real report).
+REPORT = "<!DOCTYPE html>\n<p>report</p>\n"
 
 N = 240  # samples of the test record; experiment "a" is the first half, "b" the second
 DT = 0.5  # its time column's step
+#: The time column's name: not one that looks like time ("t", "time"), which a --ts
+#: off DT would contradict (read_data refuses that).
+TIME = "clock"
 
 
 # ----------------------------------------------------------------------------- the app
@@ -55,8 +78,11 @@ def _command_options() -> list[tuple[str, str]]:
         for param in command.params:
             if param.param_type_name != "option":
                 continue
-            if path in (("fit",), ("compare",), ("stream",), ("fleet",)) and param.name in generated:
-                continue  # tests/cli/test_options.py
+            if (
+                path in (("fit",), ("compare",), ("stream",), ("fleet",), ("report",))
+                and param.name in generated
+            ):
+                continue  # tests/cli/test_options.py (report: as compare's)
             found.append((" ".join(path), param.name))
         for name, sub in getattr(command, "commands", {}).items():
             walk(sub, (*path, name))
@@ -69,7 +95,7 @@ def _command_options() -> list[tuple[str, str]]:
 @dataclass
 class Files:
     dir: Path
-    csv: Path  # columns t, e, u, u2, y, y2
+    csv: Path  # columns clock (TIME), e, u, u2, y, y2
     model: Path  # an ARX model file from u to y
 
     def path(self, name: str) -> Path:
@@ -86,7 +112,7 @@ def files(tmp_path) -> Files:
     u, u2 = rng.uniform(-1, 1, (2, N))
     frame = pd.DataFrame(
         {
-            "t": np.arange(N) * DT,
+            TIME: np.arange(N) * DT,
             "e": ["a"] * (N // 2) + ["b"] * (N - N // 2),
             "u": u,
             "u2": u2,
@@ -147,6 +173,14 @@ def calls(monkeypatch) -> Calls:
     spy(blockid.fitting.orders, "false_nearest_neighbours")
     spy(blockid.workflows.examples, "example_record")
     spy(blockid.plotting.figures, "fit_figures", lambda *a, **k: [])
+    spy(
+        blockid.plotting.runs, "run_figure", lambda out, where, **k: Path(where) / f"{out.mode}.png"
+    )
+    spy(_identify_module, "identify", lambda *a, **k: _identified())
+    spy(blockid.reporting, "build_report", lambda **k: REPORT)
+    spy(_export_module, "export_text")
+    spy(_stream_module, "stream_identification")
+    spy(_fleet_module, "fit_fleet", _in_process(seen, _fleet_module.fit_fleet))
     spy(blockid.workflows.demo, "run_demo", lambda *a, **k: FakeRun())
     for module in (
         blockid.workflows.reproduce_windtunnel,
@@ -157,8 +191,66 @@ def calls(monkeypatch) -> Calls:
     return seen
 
 
-def _run(*args: Any, code: int = 0) -> Any:
-    r = runner.invoke(app, [str(a) for a in args])
+@functools.cache
+def _identified() -> Any:
+    """A real (small) result of :func:`blockid.fitting.identify.identify`: ARX only, on
+    a record of the test plant; what the faked search returns to ``identify``."""
+    rng = np.random.default_rng(3)
+    u = rng.uniform(-1, 1, (N, 1))
+    y = _plant().simulate(u) + 0.01 * rng.standard_normal((N, 1))
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    return _real_identify(data, structures=["arx"], budget=20, max_order=2, max_delay=1)
+
+
+def _in_process(seen: Calls, fit_fleet: Callable[..., Any]) -> Callable[..., Any]:
+    """``fit_fleet`` with dask.distributed's LocalCluster, Client and as_completed
+    replaced by fakes that run the tasks here, one after another; the cluster and the
+    client made are recorded as calls ``LocalCluster`` and ``Client``."""
+
+    class Cluster:
+        def __init__(self, n_workers: int, **kwargs: Any) -> None:
+            seen.setdefault("LocalCluster", []).append(((), {"n_workers": n_workers, **kwargs}))
+            self.n_workers = n_workers
+
+        def close(self) -> None:
+            pass
+
+    class Done:
+        def __init__(self, value: Any) -> None:
+            self.value = value
+
+        def result(self) -> Any:
+            return self.value
+
+    class Client:
+        def __init__(self, address: Any) -> None:
+            seen.setdefault("Client", []).append(((address,), {}))
+            self.n_workers = address.n_workers if isinstance(address, Cluster) else 4
+
+        def __enter__(self) -> Client:
+            return self
+
+        def __exit__(self, *exc: Any) -> None:
+            pass
+
+        def scheduler_info(self) -> dict[str, Any]:
+            return {"workers": {f"w{i}": {} for i in range(self.n_workers)}}
+
+        def submit(self, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Done:
+            return Done(fn(*args))  # fit_record never raises
+
+    def run(*args: Any, **kwargs: Any) -> Any:
+        import distributed
+
+        fakes = {"Client": Client, "LocalCluster": Cluster, "as_completed": iter}
+        with mock.patch.multiple(distributed, **fakes):
+            return fit_fleet(*args, **kwargs)
+
+    return run
+
+
+def _run(*args: Any, code: int = 0, input: str | None = None) -> Any:
+    r = runner.invoke(app, [str(a) for a in args], input=input)
     assert r.exit_code == code, r.output
     return r
 
@@ -226,8 +318,8 @@ def fit_ts(f, calls):
 
 
 def fit_time_column(f, calls):
-    doc = _json(_fit(f, "--time-column", "t", "--json"))
-    assert calls.one("read_data")[1]["time_column"] == "t"
+    doc = _json(_fit(f, "--time-column", TIME, "--json"))
+    assert calls.one("read_data")[1]["time_column"] == TIME
     assert doc["model"]["sampling_time"] == DT
 
 
@@ -237,12 +329,12 @@ def fit_experiment_column(f, calls):
     assert [e.name for e in _fit_data(calls).experiments] == ["a", "b"]
 
 
-def _force(command: Callable[..., Any], out: Path) -> None:
+def _force(command: Callable[..., Any], out: Path, flag: str = "-o") -> None:
     """An existing file is refused without --force and replaced with it."""
     out.write_text("old")
-    r = command("-o", out, code=2)
+    r = command(flag, out, code=2)
     assert "exists; pass --force" in r.stderr and out.read_text() == "old"
-    command("-o", out, "--force")
+    command(flag, out, "--force")
     assert out.read_text() != "old"
 
 
@@ -315,7 +407,7 @@ def compare_ts(f, calls):
 
 
 def compare_time_column(f, calls):
-    _compare(f, "--time-column", "t", "--json")
+    _compare(f, "--time-column", TIME, "--json")
     assert _compared(calls)[0].sampling_time == DT
 
 
@@ -326,6 +418,25 @@ def compare_experiment_column(f, calls):
     est, val, _ = _compared(calls)
     assert [e.name for e in est.experiments] == ["a", "b"]
     assert [e.n_samples for e in val.experiments] == [20, 20]
+
+
+def compare_report(f, calls):
+    out = f.path("compare.html")
+    r = _compare(f, "--report", out, "--json")
+    _, _, kwargs = _compared(calls)
+    assert kwargs["options"] == {"record_history": True, "standard_errors": True}
+    built = calls.one("build_report")[1]
+    assert [m.structure for m in built["compare"].models] == ["arx"]
+    assert built["estimation_range"] == "0:160" and built["validation_range"] == "160:240"
+    assert out.read_text() == REPORT and f"report written to {out}" in r.stderr
+    _compare(f, "--json")  # without a report, no trajectories or standard errors
+    assert calls["compare_structures"][1][1]["options"] == {}
+
+
+def compare_force(f, calls):
+    command = lambda *a, code=0: _compare(f, *a, "--json", code=code)  # noqa: E731
+    _force(command, f.path("compare.html"), flag="--report")
+    assert f.path("compare.html").read_text() == REPORT
 
 
 def compare_json(f, calls):
@@ -374,7 +485,7 @@ def network_ts(f, calls):
 
 
 def network_time_column(f, calls):
-    _network(f, "--time-column", "t", "--json")
+    _network(f, "--time-column", TIME, "--json")
     assert _network_data(calls).sampling_time == DT
 
 
@@ -417,12 +528,20 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
         assert f"model output written to {path}" in r.stdout
         assert len(pd.read_csv(path)) == N
 
+    def plot(f, calls):
+        where = f.path("figs")
+        r = run(f, "--range", "40:100", "--plot", where)
+        (output, folder), kwargs = calls.one("run_figure")
+        assert folder == where and output.mode == mode
+        assert evaluated(calls).n_samples == 60 and kwargs == {"data_label": f"{f.csv} [40:100]"}
+        assert f"figure written to {where / f'{mode}.png'}" in r.stdout
+
     def ts(f, calls):
         run(f, "--ts", "0.25", "--json")
         assert evaluated(calls).sampling_time == 0.25
 
     def time_column(f, calls):
-        run(f, "--time-column", "t", "--json")
+        run(f, "--time-column", TIME, "--json")
         assert evaluated(calls).sampling_time == DT
 
     def experiment_column(f, calls):
@@ -441,6 +560,7 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
     return {
         "rng": range_,
         "out": out,
+        "plot": plot,
         "ts": ts,
         "time_column": time_column,
         "experiment_column": experiment_column,
@@ -480,7 +600,7 @@ def orders_ts(f, calls):
 
 
 def orders_time_column(f, calls):
-    _orders(f, "--time-column", "t", "--json")
+    _orders(f, "--time-column", TIME, "--json")
     assert _tested(calls)[0].sampling_time == DT
 
 
@@ -508,12 +628,513 @@ def orders_json(f, calls):
     assert set(_json(_orders(f, "--json"))) >= {"recommended", "table"}
 
 
+# ----------------------------------------------------------------------------- identify
+def _identify(f: Files, *args: Any, code: int = 0) -> Any:
+    return _run("identify", f.csv, "-u", "u", "-y", "y", *args, code=code)
+
+
+def _searched(calls: Calls) -> tuple[Any, Any, dict[str, Any]]:
+    (est, val), kwargs = calls.one("identify")
+    return est, val, kwargs
+
+
+class _OnATerminal:
+    """``sys`` as ``blockid identify`` sees it, with stderr a terminal (where the
+    progress bar is shown)."""
+
+    class stderr:
+        @staticmethod
+        def isatty() -> bool:
+            return True
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(sys, name)
+
+
+def identify_input(f, calls):
+    _identify(f, "-u", "u2", "--json")
+    assert _searched(calls)[0].inputs == ("u", "u2")
+
+
+def identify_output(f, calls):
+    _identify(f, "-y", "y2", "--json")
+    assert _searched(calls)[0].outputs == ("y", "y2")
+
+
+def identify_estimation(f, calls):
+    _identify(f, "--estimation", "20:180", "--json")
+    est, val, _ = _searched(calls)
+    assert est.n_samples == 160 and val is None
+
+
+def identify_validation(f, calls):
+    _identify(f, "--estimation", "0:160", "--validation", "180:240", "--json")
+    est, val, _ = _searched(calls)
+    assert est.n_samples == 160 and val.n_samples == 60
+    r = _identify(f, "--estimation", "0:160", "--validation", "100:240", code=2)
+    assert "overlap" in r.stderr
+
+
+def identify_validation_data(f, calls):
+    other = f.path("validation.csv")
+    pd.read_csv(f.csv).iloc[:100].to_csv(other, index=False)
+    _identify(f, "--validation-data", other, "--json")
+    est, val, _ = _searched(calls)
+    assert est.n_samples == N and val.n_samples == 100
+    assert calls["read_data"][1][0][0] == [other]
+
+
+def identify_structures(f, calls):
+    _identify(f, "--structures", "arx, wiener", "--json")
+    assert _searched(calls)[2]["structures"] == ["arx", "wiener"]
+
+
+def identify_budget(f, calls):
+    _identify(f, "--budget", "7.5", "--json")
+    assert _searched(calls)[2]["budget"] == 7.5
+
+
+def identify_out(f, calls):
+    out = f.path("chosen.json")
+    r = _identify(f, "-o", out)
+    assert f"model written to {out}" in r.stdout
+    assert load_model(out).to_dict() == _identified().model.to_dict()
+    record = json.loads(out.read_text())["estimation"]
+    assert record["identify"]["selected"]["structure"] == "arx"
+
+
+def identify_plot(f, calls):
+    _identify(f, "--plot", f.path("figs"), "--json")
+    (fit, data, where), _ = calls.one("fit_figures")
+    assert where == f.path("figs") and fit is _identified().fit
+    assert data is _searched(calls)[0]
+
+
+def identify_ts(f, calls):
+    _identify(f, "--ts", "0.25", "--json")
+    assert calls.one("read_data")[1]["sampling_time"] == 0.25
+    assert _searched(calls)[0].sampling_time == 0.25
+
+
+def identify_time_column(f, calls):
+    _identify(f, "--time-column", TIME, "--json")
+    assert _searched(calls)[0].sampling_time == DT
+
+
+def identify_experiment_column(f, calls):
+    _identify(f, "--experiment-column", "e", "--json")
+    assert [e.name for e in _searched(calls)[0].experiments] == ["a", "b"]
+
+
+def identify_quiet(f, calls):
+    with mock.patch.object(_identify_cli, "sys", _OnATerminal()):
+        _identify(f)
+        _identify(f, "--quiet")
+    (_, shown), (_, quiet) = calls["identify"]
+    assert callable(shown["progress"]) and "progress" not in quiet
+
+
+def identify_report(f, calls):
+    out = f.path("identify.html")
+    r = _identify(f, "--estimation", "0:160", "--validation", "160:240", "--report", out)
+    built = calls.one("build_report")[1]
+    est, val, _ = _searched(calls)
+    assert built["identify"] is _identified() and built["estimation"] is est
+    assert built["validation"] is val and built["data"].n_samples == N
+    assert built["validation_range"] == "160:240"
+    assert out.read_text() == REPORT and f"report written to {out}" in r.stderr
+
+
+def identify_force(f, calls):
+    command = lambda *a, code=0: _identify(f, *a, code=code)  # noqa: E731
+    _force(command, f.path("chosen.json"))
+    load_model(f.path("chosen.json"))
+    _force(command, f.path("identify.html"), flag="--report")
+    assert f.path("identify.html").read_text() == REPORT
+
+
+def identify_json(f, calls):
+    plain = _identify(f).stdout
+    assert "candidates ranked by free-run RMSE" in plain
+    with mock.patch.object(_identify_cli, "sys", _OnATerminal()):
+        doc = _json(_identify(f, "--json"))  # no progress bar either
+    assert doc == json.loads(json.dumps(_identified().to_dict()))
+    assert "progress" not in calls["identify"][1][1]
+
+
+# ----------------------------------------------------------------------------- export
+def _export(f: Files, *args: Any, code: int = 0) -> Any:
+    return _run("export", f.model, *args, code=code)
+
+
+def _exported(calls: Calls) -> str:
+    (model, to), _ = calls.one("export_text")
+    assert model.to_dict() == _plant().to_dict()
+    return to
+
+
+def export_to(f, calls):
+    doc = json.loads(_export(f, "--to", "scipy-json").stdout)
+    assert _exported(calls) == "scipy-json"
+    assert doc["transfer_functions"][0]["den"] == [1.0, -1.2, 0.35]
+
+
+def export_out(f, calls):
+    out = f.path("plant.py")
+    r = _export(f, "-o", out)
+    assert _exported(calls) == "python"
+    assert f"arx model exported (python) to {out}" in r.stdout and "def simulate" not in r.stdout
+    space: dict[str, Any] = {}
+    exec(compile(out.read_text(), str(out), "exec"), space)
+    u = np.random.default_rng(0).uniform(-1, 1, (30, 1))
+    np.testing.assert_allclose(space["simulate"](u), _plant().simulate(u), atol=1e-12)
+
+
+def export_force(f, calls):
+    _force(lambda *a, code=0: _export(f, *a, code=code), f.path("plant.py"))
+    assert "def simulate" in f.path("plant.py").read_text()
+
+
+def export_json(f, calls):
+    plain = _export(f).stdout
+    assert "def simulate" in plain
+    with pytest.raises(json.JSONDecodeError):
+        json.loads(plain)
+    doc = _json(_export(f, "--json"))
+    assert doc == {"model": str(f.model), "to": "python", "out": None, "text": plain}
+
+
+# ----------------------------------------------------------------------------- stream
+ORDERS = ("--na", "2", "--nb", "2", "--nk", "1")
+
+
+def _stream(f: Files, *args: Any, code: int = 0, text: str | None = None) -> Any:
+    text = f.csv.read_text() if text is None else text
+    return _run("stream", "-u", "u", "-y", "y", *ORDERS, *args, code=code, input=text)
+
+
+def _lines(r: Any) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in r.stdout.splitlines()]
+
+
+def _streamed(calls: Calls) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    return calls.one("stream_identification")
+
+
+def stream_input(f, calls):
+    final = _lines(_stream(f, "-u", "u2"))[-1]
+    assert _streamed(calls)[0][2] == ["u", "u2"]
+    assert set(final["parameters"]["y"]["b"]) == {"u", "u2"}
+
+
+def stream_output(f, calls):
+    final = _lines(_stream(f, "-y", "y2"))[-1]
+    assert _streamed(calls)[0][3] == ["y", "y2"]
+    assert set(final["parameters"]) == {"y", "y2"}
+
+
+def stream_structure(f, calls):
+    out = f.path("online.json")
+    _stream(f, "--structure", "hammerstein", "-o", out)
+    args, kwargs = _streamed(calls)
+    assert args[1] == "hammerstein" and kwargs["method"] == "key-term-rls"
+    assert load_model(out).structure == "hammerstein"
+
+
+def stream_method(f, calls):
+    out = f.path("online.json")
+    _stream(f, "--method", "aw-rls", "-o", out)
+    assert _streamed(calls)[1]["method"] == "aw-rls"
+    assert json.loads(out.read_text())["estimation"]["method"] == "aw-rls"
+
+
+def stream_start(f, calls):
+    def first_error(*args: Any) -> float:
+        steps = [line for line in _lines(_stream(f, *args)) if "prediction" in line]
+        return abs(next(s["error"]["y"] for s in steps if s["error"]["y"] is not None))
+
+    cold, warm = first_error(), first_error("--model", f.model)
+    assert warm < 0.1 < cold  # the first prediction is the plant's
+    initial = calls["stream_identification"][1][1]["initial"]
+    assert initial.to_dict() == load_model(f.model).to_dict()
+    assert "initial" not in calls["stream_identification"][0][1] or (
+        calls["stream_identification"][0][1]["initial"] is None
+    )
+
+
+def stream_every(f, calls):
+    lines = _lines(_stream(f, "--every", "50"))
+    assert _streamed(calls)[1]["every"] == 50
+    estimates = [line for line in lines if "parameters" in line and not line.get("final")]
+    assert len(estimates) == N // 50
+
+
+def stream_out(f, calls):
+    out = f.path("online.json")
+    r = _stream(f, "-o", out)
+    assert f"model written to {out}" in r.stderr
+    assert load_model(out).to_dict()["parameters"] == _lines(r)[-1]["parameters"]
+    record = json.loads(out.read_text())["estimation"]
+    assert record["n_samples"] == N and record["online"] is True
+
+
+def stream_fmt(f, calls):
+    frame = pd.read_csv(f.csv)
+    text = "".join(
+        json.dumps({"u": u, "y": y}) + "\n" for u, y in zip(frame.u, frame.y, strict=True)
+    )
+    final = _lines(_stream(f, "--format", "jsonl", text=text))[-1]
+    assert _streamed(calls)[1]["fmt"] == "jsonl" and final["n_samples"] == N
+
+
+def _stream_scale(name: str) -> Callable[[Files, Calls], None]:
+    def check(f, calls):
+        out = f.path("online.json")
+        r = _stream(f, f"--{name.replace('_', '-')}", "2.5", code=2)
+        assert "give both input_scale and output_scale" in r.stderr
+        _stream(f, "--input-scale", "2.5", "--output-scale", "4", "-o", out)
+        value = {"input_scale": 2.5, "output_scale": 4.0}[name]
+        assert calls["stream_identification"][-1][1]["options"][name] == value
+        assert json.loads(out.read_text())["estimation"]["settings"][name] == value
+
+    return check
+
+
+def stream_stop_on_error(f, calls):
+    rows = f.csv.read_text().splitlines()
+    cells = rows[6].split(",")
+    cells[2] = "oops"  # the u of data row 5
+    rows[6] = ",".join(cells)
+    text = "\n".join(rows) + "\n"
+    going_on = _lines(_stream(f, text=text))
+    stopped = _lines(_stream(f, "--stop-on-error", text=text, code=1))
+    flags = [kw["stop_on_error"] for _, kw in calls["stream_identification"]]
+    assert flags == [False, True]
+    assert going_on[-1]["n_samples"] == N - 1 and "stopped" not in going_on[-1]
+    assert stopped[-1]["stopped"] is True and stopped[-1]["n_samples"] == 5
+    assert "oops" in stopped[-2]["error_message"]
+
+
+def stream_force(f, calls):
+    _force(lambda *a, code=0: _stream(f, *a, code=code), f.path("online.json"))
+    load_model(f.path("online.json"))
+
+
+# ----------------------------------------------------------------------------- fleet
+def _fleet(f: Files, *args: Any, out: Path | None = None, code: int = 0) -> Any:
+    out = f.path("fleet") if out is None else out
+    return _run("fleet", f.csv, "-u", "u", "-y", "y", "-o", out, *ORDERS, *args, code=code)
+
+
+def _fleet_call(calls: Calls) -> tuple[tuple[Any, ...], dict[str, Any]]:
+    return calls.one("fit_fleet")
+
+
+def _summary(f: Files, out: Path | None = None) -> dict[str, Any]:
+    rows = pd.read_csv((out or f.path("fleet")) / "summary.csv").to_dict("records")
+    assert len(rows) == 1
+    return rows[0]
+
+
+def _fleet_model(f: Files) -> Any:
+    return load_model(f.path("fleet") / "data.json")
+
+
+def fleet_input(f, calls):
+    _fleet(f, "-u", "u2", "--json")
+    assert _fleet_call(calls)[0][3] == ["u", "u2"]
+    assert _fleet_model(f).inputs == ("u", "u2")
+
+
+def fleet_output(f, calls):
+    _fleet(f, "-y", "y2", "--json")
+    assert _fleet_call(calls)[0][4] == ["y", "y2"]
+    assert _fleet_model(f).outputs == ("y", "y2")
+    assert {"rmse_y", "rmse_y2"} <= set(_summary(f))
+
+
+def fleet_out(f, calls):
+    out = f.path("models")
+    r = _fleet(f, out=out)
+    assert _fleet_call(calls)[0][1] == out
+    assert f"models and summary in {out}/" in r.stdout
+    assert load_model(out / "data.json").outputs == ("y",)
+    assert _summary(f, out)["status"] == "ok" and (out / "summary.parquet").is_file()
+
+
+def fleet_structure(f, calls):
+    _fleet(f, "--structure", "output-error", "--max-nfev", "3", "--json")
+    assert _fleet_call(calls)[0][2] == "output-error"
+    assert _fleet_model(f).structure == "output-error"
+    assert _summary(f)["structure"] == "output-error"
+
+
+def fleet_method(f, calls):
+    _fleet(f, "--method", "rls", "--json")
+    assert _fleet_call(calls)[1]["method"] == "rls"
+    assert _summary(f)["method"] == "rls"
+
+
+def fleet_workers(f, calls):
+    doc = _json(_fleet(f, "--workers", "3", "--json"))
+    assert _fleet_call(calls)[1]["workers"] == 3
+    assert calls.one("LocalCluster")[1]["n_workers"] == 3 and doc["workers"] == 3
+
+
+def fleet_scheduler(f, calls):
+    address = "tcp://scheduler.invalid:8786"
+    doc = _json(_fleet(f, "--scheduler", address, "--json"))
+    assert _fleet_call(calls)[1]["scheduler"] == address
+    assert calls.one("Client")[0] == (address,) and "LocalCluster" not in calls
+    assert doc["workers"] == 4  # the fake remote cluster's, not a local one's
+
+
+def fleet_ts(f, calls):
+    _fleet(f, "--ts", "0.25", "--json")
+    assert _fleet_call(calls)[1]["read_options"] == {"sampling_time": 0.25}
+    assert _fleet_model(f).sampling_time == 0.25
+
+
+def fleet_time_column(f, calls):
+    _fleet(f, "--time-column", TIME, "--json")
+    assert _fleet_call(calls)[1]["read_options"] == {"time_column": TIME}
+    assert _fleet_model(f).sampling_time == DT
+
+
+def fleet_force(f, calls):
+    statuses = []
+    for force in ((), (), ("--force",)):
+        doc = _json(_fleet(f, *force, "--json"))
+        statuses.append(doc["records"][0]["status"])
+    assert statuses == ["ok", "skipped", "ok"]
+    assert [kw["force"] for _, kw in calls["fit_fleet"]] == [False, False, True]
+
+
+def fleet_json(f, calls):
+    plain = _fleet(f).stdout
+    assert "1 records: 1 fitted, 0 failed, 0 skipped" in plain
+    with pytest.raises(json.JSONDecodeError):
+        json.loads(plain)
+    doc = _json(_fleet(f, "--json", "--force"))
+    assert doc["counts"] == {"ok": 1, "error": 0, "skipped": 0}
+    assert doc["records"][0]["file"] == str(f.csv.resolve())
+
+
+# ----------------------------------------------------------------------------- report
+def _report(f: Files, *args: Any, code: int = 0) -> Any:
+    ranges = ("--estimation", "0:160", "--validation", "160:240", "--structures", "arx")
+    return _run("report", f.csv, "-u", "u", "-y", "y", *ranges, *args, code=code)
+
+
+def _built(calls: Calls) -> dict[str, Any]:
+    return calls.one("build_report")[1]
+
+
+def report_input(f, calls):
+    _report(f, "-u", "u2")
+    est, val, _ = _compared(calls)
+    assert est.inputs == val.inputs == ("u", "u2") and _built(calls)["estimation"] is est
+
+
+def report_output(f, calls):
+    _report(f, "-y", "y2")
+    est, val, _ = _compared(calls)
+    assert est.outputs == val.outputs == ("y", "y2")
+
+
+def report_estimation(f, calls):
+    _report(f, "--estimation", "20:100")
+    est, _, _ = _compared(calls)
+    assert est.n_samples == 80 and _built(calls)["estimation_range"] == "20:100"
+
+
+def report_validation(f, calls):
+    _report(f, "--validation", "200:240")
+    _, val, _ = _compared(calls)
+    assert val.n_samples == 40 and _built(calls)["validation_range"] == "200:240"
+
+
+def report_structures(f, calls):
+    orders = ("--na", "2", "--nb", "2", "--nk", "1", "--max-nfev", "3")
+    _report(f, "--structures", "arx,output-error", *orders)
+    assert _compared(calls)[2]["structures"] == ["arx", "output-error"]
+    assert [m.structure for m in _built(calls)["compare"].models] == ["arx", "output-error"]
+
+
+def report_method(f, calls):
+    _report(f, "--method", "rls")
+    assert _compared(calls)[2]["method"] == "rls"
+    assert [m.method for m in _built(calls)["compare"].models] == ["rls"]
+
+
+def report_out(f, calls):
+    r = _report(f)  # the default, in the working folder
+    assert f"report written to {Path('report.html')}" in r.stdout
+    assert f.path("report.html").read_text() == REPORT
+    out = f.path("other.html")
+    r = _report(f, "-o", out)
+    assert f"report written to {out}" in r.stdout and out.read_text() == REPORT
+
+
+def report_ts(f, calls):
+    _report(f, "--ts", "0.25")
+    assert _compared(calls)[0].sampling_time == 0.25
+
+
+def report_time_column(f, calls):
+    _report(f, "--time-column", TIME)
+    assert _compared(calls)[0].sampling_time == DT
+
+
+def report_experiment_column(f, calls):
+    _report(f, "--experiment-column", "e", "--estimation", "0:100", "--validation", "100:120")
+    assert [e.name for e in _compared(calls)[0].experiments] == ["a", "b"]
+    assert [e.name for e in _built(calls)["data"].experiments] == ["a", "b"]
+
+
+def report_force(f, calls):
+    _force(lambda *a, code=0: _report(f, *a, code=code), f.path("report.html"))
+    assert f.path("report.html").read_text() == REPORT
+
+
+def report_json(f, calls):
+    plain = _report(f).stdout
+    with pytest.raises(json.JSONDecodeError):
+        json.loads(plain)
+    doc = _json(_report(f, "--json", "--force"))
+    assert doc["report"] == "report.html" and doc["bytes"] == len(REPORT)
+    assert [m["structure"] for m in doc["models"]] == ["arx"]
+
+
 # ----------------------------------------------------------------------------- workflows
 def demo_output_dir(f, calls):
     where = f.path("demo")
     r = _run("demo", "--output-dir", where)
     assert calls.one("run_demo") == ((where,), {"seed": 0})
     assert f"written to {where}/" in r.stdout
+
+
+def demo_plot(f, calls):
+    where = f.path("demo")
+    r = _run("demo", "--plot", where)
+    assert calls.one("run_demo") == ((where,), {"seed": 0})
+    assert f"written to {where}/" in r.stdout
+
+
+def _folder_force(calls: Calls, workflow: str, *command: Any) -> None:
+    """A folder that holds files is refused without --force and written into with it."""
+    where = command[-1]
+    where.mkdir()
+    (where / "old.txt").write_text("old")
+    r = _run(*command, code=2)
+    assert "not empty; pass --force" in r.stderr and workflow not in calls
+    _run(*command, "--force", "--json")
+    (args, kwargs) = calls.one(workflow)
+    assert where in args or kwargs["figures_dir"] == where
+
+
+def demo_force(f, calls):
+    _folder_force(calls, "run_demo", "demo", "--plot", f.path("demo"))
 
 
 def demo_seed(f, calls):
@@ -540,6 +1161,16 @@ def windtunnel_figures(f, calls):
     assert f"figures written to {f.path('wt')}/" in r.stdout
 
 
+def windtunnel_plot(f, calls):
+    r = _run("reproduce", "windtunnel", "--plot", f.path("wt"))
+    assert calls.one("reproduce_windtunnel")[1] == {"seed": 0, "figures_dir": f.path("wt")}
+    assert f"figures written to {f.path('wt')}/" in r.stdout
+
+
+def windtunnel_force(f, calls):
+    _folder_force(calls, "reproduce_windtunnel", "reproduce", "windtunnel", "--plot", f.path("wt"))
+
+
 def windtunnel_json(f, calls):
     assert "Paper A, Table 2 form" in _reproduce("windtunnel").stdout
     assert _json(_reproduce("windtunnel", "--json")) == {"fake": "run"}
@@ -555,6 +1186,18 @@ def electrohydraulic_figures(f, calls):
     kwargs = calls.one("reproduce_electrohydraulic")[1]
     assert kwargs == {"seed": 0, "figures_dir": f.path("eh"), "validation_bandwidth": 0.5}
     assert f"figures written to {f.path('eh')}/" in r.stdout
+
+
+def electrohydraulic_plot(f, calls):
+    r = _run("reproduce", "electrohydraulic", "--plot", f.path("eh"))
+    kwargs = calls.one("reproduce_electrohydraulic")[1]
+    assert kwargs == {"seed": 0, "figures_dir": f.path("eh"), "validation_bandwidth": 0.5}
+    assert f"figures written to {f.path('eh')}/" in r.stdout
+
+
+def electrohydraulic_force(f, calls):
+    command = ("reproduce", "electrohydraulic", "--plot", f.path("eh"))
+    _folder_force(calls, "reproduce_electrohydraulic", *command)
 
 
 def electrohydraulic_validation_bandwidth(f, calls):
@@ -622,6 +1265,8 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("compare", "time_column"): compare_time_column,
     ("compare", "experiment_column"): compare_experiment_column,
     ("compare", "json_out"): compare_json,
+    ("compare", "report"): compare_report,
+    ("compare", "force"): compare_force,
     ("fit-network", "subsystems"): network_subsystem,
     ("fit-network", "estimation"): network_estimation,
     ("fit-network", "out"): network_out,
@@ -645,13 +1290,74 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("orders", "noise"): _orders_setting("noise", "0.1", 0.1),
     ("orders", "json_out"): orders_json,
     ("demo", "output_dir"): demo_output_dir,
+    ("identify", "inputs"): identify_input,
+    ("identify", "outputs"): identify_output,
+    ("identify", "estimation"): identify_estimation,
+    ("identify", "validation"): identify_validation,
+    ("identify", "validation_data"): identify_validation_data,
+    ("identify", "structures"): identify_structures,
+    ("identify", "budget"): identify_budget,
+    ("identify", "out"): identify_out,
+    ("identify", "plot"): identify_plot,
+    ("identify", "ts"): identify_ts,
+    ("identify", "time_column"): identify_time_column,
+    ("identify", "experiment_column"): identify_experiment_column,
+    ("identify", "quiet"): identify_quiet,
+    ("identify", "report"): identify_report,
+    ("identify", "force"): identify_force,
+    ("identify", "json_out"): identify_json,
+    ("export", "to"): export_to,
+    ("export", "out"): export_out,
+    ("export", "force"): export_force,
+    ("export", "json_out"): export_json,
+    ("stream", "inputs"): stream_input,
+    ("stream", "outputs"): stream_output,
+    ("stream", "structure"): stream_structure,
+    ("stream", "method"): stream_method,
+    ("stream", "start"): stream_start,
+    ("stream", "every"): stream_every,
+    ("stream", "out"): stream_out,
+    ("stream", "fmt"): stream_fmt,
+    ("stream", "input_scale"): _stream_scale("input_scale"),
+    ("stream", "output_scale"): _stream_scale("output_scale"),
+    ("stream", "stop_on_error"): stream_stop_on_error,
+    ("stream", "force"): stream_force,
+    ("fleet", "inputs"): fleet_input,
+    ("fleet", "outputs"): fleet_output,
+    ("fleet", "out"): fleet_out,
+    ("fleet", "structure"): fleet_structure,
+    ("fleet", "method"): fleet_method,
+    ("fleet", "workers"): fleet_workers,
+    ("fleet", "scheduler"): fleet_scheduler,
+    ("fleet", "ts"): fleet_ts,
+    ("fleet", "time_column"): fleet_time_column,
+    ("fleet", "force"): fleet_force,
+    ("fleet", "json_out"): fleet_json,
+    ("report", "inputs"): report_input,
+    ("report", "outputs"): report_output,
+    ("report", "estimation"): report_estimation,
+    ("report", "validation"): report_validation,
+    ("report", "structures"): report_structures,
+    ("report", "method"): report_method,
+    ("report", "out"): report_out,
+    ("report", "ts"): report_ts,
+    ("report", "time_column"): report_time_column,
+    ("report", "experiment_column"): report_experiment_column,
+    ("report", "force"): report_force,
+    ("report", "json_out"): report_json,
+    ("demo", "plot"): demo_plot,
     ("demo", "seed"): demo_seed,
+    ("demo", "force"): demo_force,
     ("demo", "json_out"): demo_json,
     ("reproduce windtunnel", "seed"): windtunnel_seed,
     ("reproduce windtunnel", "figures"): windtunnel_figures,
+    ("reproduce windtunnel", "plot"): windtunnel_plot,
+    ("reproduce windtunnel", "force"): windtunnel_force,
     ("reproduce windtunnel", "json_out"): windtunnel_json,
     ("reproduce electrohydraulic", "seed"): electrohydraulic_seed,
     ("reproduce electrohydraulic", "figures"): electrohydraulic_figures,
+    ("reproduce electrohydraulic", "plot"): electrohydraulic_plot,
+    ("reproduce electrohydraulic", "force"): electrohydraulic_force,
     ("reproduce electrohydraulic", "validation_bandwidth"): electrohydraulic_validation_bandwidth,
     ("reproduce electrohydraulic", "json_out"): electrohydraulic_json,
     ("example-data", "out"): example_out,

@@ -53,7 +53,7 @@ def test_network_file_round_trip(tmp_path, rng):
 
 def test_wiring_errors():
     s1 = ARX(["u"], ["v"], 1, 1, 1)
-    with pytest.raises(errors.OrderError, match="produced twice or used before"):
+    with pytest.raises(errors.OrderError, match="made by subsystem .B. and by .C."):
         Network([("A", ARX(["v"], ["y"], 1, 1, 1)), ("B", s1), ("C", ARX(["u2"], ["v"], 1, 1, 1))])
 
 

@@ -183,7 +183,9 @@ def load_data(
 
 def print_json(doc: Any) -> None:
     """One JSON document on standard output (no markup, no wrapping)."""
-    sys.stdout.write(json.dumps(doc, indent=2, allow_nan=False) + "\n")
+    from blockid.data.io import json_safe
+
+    sys.stdout.write(json.dumps(json_safe(doc), indent=2, allow_nan=False) + "\n")
     sys.stdout.flush()
 
 

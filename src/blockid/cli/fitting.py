@@ -119,6 +119,8 @@ def fit(
         print_json(model_document(result.model, record))
         return
     print_model(result.model)
+    for note in result.settings.get("warnings", []):
+        stderr.print(f"warning: {note}", markup=False)
     label = "one-step prediction" if result.metrics_mode == "one-step" else "free-run simulation"
     stdout.print(
         metrics_table(
@@ -175,10 +177,11 @@ def compare(
     free-run simulation and of one-step prediction on the validation range. Each
     structure takes the estimator options it uses and leaves the others.
     """
-    from blockid.data import parse_range
+    from blockid.data import check_disjoint, parse_range
     from blockid.workflows import compare_structures
 
     refuse_to_overwrite(report, force)
+    check_disjoint(estimation, validation)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
     est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
     val = data.select(*parse_range(validation, "--validation"), what="--validation")

@@ -121,7 +121,9 @@ def identify(
             data_paths, inputs, outputs, ts, time_column, experiment_column, validation,
             "--validation",
         )  # fmt: skip
-        _refuse_overlap(estimation, validation)
+        from blockid.data import check_disjoint
+
+        check_disjoint(estimation or ":", validation)
     elif validation_data:
         val = load_data(validation_data, inputs, outputs, ts, time_column, experiment_column)
     names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
@@ -154,21 +156,6 @@ def identify(
     _print(result)
     if out is not None:
         stdout.print(f"model written to {out}")
-
-
-def _refuse_overlap(estimation: str | None, validation: str) -> None:
-    from blockid.data import parse_range
-    from blockid.errors import ParameterError
-
-    e0, e1 = parse_range(estimation or ":", "--estimation")
-    v0, v1 = parse_range(validation, "--validation")
-    e1 = float("inf") if e1 is None else e1
-    v1 = float("inf") if v1 is None else v1
-    if max(e0 or 0, v0 or 0) < min(e1, v1):
-        raise ParameterError(
-            f"--estimation {estimation or ':'} and --validation {validation} overlap: the "
-            "model would be scored on data it was fitted on; give disjoint ranges"
-        )
 
 
 def _print(result: Any) -> None:

@@ -15,6 +15,7 @@ error has been found.
 from __future__ import annotations
 
 import difflib
+import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -838,12 +839,63 @@ def _frame_to_dataset(
                 )
         else:
             dt = inferred
+    elif dt is not None:
+        _check_unused_time_column(df, dt, groups, ins + outs, experiment_column, where)
 
     experiments = [
         Experiment(label, u[rows[0] : rows[-1] + 1], y[rows[0] : rows[-1] + 1])
         for label, rows in groups
     ]
     return Dataset(ins, outs, dt, experiments, source)
+
+
+#: Column names that look like sample times: ``t``, ``time``, ``Time [s]``, ``t_s``...
+_TIME_NAME = re.compile(r"^(t|time)([\s_\-\[(.].*)?$", re.IGNORECASE)
+
+
+def _time_like(names: Iterable[str]) -> list[str]:
+    """The names among ``names`` that look like a time column."""
+    return [n for n in names if _TIME_NAME.match(str(n).strip())]
+
+
+def _check_unused_time_column(
+    df: pd.DataFrame,
+    dt: float,
+    groups: Sequence[tuple[str, np.ndarray]],
+    signals: Sequence[str],
+    experiment_column: str | None,
+    where: _Where,
+) -> None:
+    """Refuse a given sampling time that a time-like column of the table contradicts.
+
+    Without ``time_column`` the table's time column is not read, so a sampling time
+    that disagrees with it would pass unnoticed. Only a clean column counts: numbers,
+    increasing with a uniform step (1 %) in every experiment.
+    """
+    for name in _time_like(str(c) for c in df.columns):
+        if name in signals or name == experiment_column:
+            continue
+        column = df[name] if name in df.columns else None
+        if not isinstance(column, pd.Series):
+            continue
+        t = pd.to_numeric(column, errors="coerce").to_numpy(dtype=np.float64, na_value=np.nan)
+        if not np.all(np.isfinite(t)):
+            continue
+        steps = [np.diff(t[rows]) for _, rows in groups if rows.size > 1]
+        if not steps:
+            continue
+        all_steps = np.concatenate(steps)
+        step = float(np.median(all_steps))
+        if step <= 0 or np.any(np.abs(all_steps - step) > _TIME_TOLERANCE * step):
+            continue
+        if abs(step - dt) > _TIME_TOLERANCE * dt:
+            raise DataError(
+                f"{where.prefix}sampling_time {_num(dt)} disagrees with {where.label} "
+                f"'{name}', which looks like the sample times and steps by {_num(step)}; "
+                f"give one of the two: time_column='{name}' to take the sampling time from "
+                "it, or the sampling time that matches it",
+                parameter="sampling_time",
+            )
 
 
 def _concat(datasets: Sequence[Dataset], source: str | None = None) -> Dataset:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import math
 import os
 import re
 import secrets
@@ -35,6 +36,7 @@ from blockid.data.dataset import (
     _check_signal_names,
     _concat,
     _frame_to_dataset,
+    _time_like,
     _unknown_name_message,
     _Where,
 )
@@ -42,6 +44,7 @@ from blockid.errors import DataError
 
 __all__ = [
     "READ_SUFFIXES",
+    "json_safe",
     "WRITE_SUFFIXES",
     "read_data",
     "write_table",
@@ -318,8 +321,77 @@ def _read_text(
     if any(issubclass(w.category, pd.errors.ParserWarning) for w in caught):
         _check_extra_fields(sample, delimiter, shown)
     frame.columns = [str(c).strip() for c in frame.columns]
-    _check_columns(list(frame.columns), _needed_columns(options), where)
+    header = [name.strip() for name in next(_records(sample.splitlines(), delimiter), (0, []))[1]]
+    needed = _needed_columns(options)
+    if len(header) == frame.shape[1]:
+        _check_duplicates(header, needed, where)
+        _check_grouped_header(header, frame, needed, shown)
+    _check_columns(list(frame.columns), needed, where)
     return frame, where, f"{shown} has a header but no data rows"
+
+
+def _check_duplicates(header: Sequence[str], needed: Sequence[str], where: _Where) -> None:
+    """Raise if a needed column name appears more than once in the header.
+
+    pandas renames the second ``u`` to ``u.1`` and the first would be used without a
+    word; which one the user meant cannot be guessed.
+    """
+    for wanted in needed:
+        positions = [k + 1 for k, name in enumerate(header) if name == wanted]
+        if len(positions) > 1:
+            raise DataError(
+                f"{where.prefix}{where.label} '{wanted}' appears {len(positions)} times in the "
+                f"header ({where.label}s {_and(positions)}); give every {where.label} a "
+                "unique name"
+            )
+
+
+def _check_grouped_header(
+    header: Sequence[str], frame: pd.DataFrame, needed: Sequence[str], shown: str
+) -> None:
+    """Raise if a needed column heads a group of unnamed columns that hold data.
+
+    Some files name groups of columns (``"r",,,,"u",,,,"y",,,`` : one name over the
+    columns of several periods or experiments); read column by column, only the first
+    of each group would be used and the others dropped without a word.
+    """
+    groups = []
+    for wanted in needed:
+        if wanted not in header:
+            continue
+        first = header.index(wanted)
+        last = first
+        while (
+            last + 1 < len(header)
+            and not header[last + 1]
+            and frame.iloc[:, last + 1].notna().any()
+        ):
+            last += 1
+        if last > first:
+            groups.append((wanted, first + 1, last + 1))
+    if not groups:
+        return
+    unnamed = sum(last - first for _, first, last in groups)
+    where = "; ".join(
+        f"'{name}' (column {first}) is followed by {last - first} columns without a name "
+        f"({_span(first + 1, last)})"
+        for name, first, last in groups
+    )
+    raise DataError(
+        f"{shown} has a grouped header: {where}. Each name seems to stand over a group of "
+        f"columns (e.g. one per period or experiment), and only the first column of each "
+        f"group would be read, dropping {unnamed} unnamed columns that hold data. Give every "
+        "column its own name in the header line (e.g. u1,u2,...), or read the file yourself "
+        "and build the data with Dataset.from_frame (one experiment per column group)"
+    )
+
+
+def _and(numbers: Sequence[int]) -> str:
+    return ", ".join(map(str, numbers[:-1])) + f" and {numbers[-1]}"
+
+
+def _span(first: int, last: int) -> str:
+    return f"column {first}" if first == last else f"columns {first} to {last}"
 
 
 # .parquet ----------------------------------------------------------------------------
@@ -336,7 +408,11 @@ def _read_parquet(
         raise DataError(f"{shown} is not a readable Parquet file ({exc})") from None
     available = [n for n in schema.names if not n.startswith("__index_level_")]
     needed = _needed_columns(options)
+    _check_duplicates(available, needed, where)
     _check_columns(available, needed, where)
+    if options["sampling_time"] is not None and options["time_column"] is None:
+        # read a time-like column too, so that a contradicting sampling time is caught
+        needed += [n for n in _time_like(available) if n not in needed and available.count(n) == 1]
     try:
         frame = pq.read_table(path, columns=needed).to_pandas()
     except (pa.ArrowException, OSError) as exc:
@@ -507,3 +583,25 @@ def _atomic_write(target: Path, overwrite: bool, write: Callable[[IO[bytes]], An
         except OSError:
             pass
     return target
+
+
+def json_safe(value: Any) -> Any:
+    """A copy of a JSON-ready document with every NaN or infinite float as ``None``.
+
+    JSON has no NaN or infinity (``json.dumps(..., allow_nan=False)`` refuses them);
+    an undefined number (the fit percent of a constant output) is written as
+    ``null`` instead. Dictionaries, lists and tuples
+    are copied; NumPy scalars become Python numbers.
+
+    >>> json_safe({"fit_percent": {"y": float("nan")}, "mse": [1.0, float("inf")]})
+    {'fit_percent': {'y': None}, 'mse': [1.0, None]}
+    """
+    if isinstance(value, Mapping):
+        return {k: json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

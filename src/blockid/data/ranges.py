@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from blockid.errors import ParameterError
 
-__all__ = ["parse_range"]
+__all__ = ["check_disjoint", "parse_range"]
+
+Range = tuple[int, int | None]
 
 
 def parse_range(text: str, what: str) -> tuple[int, int | None]:
@@ -66,3 +68,54 @@ def parse_range(text: str, what: str) -> tuple[int, int | None]:
     if stop is not None and stop <= start:
         raise ParameterError(f"{form}; {text!r} is empty (STOP must be larger than START)")
     return start, stop
+
+
+def check_disjoint(
+    estimation: str | Range,
+    validation: str | Range,
+    names: tuple[str, str] = ("--estimation", "--validation"),
+) -> None:
+    """Refuse estimation and validation ranges that share samples.
+
+    A model scored on samples it was fitted on looks better than it is. The ranges
+    apply to every experiment alike (:meth:`blockid.data.Dataset.select`), so two
+    ranges overlap when their index intervals do.
+
+    Parameters
+    ----------
+    estimation, validation : str or (start, stop)
+        Ranges as typed (``"0:1000"``, ``"1000:"``) or as :func:`parse_range` returns.
+    names : (str, str)
+        How the two ranges are named in the message (their options).
+
+    Raises
+    ------
+    ParameterError
+        If the ranges overlap; the message names both and the shared samples.
+
+    Examples
+    --------
+    >>> check_disjoint("0:1000", "1000:")
+    >>> check_disjoint("0:1000", "900:2000")
+    Traceback (most recent call last):
+    ...
+    blockid.errors.ParameterError: --estimation 0:1000 and --validation 900:2000 overlap (samples 900:1000 are in both): the model would be scored on data it was fitted on; give disjoint ranges
+    """  # noqa: E501
+    (e0, e1), (v0, v1) = (
+        parse_range(r, name) if isinstance(r, str) else r
+        for r, name in zip((estimation, validation), names, strict=True)
+    )
+    end = float("inf")
+    lo = max(e0, v0)
+    hi = min(end if e1 is None else e1, end if v1 is None else v1)
+    if lo < hi:
+        shared = f"{lo}:{'' if hi == end else int(hi)}"
+        raise ParameterError(
+            f"{names[0]} {_text(e0, e1)} and {names[1]} {_text(v0, v1)} overlap (samples "
+            f"{shared} are in both): the model would be scored on data it was fitted on; "
+            "give disjoint ranges"
+        )
+
+
+def _text(start: int, stop: int | None) -> str:
+    return f"{start}:{'' if stop is None else stop}"

@@ -85,20 +85,24 @@ class BatchLeastSquares(RegressionEstimator):
         self._one_d = one_d
         self.n_samples_seen_ = seen + Phi.shape[0]
         if self.n_samples_seen_ >= n:  # fewer rows than parameters: wait for more chunks
-            self._solve(n)
+            self._solve(n, Phi)
         return self
 
-    def _solve(self, n: int) -> None:
+    def _solve(self, n: int, Phi: np.ndarray) -> None:
         R11, R12, R22 = self._R[:n, :n], self._R[:n, n:], self._R[n:, n:]
         d = np.abs(np.diag(R11))
         scale = d.max() if d.size and d.max() > 0 else 1.0
         weak = np.flatnonzero(d <= self.rcond * scale)
         if weak.size:
-            raise EstimationError(
-                f"least squares is rank deficient: regressor column(s) {weak.tolist()} are "
+            constant = [int(j) for j in weak if np.ptp(Phi[:, j]) == 0.0]
+            note = f" (constant over the last rows given: {constant})" if constant else ""
+            exc = EstimationError(
+                f"least squares is rank deficient: regressor column(s) {weak.tolist()}{note} are "
                 f"(nearly) linear combinations of the others over {self.n_samples_seen_} samples; "
                 "the data do not excite the model enough, or the orders are too high"
             )
+            exc.columns = weak.tolist()  # for callers that can name the columns
+            raise exc
         self._theta = solve_triangular(R11, R12)
         Rinv = solve_triangular(R11, np.eye(n))
         self.covariance_ = Rinv @ Rinv.T

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from blockid.data.io import json_safe
 from blockid.errors import DataError
 
 __all__ = [
@@ -127,8 +128,9 @@ def metrics_by_output(
 def undefined_notes(metrics: Mapping[str, Mapping[str, float]]) -> list[str]:
     """One note per metric and output that is undefined (NaN) in ``metrics``.
 
-    >>> undefined_notes({"fit_percent": {"y": float("nan")}, "mse": {"y": 0.1}})
-    ["fit_percent of output 'y' is undefined (null): the output is constant over the scored samples"]
+    >>> for note in undefined_notes({"fit_percent": {"y": float("nan")}, "mse": {"y": 0.1}}):
+    ...     print(note.split(":")[0])
+    fit_percent of output 'y' is undefined (null)
     """
     notes = []
     for name, values in metrics.items():
@@ -141,24 +143,3 @@ def undefined_notes(metrics: Mapping[str, Mapping[str, float]]) -> list[str]:
                 )
                 notes.append(f"{name} of output {output!r} is undefined (null): {why}")
     return notes
-
-
-def json_safe(value: Any) -> Any:
-    """A copy of a JSON-ready document with every NaN or infinite float as ``None``.
-
-    JSON has no NaN or infinity (``json.dumps(..., allow_nan=False)`` refuses them);
-    an undefined metric is written as ``null`` instead. Dictionaries, lists and tuples
-    are copied; NumPy scalars become Python numbers.
-
-    >>> json_safe({"fit_percent": {"y": float("nan")}, "mse": [1.0, float("inf")]})
-    {'fit_percent': {'y': None}, 'mse': [1.0, None]}
-    """
-    if isinstance(value, Mapping):
-        return {k: json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [json_safe(v) for v in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value

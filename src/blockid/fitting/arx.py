@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset
-from blockid.errors import EstimationError, ParameterError
+from blockid.errors import EstimationError, OrderError, ParameterError
 from blockid.estimators import (
     AdaptiveWeightedRLS,
     BatchLeastSquares,
@@ -116,30 +116,112 @@ def regressor_scale(model: ARX, i: int, scaling: Any, Phi: np.ndarray | None = N
     return np.concatenate(parts) if parts else np.zeros(0)
 
 
-def _advice(method: str) -> str:
+def _advice(method: str, schedule: ForgettingSchedule, passes: int) -> str:
+    """What to try after a recursion that did not converge, given what was used."""
+    more = f"more passes (passes={passes} was used)"
     if method == "hierarchical-rls":
+        if schedule.is_constant_one:
+            return (
+                f"H-RLS needs a forgetting factor below 1 (e.g. 0.98) and possibly {more}, "
+                "see docs/convergence.md; or use method batch or rls"
+            )
         return (
-            "H-RLS needs a forgetting factor below 1 (e.g. 0.98) and possibly more passes, "
-            "see docs/convergence.md; or use method batch or rls"
+            f"forgetting {schedule} was used: try {more}, a factor closer to 1 (e.g. 0.995) "
+            "so that the estimate settles, see docs/convergence.md; or use method batch or rls"
         )
-    return "use more data or more passes, forgetting 1 (no forgetting), or method batch"
+    if schedule.is_constant_one:
+        return f"use more data or {more}, or method batch"
+    return (
+        f"use more data or {more}, forgetting 1 (forgetting {schedule} was used), or method batch"
+    )
+
+
+#: Relative to the variance of the output, a one-step MSE below this floor counts as
+#: converged whatever the least-squares optimum is: on noise-free data the optimum is
+#: rounding noise (1e-31) that no recursion with forgetting reaches, and a recursive
+#: estimate that predicts to 1e-8 of the output's variance is as good as it.
+CONVERGENCE_FLOOR = 1e-8
 
 
 def _check_converged(
-    Phi: np.ndarray, target: np.ndarray, theta: np.ndarray, method: str, name: str, ratio: float
+    Phi: np.ndarray,
+    target: np.ndarray,
+    theta: np.ndarray,
+    method: str,
+    name: str,
+    ratio: float,
+    advice: str,
 ) -> None:
-    """Raise when a recursive estimate is far from the least-squares optimum."""
+    """Raise when a recursive estimate is far from the least-squares optimum.
+
+    The estimate passes when its one-step MSE is at most ``ratio`` times the optimum
+    plus :data:`CONVERGENCE_FLOOR` times the variance of the output.
+    """
     best = BatchLeastSquares().fit(Phi, target).coef_
     mse_best = float(np.mean((target - Phi @ best) ** 2))
     mse = float(np.mean((target - Phi @ theta) ** 2))
-    floor = 1e-12 * float(np.var(target)) + 1e-300
+    floor = CONVERGENCE_FLOOR * float(np.var(target)) + 1e-300
     if mse > ratio * mse_best + floor:
         raise EstimationError(
             f"output {name!r}: {method} did not converge: its one-step MSE on the estimation "
             f"data, {mse:.4g}, is {mse / max(mse_best, floor):.3g} times the least-squares "
-            f"optimum {mse_best:.4g}. {_advice(method)}; for a plant that really varies in "
-            "time, switch this check off (convergence_check=False)"
+            f"optimum {mse_best:.4g} (and above {CONVERGENCE_FLOOR:g} of the output's "
+            f"variance). {advice}; for a plant that really varies in time, switch this check "
+            "off (convergence_check=False)"
         )
+
+
+def _check_inputs_used(model: ARX) -> None:
+    """Refuse an output that no input drives (``nb`` 0 for every input)."""
+    for i, name in enumerate(model.outputs):
+        if not model.nb[i].any():
+            inputs = ", ".join(repr(u) for u in model.inputs)
+            raise OrderError(
+                f"nb is 0 for every input of output {name!r} ({inputs}): the model would "
+                "not use any input (a pure autoregression that free-run simulation cannot "
+                "drive); give nb >= 1, the number of coefficients of an input"
+                + (", for at least one input" if len(model.inputs) > 1 else ""),
+                parameter="nb",
+            )
+
+
+def _rank_deficient(exc: EstimationError, model: ARX, i: int, data: Dataset) -> EstimationError:
+    """The least-squares rank error of output ``i`` with its regressors named by signal
+    and lag, and the signals that are constant over the data."""
+    columns = getattr(exc, "columns", None) or []
+    yi = model.outputs[i]
+    lags = [(yj, k) for j, yj in enumerate(model.outputs) for k in range(1, model.na[i, j] + 1)]
+    lags += [
+        (um, int(model.nk[i, m]) + k)
+        for m, um in enumerate(model.inputs)
+        for k in range(model.nb[i, m])
+    ]  # the columns of ARX.regressors, in order
+    shown = ", ".join(f"{lags[k][0]} at lag {lags[k][1]}" for k in columns if k < len(lags))
+    shown = shown or "some regressors"
+    constant = []
+    for kind, signals, orders in (
+        ("input", model.inputs, model.nb[i]),
+        ("output", model.outputs, model.na[i]),
+    ):
+        for j, signal in enumerate(signals):
+            if orders[j] == 0:
+                continue
+            values = np.concatenate(data.signal(signal))
+            if np.ptp(values) == 0.0:
+                constant.append(
+                    f"{kind} {signal!r} is constant over the estimation data "
+                    f"({values[0]:.6g} at every sample)"
+                )
+    why = (
+        "; ".join(constant) + ": a constant signal tells nothing about the dynamics and its "
+        "lags repeat one another; use data in which it varies"
+        if constant
+        else "the data do not excite the model enough, or the orders are too high"
+    )
+    return EstimationError(
+        f"output {yi!r}: least squares is rank deficient: the regressors {shown} are "
+        f"(nearly) linear combinations of the others; {why}"
+    )
 
 
 def fit_arx(
@@ -218,6 +300,7 @@ def fit_arx(
         input_offset=u_off,
         output_offset=y_off,
     )
+    _check_inputs_used(model)
     n_par_max = max(model.n_parameters(i) for i in range(len(model.outputs)))
     data.check_orders(model.max_lag, n_par_max, what="ARX orders")
     settings: dict[str, Any] = {
@@ -250,7 +333,10 @@ def fit_arx(
             groups=model.hierarchical_groups(i),
         )
         if method == "batch":
-            theta = est.fit(Phi, target).coef_
+            try:
+                theta = est.fit(Phi, target).coef_
+            except EstimationError as exc:
+                raise _rank_deficient(exc, model, i, data) from None
         else:
             scale = regressor_scale(model, i, scaling, Phi)
             try:
@@ -264,7 +350,20 @@ def fit_arx(
                 raise EstimationError(f"output {name!r}: {exc}") from None
             theta = est.coef_ / scale
             if max_mse_ratio is not None:
-                _check_converged(Phi, target, theta, method, name, max_mse_ratio)
+                try:
+                    _check_converged(
+                        Phi,
+                        target,
+                        theta,
+                        method,
+                        name,
+                        max_mse_ratio,
+                        _advice(method, schedule, int(passes)),
+                    )
+                except EstimationError as exc:
+                    if getattr(exc, "columns", None) is None:
+                        raise
+                    raise _rank_deficient(exc, model, i, data) from None
         if not np.all(np.isfinite(theta)):
             raise EstimationError(f"output {name!r}: the {method} estimate is not finite")
         model.set_parameter_vector(i, theta)

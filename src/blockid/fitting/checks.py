@@ -13,6 +13,12 @@ data; blockid reports that instead of handing out a bad model. A model is accept
   least squares (at most ``max_mse_ratio`` = 1.1 times its MSE). A block-oriented model
   contains the linear one; if it simulates worse, the estimator failed (e.g. AW-RLS
   stalled on a wrong backlash that still beat a linear model by a margin).
+
+One more look does not reject the model but warns (:func:`linear_block_notes`): a
+static block that is affine to within ``LINEARITY_TOLERANCE`` of its output spread over
+the estimation data makes the block-oriented model a linear one in disguise (a
+Hammerstein fit that stayed at its ARX start, input-block coefficients ~1e-19). The
+notes belong in the result's ``settings["warnings"]``.
 """
 
 from __future__ import annotations
@@ -27,10 +33,20 @@ from blockid.estimators import BatchLeastSquares
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.models.arx import ARX
 
-__all__ = ["STABILITY_MARGIN", "simulation_mse", "linear_baseline", "check_model"]
+__all__ = [
+    "LINEARITY_TOLERANCE",
+    "STABILITY_MARGIN",
+    "simulation_mse",
+    "linear_baseline",
+    "check_model",
+    "linear_block_notes",
+]
 
 #: Poles must lie inside the circle of radius ``1 - STABILITY_MARGIN``.
 STABILITY_MARGIN = 1e-3
+#: A static block whose largest deviation from its best affine fit over the estimation
+#: data is below this fraction of its output spread counts as linear.
+LINEARITY_TOLERANCE = 1e-6
 
 
 def simulation_mse(model: Any, data: Dataset) -> float:
@@ -120,3 +136,57 @@ def check_model(
         [model.simulate(e.u, e.y[: model.max_lag])[model.max_lag :] for e in data.experiments]
     )
     return metrics_by_output(y, y_sim, data.outputs)
+
+
+def linear_block_notes(model: Any, data: Dataset) -> list[str]:
+    """Warnings for the static blocks of a chain that are linear over ``data``.
+
+    Each static block is evaluated on the signal that enters it over every experiment
+    (simulated from rest, as :meth:`~blockid.models.block.ChainModel.block_inputs`
+    gives it); when the largest deviation of its output from the best affine fit is
+    below :data:`LINEARITY_TOLERANCE` times the output spread, the model behaves as
+    a linear one on these data. Models without blocks (ARX, networks) give none.
+
+    Returns
+    -------
+    list of str
+        One note per such block, meant for ``settings["warnings"]``.
+    """
+    blocks = getattr(model, "blocks", ())
+    if not blocks:
+        return []
+    static = [i for i, block in enumerate(blocks) if block.role == "static"]
+    if not static:
+        return []
+    inputs: dict[int, list[np.ndarray]] = {i: [] for i in static}
+    for e in data.experiments:
+        entering = model.block_inputs(e.u)
+        for i in static:
+            inputs[i].append(entering[i])
+    notes = []
+    for i in static:
+        s = np.concatenate(inputs[i])
+        out = blocks[i].run(s)
+        if not (np.all(np.isfinite(s)) and np.all(np.isfinite(out))):
+            continue
+        spread = float(np.ptp(out))
+        design = np.column_stack([np.ones_like(s), s])
+        coef = np.linalg.lstsq(design, out, rcond=None)[0]
+        deviation = float(np.max(np.abs(out - design @ coef)))
+        if deviation > LINEARITY_TOLERANCE * spread:
+            continue
+        where = (
+            "input block"
+            if i == 0
+            else "output block"
+            if i == len(blocks) - 1
+            else f"block {i + 1}"
+        )
+        notes.append(
+            f"the {where} ({blocks[i].kind}) is linear over the estimation data (largest "
+            f"deviation from a straight line {deviation:.3g}, output spread {spread:.3g}): "
+            f"the {model.structure} model behaves as a linear one here, e.g. a fit that "
+            "stayed at its linear start. Compare with a linear model (structure arx or "
+            "output-error), or use data that show the nonlinearity"
+        )
+    return notes

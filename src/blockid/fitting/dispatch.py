@@ -109,6 +109,12 @@ def fit_model(
         if not result.model.ranges:  # the one place ranges are recorded for every method
             model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
             result = replace(result, model=model)
+    from blockid.fitting.checks import linear_block_notes
+
+    notes = linear_block_notes(result.model, data)
+    if notes:
+        warnings = [*result.settings.get("warnings", []), *notes]
+        result = replace(result, settings={**result.settings, "warnings": warnings})
     if uncertainty:
         from blockid.evaluation.uncertainty import with_standard_errors
 

@@ -48,11 +48,11 @@ __all__ = ["Candidate", "Score", "IdentifyResult", "identify", "DEFAULT_SEARCH"]
 DEFAULT_SEARCH = (
     "arx",
     "output-error",
+    "feedback",
     "hammerstein",
     "wiener",
     "hammerstein-wiener",
     "wiener-hammerstein",
-    "feedback",
     "backlash",
 )
 
@@ -319,46 +319,26 @@ def _screen(data: Dataset, samples: int) -> Dataset:
     return Dataset(data.inputs, data.outputs, data.sampling_time, exps, data.source)
 
 
-#: The search's plans per structure, most telling first: a structure's first plan is tried
-#: for every structure before any second plan, so that a short budget still sees every
-#: structure once. Delays are raised to 1 where the structure needs one.
-_PLANS: dict[str, list[dict[str, Any]]] = {
-    "output-error": [{}],
-    "feedback": [{"r": 3}],
-    "hammerstein": [
-        {"input_block": "polynomial:degree=3", "center": True},
-        {"input_block": "piecewise-linear:knots=7", "center": True},
-        {"r1": 3, "center": False},
-        {"r1": 3, "center": True},
-    ],
-    "wiener": [{"r2": 3}],
-    "hammerstein-wiener": [{"r1": 3, "r2": 3, "center": False}],
-    "wiener-hammerstein": [{"r2": 5}],
-    "backlash": [{}],
-}
-#: Structures whose fit needs a delay of at least one sample.
-_NEEDS_DELAY = ("feedback", "backlash")
-
-
 def _nonlinear_candidates(
     structures: Sequence[str], orders: list[tuple[int, int, int]], nfev: int
 ) -> list[Candidate]:
+    """The structures' search plans (``Structure.search`` in the registry) on every order
+    set: each structure's first plan before any second one, so that a short budget still
+    sees every structure once."""
     fast = {"max_nfev": nfev, "tail_fraction": 0.0}
     out: list[Candidate] = []
-    usable = [s for s in structures if s in STRUCTURES and STRUCTURES[s].block_oriented]
-    rounds = max((len(_PLANS.get(s, [{}])) for s in usable), default=0)
+    usable = [STRUCTURES[s] for s in structures if s in STRUCTURES]
+    usable = [d for d in usable if d.block_oriented]
+    rounds = max((len(d.search) for d in usable), default=0)
     for na, nb, nk in orders:
         for r in range(rounds):
-            for structure in usable:
-                plans = _PLANS.get(structure, [{}])
-                if r >= len(plans):
+            for decl in usable:
+                if r >= len(decl.search):
                     continue
-                o = {"na": na, "nb": nb, "nk": max(nk, 1) if structure in _NEEDS_DELAY else nk}
-                if structure == "wiener-hammerstein":  # the BLA of a chain: proper, nb = na + 1
-                    o["nb"] = na + 1
-                accepted = STRUCTURES[structure].accepted(None)
-                opts = {k: v for k, v in {**o, **plans[r], **fast}.items() if k in accepted}
-                out.append(Candidate(structure, opts))
+                o = {"na": na, "nb": na + 1 if decl.proper else nb, "nk": max(nk, decl.min_delay)}
+                accepted = decl.accepted(None)
+                opts = {k: v for k, v in {**o, **decl.search[r], **fast}.items() if k in accepted}
+                out.append(Candidate(decl.name, opts))
     unique, seen = [], set()
     for c in out:
         key = (c.structure, tuple(sorted(c.options.items())))

@@ -78,6 +78,9 @@ def network_signals(specs: list[SubsystemSpec]) -> tuple[list[str], list[str]]:
     >>> network_signals(specs)
     (['u1', 'u2'], ['v1', 'y'])
     """
+    from blockid.models.network import check_wiring
+
+    check_wiring([(spec.name, spec.inputs, spec.outputs) for spec in specs])
     outputs: list[str] = []
     for spec in specs:
         outputs += [o for o in spec.outputs if o not in outputs]

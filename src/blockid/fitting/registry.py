@@ -398,6 +398,13 @@ class Structure:
     #: Fit around the operating point unless told otherwise.
     center_default: bool = False
     block_oriented: bool = True
+    #: What :func:`~blockid.fitting.identify.identify` tries of this structure: option
+    #: sets added to the linear orders, most telling first.
+    search: tuple[dict[str, Any], ...] = ({},)
+    #: Smallest input delay the structure's fit takes (a loop needs one sample).
+    min_delay: int = 0
+    #: The search gives the structure ``nb = na + 1`` (a proper BLA of a chain).
+    proper: bool = False
     method_names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -506,6 +513,12 @@ STRUCTURES: dict[str, Structure] = {
             "static input block, then a linear block (N1-L)",
             _block_methods(("r1", "input_block"), _key_term(("r1",))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
+            search=(
+                {"input_block": "polynomial:degree=3", "center": True},
+                {"input_block": "piecewise-linear:knots=7", "center": True},
+                {"r1": 3, "center": False},
+                {"r1": 3, "center": True},
+            ),
         ),
         Structure(
             "wiener",
@@ -514,6 +527,7 @@ STRUCTURES: dict[str, Structure] = {
             _block_methods(("r2", "output_block"), _key_term(("r2",))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
             center_default=True,
+            search=({"r2": 3},),
         ),
         Structure(
             "hammerstein-wiener",
@@ -521,6 +535,7 @@ STRUCTURES: dict[str, Structure] = {
             "input block, linear block, output block (N1-L-N2, paper B)",
             _block_methods(("r1", "r2", "input_block", "output_block"), _key_term(("r1", "r2"))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
+            search=({"r1": 3, "r2": 3, "center": False},),
         ),
         Structure(
             "backlash",
@@ -537,6 +552,7 @@ STRUCTURES: dict[str, Structure] = {
                 ),
             ),
             common=_ORDERS + ("center", "refine", "standard_errors"),
+            min_delay=1,
         ),
         Structure(
             "output-error",
@@ -569,6 +585,8 @@ STRUCTURES: dict[str, Structure] = {
             ),
             common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
+            search=({"r2": 5},),
+            proper=True,
         ),
         Structure(
             "feedback",
@@ -585,6 +603,8 @@ STRUCTURES: dict[str, Structure] = {
             ),
             common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
+            search=({"r": 3},),
+            min_delay=1,
         ),
     )
 }

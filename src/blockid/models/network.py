@@ -26,7 +26,75 @@ import numpy as np
 from blockid.errors import ModelFileError, OrderError
 from blockid.models.base import Model, model_from_dict
 
-__all__ = ["Network"]
+__all__ = ["Network", "check_wiring"]
+
+
+def check_wiring(connections: Sequence[tuple[str, Sequence[str], Sequence[str]]]) -> None:
+    """Refuse wiring a network cannot simulate: a cycle, or a signal made twice.
+
+    Parameters
+    ----------
+    connections : sequence of (name, inputs, outputs)
+        Each subsystem's name and the signals it reads and makes.
+
+    Raises
+    ------
+    OrderError
+        Naming the cycle (``'S1' -> v1 -> 'S2' -> v2 -> 'S1'``): every signal in it is
+        made inside the network, so none is an external input and the loop has no
+        start; or naming a signal two subsystems make.
+
+    Examples
+    --------
+    >>> check_wiring([("S1", ["u"], ["v"]), ("S2", ["v"], ["y"])])
+    >>> try:
+    ...     check_wiring([("S1", ["v2"], ["v1"]), ("S2", ["v1"], ["v2"])])
+    ... except OrderError as exc:
+    ...     print(str(exc).split(";")[0])
+    the subsystems form a cycle: 'S1' -> v1 -> 'S2' -> v2 -> 'S1'
+    """
+    maker: dict[str, str] = {}
+    for name, _, outputs in connections:
+        for sig in outputs:
+            if sig in maker:
+                raise OrderError(
+                    f"signal {sig!r} is made by subsystem {maker[sig]!r} and by {name!r}; "
+                    "each signal must come from one subsystem"
+                )
+            maker[sig] = name
+    reads = {name: list(inputs) for name, inputs, _ in connections}
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+
+    def visit(name: str, path: list[tuple[str, str]]) -> None:
+        state[name] = 1
+        for sig in reads[name]:
+            up = maker.get(sig)
+            if up is None or state.get(up) == 2:
+                continue
+            if state.get(up) == 1:  # back to a subsystem on the path: a cycle
+                loop = path[[n for n, _ in path].index(up) :] if up != name else []
+                steps = [*loop, (name, sig)] if up != name else [(name, sig)]
+                text = " -> ".join(f"{n!r} -> {s}" for n, s in _downstream(steps))
+                raise OrderError(
+                    f"the subsystems form a cycle: {text} -> {up!r}; every signal in it is "
+                    "made inside the network, so the loop has no external input to start "
+                    "from. Feed one of them from outside (a measured input), or model the "
+                    "loop inside one subsystem"
+                )
+            visit(up, [*path, (name, sig)])
+        state[name] = 2
+
+    for name, _, _ in connections:
+        if name not in state:
+            visit(name, [])
+
+
+def _downstream(steps: list[tuple[str, str]]) -> list[tuple[str, str]]:
+    """A cycle found walking upstream (``(reader, signal read)`` pairs), written in the
+    direction the signals flow: ``(maker, signal made)`` pairs."""
+    reversed_steps = steps[::-1]
+    makers = [reversed_steps[-1][0], *[n for n, _ in reversed_steps[:-1]]]
+    return [(m, sig) for m, (_, sig) in zip(makers, reversed_steps, strict=True)]
 
 
 class Network(Model):
@@ -59,6 +127,7 @@ class Network(Model):
         names = [n for n, _ in self.subsystems]
         if len(set(names)) != len(names):
             raise OrderError(f"subsystem names must be unique; got {names}")
+        check_wiring([(n, m.inputs, m.outputs) for n, m in self.subsystems])
         produced: list[str] = []
         external: list[str] = []
         for name, model in self.subsystems:

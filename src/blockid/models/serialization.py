@@ -20,6 +20,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from blockid.data.io import json_safe
 from blockid.errors import ModelFileError
 from blockid.models.base import Model, model_from_dict
 
@@ -39,8 +40,6 @@ VERSION = 1
 
 def model_document(model: Model, estimation: dict[str, Any] | None = None) -> dict[str, Any]:
     """The JSON document of a model file (also what ``blockid fit --json`` prints)."""
-    from blockid.evaluation.metrics import json_safe
-
     doc: dict[str, Any] = {"format": FORMAT, "version": VERSION, "model": model.to_dict()}
     if estimation:
         doc["estimation"] = json_safe(estimation)
@@ -66,10 +65,11 @@ def check_finite(description: Any, source: str = "the model") -> None:
     A NaN parameter would otherwise show up only when the model runs, as a simulation
     that "diverged on these data", blaming the data for the model file.
 
-    >>> check_finite({"parameters": {"a": [0.5, float("nan")]}}, "m.json")
-    Traceback (most recent call last):
-    ...
-    blockid.errors.ModelFileError: m.json has a non-finite parameter: parameters.a[1] is nan; ...
+    >>> try:
+    ...     check_finite({"parameters": {"a": [0.5, float("nan")]}}, "m.json")
+    ... except ModelFileError as exc:
+    ...     print(str(exc).split(";")[0])
+    m.json has a non-finite parameter: parameters.a[1] is nan
     """
     for path, value in _non_finite(description, ""):
         raise ModelFileError(

@@ -20,8 +20,6 @@ __all__ = [
     "failed_fit_figures",
 ]
 
-_MODE_TITLE = {"simulation": "free-run simulation", "one-step": "one-step prediction"}
-
 
 def _figure(n_rows: int, width: float = 9.0, height: float = 2.6) -> tuple[Any, Any]:
     import matplotlib.pyplot as plt
@@ -31,30 +29,50 @@ def _figure(n_rows: int, width: float = 9.0, height: float = 2.6) -> tuple[Any, 
 
 
 def plot_model_output(
-    output: Any, *, experiment: int = 0, data_label: str = "data", max_samples: int = 4000
+    output: Any,
+    *,
+    experiment: int | None = None,
+    data_label: str = "data",
+    max_samples: int | None = None,
 ) -> Any:
-    """Measured output against the model output of one experiment, one panel per output.
+    """Measured output against the model output, one panel per output.
 
-    ``output`` is a :class:`blockid.evaluation.ModelOutput`. Returns the Figure.
+    ``output`` is a :class:`blockid.evaluation.ModelOutput`. By default the whole record
+    is drawn (every experiment, one after another); ``experiment`` picks one, and
+    ``max_samples`` thins a longer record to every k-th sample. The title says what is
+    shown ("all 2200 samples", "every 25th of 5000000 samples"). Returns the Figure.
     """
-    exp = output.data.experiments[experiment]
-    y_hat = output.outputs[experiment]
-    n = min(exp.n_samples, max_samples)
-    ts = output.data.sampling_time
-    t = np.arange(n) * (ts or 1.0)
+    from blockid.plotting.runs import MAX_POINTS, MODE_TITLE, _number, shown_samples
+
+    if experiment is not None:
+        from dataclasses import replace
+
+        data = output.data
+        one = type(data)(
+            data.inputs,
+            data.outputs,
+            data.sampling_time,
+            [data.experiments[experiment]],
+            data.source,
+        )
+        output = replace(output, data=one, outputs=[output.outputs[experiment]])
+    t, y, y_hat, bounds, _, shown = shown_samples(output, max_samples or MAX_POINTS)
     fig, axes = _figure(len(output.data.outputs))
+    mode = MODE_TITLE[output.mode]
     for j, (ax, name) in enumerate(zip(axes, output.data.outputs, strict=True)):
-        ax.plot(t, exp.y[:n, j], color="0.2", lw=1.0, label="measured")
-        ax.plot(t, y_hat[:n, j], color="C1", lw=1.0, label=_MODE_TITLE[output.mode])
-        fit = output.metrics["fit_percent"][name]
-        rmse = output.metrics["rmse"][name]
+        ax.plot(t, y[:, j], color="0.2", lw=1.0, label="measured")
+        ax.plot(t, y_hat[:, j], color="C1", lw=1.0, label=mode)
+        for b in bounds:
+            ax.axvline(b, color="0.6", ls=":", lw=0.8)
+        fit = _number(output.metrics["fit_percent"][name], ".1f")
+        rmse = _number(output.metrics["rmse"][name], ".4g")
         ax.set_ylabel(name)
         ax.set_title(
-            f"{_MODE_TITLE[output.mode]} on {data_label}: fit {fit:.1f} %, RMSE {rmse:.4g}",
+            f"{mode} on {data_label} ({shown}): fit {fit} %, RMSE {rmse}",
             fontsize=9,
         )
         ax.legend(fontsize=8, loc="upper right")
-    axes[-1].set_xlabel("time [s]" if ts else "sample")
+    axes[-1].set_xlabel("time [s]" if output.data.sampling_time else "sample")
     fig.tight_layout()
     return fig
 
@@ -132,7 +150,8 @@ def plot_parameter_history(
 def fit_figures(result: Any, data: Any, folder: str | Path, truth: Any = None) -> list[Path]:
     """Write the figures of a fit to ``folder`` (created if needed); return their paths.
 
-    ``simulation.png``: free-run simulation on the estimation data; ``blocks.png``:
+    ``simulation.png``: free-run simulation on the whole estimation record (the title
+    says how many samples are drawn); ``blocks.png``:
     identified nonlinear blocks (block-oriented models); ``parameters.png``: parameter
     trajectories (recursive methods that recorded them).
     """
