@@ -234,7 +234,11 @@ def _print_electrohydraulic(result: Any) -> None:
         title_justify="left",
     )
     for col in ("model", "estimator", "MSE", "fit %", "best", "paper B MSE"):
-        table.add_column(col, justify="left" if col in ("model", "estimator") else "right")
+        table.add_column(
+            col,
+            justify="left" if col in ("model", "estimator") else "right",
+            no_wrap=col in ("model", "estimator"),
+        )
     for row in result.table:
         best = result.best.get(row["model"], {}).get("estimator") == row["estimator"]
         if "error" in row:
@@ -249,12 +253,17 @@ def _print_electrohydraulic(result: Any) -> None:
             f"{PAPER_MSE[row['model']]:.4f}" if best else "",
         )
     stdout.print(table)
+    stdout.print(
+        "best: * marks the lower MSE of the two estimators of each model. The paper's MSEs "
+        "are of its measured rig (other units, noise and trajectory); ours are of blockid's "
+        "simulated arm, so compare the ordering and the ratios, not the values."
+    )
     if "hammerstein-wiener" in result.best:
         red = result.reductions()
         stdout.print(
-            "best H-W MSE below: "
+            "How much lower the best Hammerstein-Wiener MSE is than each other model's best: "
             + ", ".join(f"{s} {100 * r:.0f} %" for s, r in red.items())
-            + "  (paper B: hammerstein 13 %, wiener 54 %, arx 58 %)"
+            + " (paper B: hammerstein 13 %, wiener 54 %, arx 58 %)"
         )
     for row in result.table:
         if "error" in row:
