@@ -57,7 +57,7 @@ def test_cli_json(tmp_path):
 
 def test_cli_validation_bandwidth(tmp_path):
     def run(value):
-        args = ["reproduce", "electrohydraulic", "--figures", str(tmp_path)]
+        args = ["reproduce", "electrohydraulic", "--plot", str(tmp_path), "--force"]
         return CliRunner().invoke(app, [*args, "--json", "--validation-bandwidth", value])
 
     default = reproduce_electrohydraulic(seed=0)
