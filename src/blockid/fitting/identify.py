@@ -354,7 +354,10 @@ def _grow(winner: Score, search: _Search, data: Dataset, tie: float) -> Score:
     best = winner
     for key in ("r1", "r2", "r"):
         degree = best.candidate.options.get(key)
-        if not isinstance(degree, int) or degree + 2 > 9 or search.left() <= 0:
+        # one fit per degree, tried even when the budget is spent: the search found the
+        # structure, and its nonlinearity may be too poor (a polynomial of the winner's
+        # screening degree)
+        if not isinstance(degree, int) or degree + 2 > 9:
             continue
         opts = {**best.candidate.options, key: degree + 2}
         trial = search.run(Candidate(best.candidate.structure, opts), data, "grow")
@@ -426,7 +429,7 @@ def identify(
         input and one output, otherwise only ARX is searched).
     budget : float, default 600
         Seconds for the search; stages stop starting new candidates when it is spent
-        (the final refit always runs).
+        (the richer-nonlinearity trial of the winner and the final refit always run).
     holdout : float, default 0.25
         Fraction of a single record held out for scoring.
     max_order, max_delay : int
