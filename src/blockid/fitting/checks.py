@@ -153,7 +153,7 @@ def linear_block_notes(model: Any, data: Dataset) -> list[str]:
         One note per such block, meant for ``settings["warnings"]``.
     """
     blocks = getattr(model, "blocks", ())
-    if not blocks:
+    if not blocks or not hasattr(model, "block_inputs"):  # ARX, networks, feedback loops
         return []
     static = [i for i, block in enumerate(blocks) if block.role == "static"]
     if not static:

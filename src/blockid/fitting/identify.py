@@ -482,9 +482,9 @@ def identify(
         try:
             from blockid.fitting.orders import false_nearest_neighbours
 
-            evidence = false_nearest_neighbours(
-                split.fit, max_na=max_order, max_nb=max_order, max_nk=min(max_delay, 10)
-            )
+            # its default grid (na, nb <= 4, nk <= 3): a centre for the search, in seconds;
+            # a grid as wide as the search's costs minutes on long records
+            evidence = false_nearest_neighbours(split.fit)
             recommended = tuple(int(v) for v in evidence.recommended)
         except (BlockidError, ImportError) as exc:
             notes.append(f"orders test skipped: {exc}")
