@@ -14,11 +14,13 @@ from blockid.cli._common import (
     Force,
     Json,
     Seed,
+    busy,
     cli_errors,
     print_json,
     refuse_to_overwrite,
     stdout,
 )
+from blockid.cli._tables import print_electrohydraulic as _print_electrohydraulic
 from blockid.workflows.examples import EXAMPLES
 
 __all__ = ["demo", "example_data", "reproduce_app"]
@@ -81,7 +83,8 @@ def demo(
     from blockid.workflows.demo import run_demo
 
     output_dir = _folder(plot, output_dir, "demo-output", force)
-    result = run_demo(output_dir, seed=seed)
+    with busy("paper B's experiment: simulating the arm, fitting 4 structures 2 ways", json_out):
+        result = run_demo(output_dir, seed=seed)
     if json_out:
         print_json(result.to_dict())
         return
@@ -105,7 +108,8 @@ def reproduce_windtunnel(
     from blockid.workflows.reproduce_windtunnel import PAPER_TABLE, reproduce_windtunnel
 
     figures = _folder(plot, figures, "reproduce-windtunnel", force)
-    result = reproduce_windtunnel(seed=seed, figures_dir=figures)
+    with busy("paper A's experiment: simulating the tunnel, fitting the networks", json_out):
+        result = reproduce_windtunnel(seed=seed, figures_dir=figures)
     if json_out:
         print_json(result.to_dict())
         return
@@ -197,9 +201,8 @@ def reproduce_electrohydraulic(
 
     figures = _folder(plot, figures, "reproduce-electrohydraulic", force)
     bandwidth = _bandwidth(validation_bandwidth)
-    result = reproduce_electrohydraulic(
-        seed=seed, figures_dir=figures, validation_bandwidth=bandwidth
-    )
+    with busy("paper B's experiment: simulating the arm, fitting 4 structures 2 ways", json_out):
+        result = reproduce_electrohydraulic(seed, figures, validation_bandwidth=bandwidth)
     if json_out:
         print_json(result.to_dict())
         return
@@ -219,55 +222,6 @@ def _bandwidth(text: str) -> float | None:
         raise ParameterError(
             f"--validation-bandwidth must be a frequency in Hz or 'none', got {text!r}"
         ) from None
-
-
-def _print_electrohydraulic(result: Any) -> None:
-    from rich.table import Table
-
-    from blockid.workflows.reproduce_electrohydraulic import PAPER_MSE
-
-    band = result.validation_bandwidth
-    table = Table(
-        title="Paper B, Table 2 form: MSE of free-run simulation on the validation trajectory "
-        + ("(step-like command) " if band is None else f"(command low-passed at {band:g} Hz) ")
-        + "[(rad/s)^2]",
-        title_justify="left",
-    )
-    for col in ("model", "estimator", "MSE", "fit %", "best", "paper B MSE"):
-        table.add_column(
-            col,
-            justify="left" if col in ("model", "estimator") else "right",
-            no_wrap=col in ("model", "estimator"),
-        )
-    for row in result.table:
-        best = result.best.get(row["model"], {}).get("estimator") == row["estimator"]
-        if "error" in row:
-            table.add_row(row["model"], row["estimator"], "failed", "", "", "")
-            continue
-        table.add_row(
-            row["model"],
-            row["estimator"],
-            f"{row['mse']['velocity']:.4g}",
-            f"{row['fit_percent']['velocity']:.1f}",
-            "*" if best else "",
-            f"{PAPER_MSE[row['model']]:.4f}" if best else "",
-        )
-    stdout.print(table)
-    stdout.print(
-        "best: * marks the lower MSE of the two estimators of each model. The paper's MSEs "
-        "are of its measured rig (other units, noise and trajectory); ours are of blockid's "
-        "simulated arm, so compare the ordering and the ratios, not the values."
-    )
-    if "hammerstein-wiener" in result.best:
-        red = result.reductions()
-        stdout.print(
-            "How much lower the best Hammerstein-Wiener MSE is than each other model's best: "
-            + ", ".join(f"{s} {100 * r:.0f} %" for s, r in red.items())
-            + " (paper B: hammerstein 13 %, wiener 54 %, arx 58 %)"
-        )
-    for row in result.table:
-        if "error" in row:
-            stdout.print(f"{row['model']} {row['estimator']}: {row['error']}", markup=False)
 
 
 @cli_errors

@@ -548,7 +548,8 @@ def identify(
         opts.pop("tail_fraction", None)
         finals.append(search.run(Candidate(s.candidate.structure, opts), split.fit, "final"))
         search.tell("finalists", i + 1, min(finalists, len(screened)), s.candidate.label)
-    ranked_final = _ranked(finals, tie) or screened
+    # a full refit can score worse on the hold-out than its screening fit: rank both
+    ranked_final = _ranked(finals + screened[:finalists], tie) or screened
     winner = ranked_final[0]
     if STRUCTURES[winner.candidate.structure].block_oriented:
         winner = _grow(winner, search, split.fit, tie)
