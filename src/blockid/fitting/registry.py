@@ -133,7 +133,9 @@ def _boolean(value: Any, name: str) -> bool:
         if low in ("false", "no", "0", "off"):
             return False
         raise ParameterError(f"{name} must be true or false, got {text!r}")
-    if isinstance(value, bool) or type(value).__name__ == "bool_":
+    import numpy as np
+
+    if isinstance(value, bool | np.bool_):  # NumPy 2 names its type "bool", not "bool_"
         return bool(value)
     raise ParameterError(f"{name} must be True or False, got {value!r}")
 

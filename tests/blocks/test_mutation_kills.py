@@ -1,0 +1,111 @@
+"""Block behaviour at edges and defaults that the other block tests reach only on one
+side (gaps found by mutation testing, see docs/testing.md); expected values by hand."""
+
+import numpy as np
+import pytest
+
+from blockid.blocks import (
+    Backlash,
+    DeadZone,
+    PiecewiseLinear,
+    Polynomial,
+    Saturation,
+    TwoSegmentPolynomial,
+    block_template,
+)
+from blockid.blocks.linear import LinearBlock
+from blockid.errors import ParameterError
+
+
+def test_backlash_template_is_the_unit_backlash():
+    assert Backlash.template().parameters == {
+        "m_left": 1.0,
+        "c_left": 0.0,
+        "m_right": 1.0,
+        "c_right": 0.0,
+    }
+
+
+def test_backlash_slope_lower_bounds_scale_with_each_slope():
+    lower, upper = Backlash(2.0, 0.1, 3.0, 0.2).bounds()
+    np.testing.assert_allclose(lower, [2e-6, 0.0, 3e-6, 0.0])
+    assert np.all(np.isinf(upper))
+
+
+def test_backlash_with_vector_takes_a_column():
+    b = Backlash(2.0, 0.1, 3.0, 0.2).with_vector(np.array([[1.5], [0.0], [2.5], [0.1]]))
+    assert b.parameters == {"m_left": 1.5, "c_left": 0.0, "m_right": 2.5, "c_right": 0.1}
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "named"), [(float("nan"), 1.0, "u_min"), (0.0, float("inf"), "u_max")]
+)
+def test_backlash_check_branches_names_the_bad_end(lo, hi, named):
+    with pytest.raises(ParameterError, match=f"^{named} must be finite"):
+        Backlash(1.0, 0.1, 1.0, 0.1).check_branches(lo, hi)
+
+
+def test_dead_zone_derivative_is_zero_on_the_closed_band():
+    d = DeadZone(-1.0, 1.0, slope_left=2.0, slope_right=3.0)
+    np.testing.assert_array_equal(
+        d.derivative(np.array([-1.0, 0.0, 1.0, -1.5, 1.5])), [0, 0, 0, 2, 3]
+    )
+
+
+def test_saturation_jacobian_treats_both_limits_as_inside():
+    s = Saturation(-1.0, 1.0, slope=2.0)
+    # w = clip(2 u, -1, 1); columns d/d(lower, upper, slope): (1, 0, 0) below, (0, 1, 0)
+    # above, (0, 0, u) on the closed interval, edges v = 2 u = -1 and 1 included
+    np.testing.assert_array_equal(
+        s.jacobian(np.array([-0.5, 0.5, 0.25, 1.0, -1.0])),
+        [[0, 0, -0.5], [0, 0, 0.5], [0, 0, 0.25], [0, 1, 0], [1, 0, 0]],
+    )
+
+
+def test_saturation_bounds_leave_the_limits_free_and_the_slope_positive():
+    lower, upper = Saturation(-1.0, 1.0).bounds()
+    np.testing.assert_array_equal(lower, [-np.inf, -np.inf, 1e-6])
+    np.testing.assert_array_equal(upper, [np.inf, np.inf, np.inf])
+
+
+def test_linear_block_static_gain():
+    # G(1) = (1 + 0.5) / (1 - 0.5) = 3
+    assert LinearBlock(1, 2, 1, [-0.5], [1.0, 0.5]).static_gain() == 3.0
+    assert LinearBlock(1, 1, 1, [-1.0], [1.0]).static_gain() == float("inf")  # integrator
+
+
+def test_piecewise_linear_template_and_adapted_breakpoints():
+    p = PiecewiseLinear.template(knots=3)
+    assert p.parameters == {"breakpoints": [-1.0, 0.0, 1.0], "values": [0.0, 0.0, 0.0]}
+    assert p.adapted(np.array([-2.0, 1.0, 5.0])).parameters["breakpoints"] == [-2.0, 1.5, 5.0]
+    for bad in (1, True, 2.5):
+        with pytest.raises(ParameterError, match="knots must be a whole number >= 2"):
+            PiecewiseLinear.template(knots=bad)
+
+
+def test_block_template_defaults_and_option_values():
+    assert isinstance(block_template("two-segment"), TwoSegmentPolynomial)
+    assert isinstance(block_template(""), TwoSegmentPolynomial)
+    assert block_template("polynomial:degree=3").parameters["coefficients"] == [0.0] * 4
+    with pytest.raises(ParameterError, match=r"degree must be a whole number >= 1, got 2\.0"):
+        block_template("polynomial:degree=2.0")  # "2.0" stays a float: not a whole number
+
+
+def test_inverse_on_a_decreasing_block():
+    block = Polynomial([1.0, -2.0])  # w = 1 - 2 u, decreasing
+    u = block.inverse_on(np.array([1.0, 0.0, -1.0, 5.0]), (-1.0, 1.0))
+    np.testing.assert_allclose(u, [0.0, 0.5, 1.0, -1.0], atol=1e-12)  # 5 lies beyond w(-1) = 3
+
+
+def test_repr_names_the_block_class():
+    assert (
+        repr(DeadZone(-1.0, 1.0))
+        == "DeadZone(lower=-1.0, upper=1.0, slope_left=1.0, slope_right=1.0)"
+    )
+
+
+def test_default_inverse_on_a_decreasing_piecewise_linear_block():
+    # the bisection of StaticBlock.inverse_on (Polynomial has its own): w falls from 1 to -2
+    block = PiecewiseLinear([-1.0, 0.0, 1.0], [1.0, 0.0, -2.0])
+    u = block.inverse_on(np.array([1.0, 0.5, 0.0, -1.0, -2.0, 5.0]), (-1.0, 1.0))
+    np.testing.assert_allclose(u, [-1.0, -0.5, 0.0, 0.5, 1.0, -1.0], atol=1e-12)
