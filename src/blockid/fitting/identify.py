@@ -388,8 +388,8 @@ def _refit(winner: Score, data: Dataset) -> Any:
 
         from blockid.fitting.simulation_error import refine
 
-        try:
-            fit = refine(winner.model, data)
+        try:  # a warm start on more data: let it run (early stopping on a real rise only)
+            fit = refine(winner.model, data, max_nfev=300, patience=20)
             settings = {**fit.settings, "started_from": "the search's finalist"}
             return replace(fit, settings=settings)
         except BlockidError:
