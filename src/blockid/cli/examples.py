@@ -202,7 +202,9 @@ def reproduce_electrohydraulic(
     figures = _folder(plot, figures, "reproduce-electrohydraulic", force)
     bandwidth = _bandwidth(validation_bandwidth)
     with busy("paper B's experiment: simulating the arm, fitting 4 structures 2 ways", json_out):
-        result = reproduce_electrohydraulic(seed, figures, validation_bandwidth=bandwidth)
+        result = reproduce_electrohydraulic(
+            seed=seed, figures_dir=figures, validation_bandwidth=bandwidth
+        )
     if json_out:
         print_json(result.to_dict())
         return
