@@ -50,6 +50,7 @@ from blockid.models.base import Model
 
 __all__ = [
     "ChainModel",
+    "OneLinearBlock",
     "BlockModel",
     "Hammerstein",
     "Wiener",
@@ -567,7 +568,35 @@ def _vector_names(block: Block, prefix: str | None, i: int) -> list[str]:
     return block.vector_names(rename)
 
 
-class BlockModel(ChainModel):
+class OneLinearBlock:
+    """Orders and coefficients of a model with one linear block (``self.linear``)."""
+
+    linear: LinearBlock
+
+    @property
+    def na(self) -> int:
+        return self.linear.na
+
+    @property
+    def nb(self) -> int:
+        return self.linear.nb
+
+    @property
+    def nk(self) -> int:
+        return self.linear.nk
+
+    @property
+    def a(self) -> np.ndarray:
+        """``[a_1..a_na]`` of the linear block."""
+        return self.linear.a
+
+    @property
+    def b(self) -> np.ndarray:
+        """``[b_0..b_{nb-1}]`` of the linear block."""
+        return self.linear.b
+
+
+class BlockModel(OneLinearBlock, ChainModel):
     """The ``N_1 - L - N_2`` cascade with optional outer blocks; use the named subclasses.
 
     Parameters
@@ -676,29 +705,6 @@ class BlockModel(ChainModel):
             model, input, output, input_block=input_block, output_block=output_block, **kwargs
         )
         return model
-
-    # the single linear block's orders and coefficients
-    @property
-    def na(self) -> int:
-        return self.linear.na
-
-    @property
-    def nb(self) -> int:
-        return self.linear.nb
-
-    @property
-    def nk(self) -> int:
-        return self.linear.nk
-
-    @property
-    def a(self) -> np.ndarray:
-        """``[a_1..a_na]`` of the linear block."""
-        return self.linear.a
-
-    @property
-    def b(self) -> np.ndarray:
-        """``[b_0..b_{nb-1}]`` of the linear block."""
-        return self.linear.b
 
     @property
     def fixed_b0(self) -> bool:

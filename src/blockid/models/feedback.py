@@ -48,6 +48,7 @@ from blockid.blocks.base import Block, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import ModelFileError, OrderError
 from blockid.models.base import Model
+from blockid.models.block import OneLinearBlock
 
 __all__ = ["LinearFeedback"]
 
@@ -86,7 +87,7 @@ def _checked_feedback(feedback: Any) -> Polynomial:
     return feedback
 
 
-class LinearFeedback(Model):
+class LinearFeedback(OneLinearBlock, Model):
     """Linear block with a polynomial of the output fed back to its input (module
     docstring).
 
@@ -169,28 +170,6 @@ class LinearFeedback(Model):
         )
 
     # ------------------------------------------------------------------ structure
-    @property
-    def na(self) -> int:
-        return self.linear.na
-
-    @property
-    def nb(self) -> int:
-        return self.linear.nb
-
-    @property
-    def nk(self) -> int:
-        return self.linear.nk
-
-    @property
-    def a(self) -> np.ndarray:
-        """``[a_1..a_na]``."""
-        return self.linear.a
-
-    @property
-    def b(self) -> np.ndarray:
-        """``[b_0..b_{nb-1}]``."""
-        return self.linear.b
-
     @property
     def c(self) -> np.ndarray:
         """``[c_2..c_r]``, the free coefficients of the feedback polynomial."""
