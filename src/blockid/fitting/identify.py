@@ -348,6 +348,12 @@ def _nonlinear_candidates(
     return unique
 
 
+def _patient(structure: str) -> dict[str, Any]:
+    """Full fits stop early only on a real rise of the held-out error: a patience of 20
+    iterations where the method takes one (5 stopped long records while they improved)."""
+    return {"patience": 20} if "patience" in STRUCTURES[structure].accepted(None) else {}
+
+
 def _grow(winner: Score, search: _Search, data: Dataset, tie: float) -> Score:
     """Try the winner with a richer nonlinearity (each polynomial degree + 2, up to 9);
     keep it only when the hold-out RMSE falls by more than ``tie``."""
@@ -359,7 +365,7 @@ def _grow(winner: Score, search: _Search, data: Dataset, tie: float) -> Score:
         # screening degree)
         if not isinstance(degree, int) or degree + 2 > 9:
             continue
-        opts = {**best.candidate.options, key: degree + 2}
+        opts = {**best.candidate.options, key: degree + 2, **_patient(best.candidate.structure)}
         trial = search.run(Candidate(best.candidate.structure, opts), data, "grow")
         search.tell("nonlinearity", 1, 1, trial.candidate.label)
         if trial.ok and trial.rmse < best.rmse * (1.0 - tie):
@@ -546,6 +552,7 @@ def identify(
             continue
         opts = {k: v for k, v in s.candidate.options.items() if k != "max_nfev"}
         opts.pop("tail_fraction", None)
+        opts.update(_patient(s.candidate.structure))
         finals.append(search.run(Candidate(s.candidate.structure, opts), split.fit, "final"))
         search.tell("finalists", i + 1, min(finalists, len(screened)), s.candidate.label)
     # a full refit can score worse on the hold-out than its screening fit: rank both
