@@ -47,7 +47,6 @@ factor that changes.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import multiprocessing
 import os
 import re
@@ -64,7 +63,6 @@ import numpy as np
 
 import blockid.fitting.backlash as _aw_module
 import blockid.fitting.key_term as _kt_module
-from blockid._kernels.rls import OK
 from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
 from blockid.data import Dataset
 from blockid.errors import EstimationError
@@ -893,34 +891,17 @@ def summary(all_groups: list[Group], results: dict[str, list[list[dict]]]) -> st
 
 
 # ============================================================================ figures
-@contextlib.contextmanager
-def recorded_theta():
-    """Record the recursion's ``theta`` after every update even when the fit raises.
-
-    ``record_history=True`` returns the trajectory only with a model; a failed fit
-    raises :class:`EstimationError` and keeps it. This wraps the pass driver of
-    :mod:`blockid.fitting.key_term` (used by both recursive fits) to copy the rows the
-    compiled kernel wrote. Rows are in the recursion's (normalised) units.
-    """
-    rows: list[np.ndarray] = []
-    original = _kt_module.run_passes
-
-    def run_passes(run, theta, records, **kw):
-        kw["record"] = True
-
-        def run_and_keep(u, y, count, hist, stride):
-            status, reason, detail = run(u, y, count, hist, stride)
-            m = hist.shape[0] if status == OK else max(0, (status - kw["n0"]) // stride)
-            rows.append(hist[:m].copy())
-            return status, reason, detail
-
-        return original(run_and_keep, theta, records, **kw)
-
-    _kt_module.run_passes = _aw_module.run_passes = run_passes
+def recorded_history(call) -> tuple[Any, np.ndarray, np.ndarray, Exception | None]:
+    """Run a recursive fit with ``record_history=True``: the result (or None), the rows of
+    ``theta`` in the data's units, their update counts, and the error of a refused fit
+    (which carries what it recorded up to the failure)."""
     try:
-        yield rows
-    finally:
-        _kt_module.run_passes = _aw_module.run_passes = original
+        fit = call(record_history=True)
+        return fit, np.asarray(fit.history["theta"]), np.asarray(fit.history["update"]), None
+    except EstimationError as exc:
+        hist = exc.history or {}
+        theta = np.asarray(hist.get("theta", np.zeros((0, 0))))
+        return None, theta, np.asarray(hist.get("update", np.zeros(0))), exc
 
 
 def _pyplot():
@@ -996,21 +977,21 @@ def figure_kt_trajectories(path: Path, seed: int) -> dict:
     fig, axes = plt.subplots(1, len(cases), figsize=(15, 4.4), sharey=True)
     info = {}
     names = ["b_1", "b_2", "a_1", "a_2", "a_3"]  # unit-free: unchanged by the normalisation
-    stride = _kt_module.history_stride(20, N_KT - 10)  # as the fit records (n0 = 10)
     for ax, (label, change) in zip(axes, cases.items(), strict=True):
         cell = {**KT_BASE, **change}
         plant, data, _, init = kt_record(cell, seed)
-        with recorded_theta() as rows:
-            try:
-                fit = fit_key_term_rls(
-                    data, "hammerstein-wiener", initial_parameters=init, **KT_ORDERS
-                )
-                outcome = f"converged in {fit.settings['passes_run']} passes"
-            except EstimationError as exc:
-                outcome = _short_reason(str(exc))
-        hist = np.vstack(rows)[:, 8:13]  # B4 order: f (4), p (4), b_1, b_2, a_1..a_3
+        fit, rows, updates, exc = recorded_history(
+            lambda d=data, i=init, **kw: fit_key_term_rls(
+                d, "hammerstein-wiener", initial_parameters=i, **KT_ORDERS, **kw
+            )
+        )
+        if exc is None:
+            outcome = f"converged in {fit.settings['passes_run']} passes"
+        else:
+            outcome = _short_reason(str(exc))
+        hist = rows[:, 8:13]  # B4 order: f (4), p (4), b_1, b_2, a_1..a_3 (unit-free)
         truth = b4_order(plant)[8:13]
-        passes = stride * np.arange(1, hist.shape[0] + 1) / (N_KT - 10)
+        passes = updates / (N_KT - 10)
         for j, name in enumerate(names):
             (line,) = ax.plot(passes, hist[:, j], lw=0.8, label=name)
             ax.axhline(truth[j], color=line.get_color(), ls="--", lw=0.8)
@@ -1042,15 +1023,12 @@ def figure_aw_trajectories(path: Path, seed: int) -> dict:
     for ax, kind in zip(axes, ("every sample", "held5"), strict=True):
         cell = {**AW_BASE, "input": kind}
         _, data, _, _ = aw_record(cell, seed)
-        with recorded_theta() as rows:
-            try:
-                fit_backlash_aw_rls(data)
-                outcome = "converged"
-            except EstimationError as exc:
-                outcome = "refused: " + _short_reason(str(exc))
-        hist = _aw_data_units(np.vstack(rows), data)
+        _, hist, updates, exc = recorded_history(
+            lambda d=data, **kw: fit_backlash_aw_rls(d, **kw)
+        )
+        outcome = "converged" if exc is None else "refused: " + _short_reason(str(exc))
         for j, name in enumerate(labels):
-            (line,) = ax.plot(np.arange(1, hist.shape[0] + 1), hist[:, j], lw=0.8, label=name)
+            (line,) = ax.plot(updates, hist[:, j], lw=0.8, label=name)
             ax.axhline(true[j], color=line.get_color(), ls="--", lw=0.8)
         ax.set_xscale("log")
         ax.set_title(f"command {kind}: {outcome}", fontsize=9)
