@@ -1023,9 +1023,7 @@ def figure_aw_trajectories(path: Path, seed: int) -> dict:
     for ax, kind in zip(axes, ("every sample", "held5"), strict=True):
         cell = {**AW_BASE, "input": kind}
         _, data, _, _ = aw_record(cell, seed)
-        _, hist, updates, exc = recorded_history(
-            lambda d=data, **kw: fit_backlash_aw_rls(d, **kw)
-        )
+        _, hist, updates, exc = recorded_history(lambda d=data, **kw: fit_backlash_aw_rls(d, **kw))
         outcome = "converged" if exc is None else "refused: " + _short_reason(str(exc))
         for j, name in enumerate(labels):
             (line,) = ax.plot(updates, hist[:, j], lw=0.8, label=name)
