@@ -557,7 +557,26 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
         doc = _json(run(f, "--json"))
         assert doc["model"] == str(f.model) and set(doc["metrics"]) >= {"mse", "fit_percent"}
 
+    def band(f, calls):
+        if command == "predict":  # a band of the free-run output only
+            r = run(f, "--band", "0.9", code=2)
+            assert "--band applies to simulate only" in r.stderr
+            return
+        model = f.path("se.json")
+        _run("fit", f.csv, "-u", "u", "-y", "y", "--na", "1", "--nb", "1", "--nk", "1",
+             "--standard-errors", "-o", model)  # fmt: skip
+        path = f.path("band.csv")
+        doc = _json(_run(command, model, f.csv, "--band", "0.9", "-o", path, "--json"))
+        frame = pd.read_csv(path)
+        lower, upper, sim = frame["y_lower"], frame["y_upper"], frame["y_sim"]
+        assert (lower <= sim + 1e-12).all() and (sim <= upper + 1e-12).all()
+        assert (upper - lower).mean() > 0 and doc["band"]["level"] == 0.9
+        width90 = doc["band"]["mean_width"]["y"]
+        doc99 = _json(_run(command, model, f.csv, "--band", "0.99", "--json"))
+        assert doc99["band"]["mean_width"]["y"] > width90  # a wider band for a higher level
+
     return {
+        "band": band,
         "rng": range_,
         "out": out,
         "plot": plot,

@@ -64,12 +64,29 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         ts: SamplingTime = None,
         time_column: TimeColumn = None,
         experiment_column: ExperimentColumn = None,
+        band: Annotated[
+            float | None,
+            typer.Option(
+                "--band",
+                metavar="LEVEL",
+                help="simulate: confidence band (e.g. 0.95) of the output, from the "
+                "parameter covariance in the model file (fit --standard-errors).",
+                show_default=False,
+            ),
+        ] = None,
         force: Force = False,
         json_out: Json = False,
     ) -> None:
         from blockid.data import write_table
+        from blockid.errors import ParameterError
         from blockid.evaluation import evaluate
         from blockid.models import load_model
+
+        if band is not None and mode != "simulation":
+            raise ParameterError(
+                "--band applies to simulate only (a band of the free-run output)",
+                parameter="band",
+            )
 
         refuse_to_overwrite(out, force)
         model = load_model(model_path)
@@ -84,8 +101,16 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             "--range",
         )
         result = evaluate(model, data, mode)
+        columns = {}
+        if band is not None:
+            from blockid.evaluation.uncertainty import band_columns, load_covariance
+
+            columns = band_columns(model, load_covariance(model_path), data, band)
         if out is not None:
-            write_table(result.to_frame(), out, overwrite=force)
+            frame = result.to_frame()
+            for key, values in columns.items():
+                frame[key] = values
+            write_table(frame, out, overwrite=force)
         where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
         figure = None
         if plot is not None:
@@ -94,7 +119,14 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             figure = run_figure(result, plot, data_label=where)
         if json_out:
             paths = [str(p) for p in data_paths]
-            print_json({"model": str(model_path), "data": paths, "range": rng, **result.to_dict()})
+            doc = {"model": str(model_path), "data": paths, "range": rng, **result.to_dict()}
+            if band is not None:
+                width = {
+                    n: float((columns[f"{n}_upper"] - columns[f"{n}_lower"]).mean())
+                    for n in model.outputs
+                }
+                doc["band"] = {"level": band, "mean_width": width}
+            print_json(doc)
             return
         for note in result.warnings:
             stderr.print(f"warning: {note}", markup=False)
