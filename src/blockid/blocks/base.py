@@ -115,6 +115,17 @@ class Block(ABC):
         except (TypeError, ValueError) as exc:  # a user block's own check
             raise ParameterError(f"{self.kind}: {exc}") from None
 
+    @classmethod
+    def display_names(cls, position: str) -> dict[str, str]:
+        """How a model names this block's parameters at ``position`` (``"input"``,
+        ``"output"`` or ``"middle"``): the SPEC names (the input polynomial's ``f``, the
+        output polynomial's ``q``). Default: the parameters' own names."""
+        return {}
+
+    def check_output_block(self) -> None:  # noqa: B027 - optional hook
+        """Raise :class:`ParameterError` when the block cannot end a cascade as its output
+        block (the output offset carries any constant)."""
+
     def vector_names(self, rename: dict[str, str] | None = None) -> list[str]:
         """A name for every entry of :meth:`to_vector`: ``name`` for a number, ``name_j``
         for the entries of a list (``rename`` maps parameter names to display names)."""

@@ -118,6 +118,18 @@ class Polynomial(_PlottableStaticBlock):
         return cls([1.0] + [0.0] * (int(degree) - 1), constant=False)
 
     @classmethod
+    def display_names(cls, position: str) -> dict[str, str]:
+        """``f`` as the input block (B1's name), ``q`` as the output block (B3)."""
+        return {"input": {"coefficients": "f"}, "output": {"coefficients": "q"}}.get(position, {})
+
+    def check_output_block(self) -> None:
+        if self.constant:
+            raise ParameterError(
+                "the output block must be a Polynomial without constant term (B3): use "
+                "Polynomial(q, constant=False) (the output offset carries the constant)"
+            )
+
+    @classmethod
     def output_template(cls, degree: int = 3, constant: bool = False) -> Polynomial:
         """The output block of B3 to fit: ``q = [1, 0, .., 0]`` of the given degree (a
         constant term is refused after a linear block, B3)."""

@@ -43,7 +43,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
-from blockid.blocks.base import Block, StaticBlock, block_from_dict
+from blockid.blocks.base import BLOCK_TYPES, Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import BlockidError, ModelFileError, OrderError, ParameterError
 from blockid.models.base import Model
@@ -60,9 +60,6 @@ __all__ = [
     "WienerHammerstein",
     "BLOCK_STRUCTURES",
 ]
-
-#: SPEC names of the input-block parameters, by block kind (others keep their own names).
-_SPEC_NAMES = {"polynomial": {"coefficients": "f"}}
 
 
 def _one_name(names: Any, what: str) -> tuple[str]:
@@ -226,10 +223,7 @@ class ChainModel(Model):
                 out[f"a{tag}"] = block.a.tolist()
                 out[f"b{tag}"] = block.b.tolist()
                 continue
-            if block is self.output_block and isinstance(block, Polynomial):
-                out["q"] = block.coefficients.tolist()
-                continue
-            rename = _SPEC_NAMES.get(block.kind, {}) if i == 0 else {}
+            rename = block.display_names(self._position(i))
             for key, value in block.parameters.items():
                 if key == "constant" and value is (i == 0):
                     continue  # the usual case; kept only when unusual
@@ -337,6 +331,12 @@ class ChainModel(Model):
         return out[:, None]
 
     # ------------------------------------------------------------------ vectors
+    def _position(self, i: int) -> str:
+        """Where block ``i`` sits: ``"input"``, ``"output"`` or ``"middle"``."""
+        if self.blocks[i] is self.output_block:
+            return "output"
+        return "input" if i == 0 and self.blocks[0].role != "linear" else "middle"
+
     def _masks(self) -> list[np.ndarray]:
         return [b.free_mask(self._after(self.blocks, i)) for i, b in enumerate(self.blocks)]
 
@@ -357,7 +357,7 @@ class ChainModel(Model):
                     k = self.linear_blocks.index(block) + 1
                     full = [f"{n[0]}{k}{n[1:]}" for n in full]
             else:
-                full = _vector_names(block, "q" if block is self.output_block else None, i)
+                full = block.vector_names(block.display_names(self._position(i)))
             names += [n for n, keep in zip(full, mask, strict=True) if keep]
         return names
 
@@ -536,7 +536,7 @@ class ChainModel(Model):
         blocks: list[Block] = []
         if kinds.get("input"):
             kind = kinds["input"]
-            back = {v: k for k, v in _SPEC_NAMES.get(kind, {}).items()}
+            back = {v: k for k, v in BLOCK_TYPES[kind].display_names("input").items()}
             block_params = {
                 back.get(k, k): v for k, v in params.items() if k not in ("a", "b", "q")
             }
@@ -558,14 +558,6 @@ class ChainModel(Model):
 def _apply(block: Block, s: np.ndarray) -> np.ndarray:
     """One block on a signal, from rest."""
     return block.run(s)
-
-
-def _vector_names(block: Block, prefix: str | None, i: int) -> list[str]:
-    """Names of a nonlinear block's vector entries: ``f_0, f_1, ..``, ``q_1, ..``, ``c_left``."""
-    rename = dict(_SPEC_NAMES.get(block.kind, {})) if i == 0 else {}
-    if prefix:
-        rename = {key: prefix for key in block.parameters}
-    return block.vector_names(rename)
 
 
 class OneLinearBlock:
@@ -673,11 +665,11 @@ class BlockModel(OneLinearBlock, ChainModel):
                 raise OrderError(f"a {cls.structure} model has no {what[3:]}")
         if has_out and blocks[-1].role != "static":
             raise OrderError("the output block must be a static block")
-        if has_out and isinstance(blocks[-1], Polynomial) and blocks[-1].constant:
-            raise OrderError(
-                "the output block must be a Polynomial without constant term (B3): use "
-                "Polynomial(q, constant=False) (the output offset carries the constant)"
-            )
+        if has_out:
+            try:
+                blocks[-1].check_output_block()
+            except ParameterError as exc:
+                raise OrderError(str(exc)) from None
 
     @classmethod
     def default_blocks(cls, r1: int = 3, r2: int = 3) -> tuple[Block | None, Block | None]:
@@ -834,7 +826,7 @@ class BacklashModel(BlockModel):
     @classmethod
     def _check_shape(cls, blocks: tuple[Block, ...]) -> None:
         super()._check_shape(blocks)
-        if not isinstance(blocks[0], Backlash):
+        if blocks[0].kind != Backlash.kind:
             raise OrderError("a backlash model's input block must be a Backlash")
 
 

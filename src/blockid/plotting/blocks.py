@@ -27,7 +27,7 @@ def _default_range(block: StaticBlock) -> tuple[float, float]:
 
 
 def _check_static(name: str, block: Any) -> None:
-    if not isinstance(block, StaticBlock):
+    if getattr(block, "role", None) != "static":
         raise ParameterError(
             f"{name} must be a static block (w = N(u)), got {type(block).__name__}; "
             "blocks with memory such as backlash are plotted by simulating them"
