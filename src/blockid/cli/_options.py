@@ -17,9 +17,13 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.fitting.registry import OPTIONS, STRUCTURES, Option, option_flag
+from blockid.fitting.registry import COMPARED_BY_DEFAULT, OPTIONS, STRUCTURES, Option, option_flag
 
 __all__ = [
+    "ComparedStructures",
+    "EstimationRange",
+    "SharedMethod",
+    "ValidationRange",
     "DEFAULT_STRUCTURE",
     "INTERNAL",
     "Method",
@@ -108,5 +112,25 @@ Method = Annotated[
         metavar="NAME",
         help="Estimator, one of the structure's methods (see below); default: its first.",
         show_default=False,
+    ),
+]
+
+
+#: The options ``compare`` and ``report`` share (the structures, their ranges, a method).
+EstimationRange = Annotated[str, typer.Option(metavar="START:STOP", help="Estimation samples.")]
+ValidationRange = Annotated[str, typer.Option(metavar="START:STOP", help="Validation samples.")]
+ComparedStructures = Annotated[
+    str | None,
+    typer.Option(
+        metavar="NAME,NAME..",
+        help=f"Comma-separated structures to compare, of {', '.join(STRUCTURES)} "
+        f"(default: {', '.join(COMPARED_BY_DEFAULT)}).",
+        show_default=False,
+    ),
+]
+SharedMethod = Annotated[
+    str | None,
+    typer.Option(
+        metavar="NAME", help="Method for the structures that offer it (others: their default)."
     ),
 ]

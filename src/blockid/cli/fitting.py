@@ -33,14 +33,17 @@ from blockid.cli._common import (
 )
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
+    ComparedStructures,
+    EstimationRange,
     Method,
+    SharedMethod,
     Structure,
+    ValidationRange,
     given,
     structures_help,
     with_fit_options,
 )
 from blockid.cli.report import ReportFile, write_report_option
-from blockid.fitting.registry import COMPARED_BY_DEFAULT, STRUCTURES
 
 __all__ = ["compare", "fit", "fit_network"]
 
@@ -136,33 +139,16 @@ def fit(
 fit.__doc__ = f"{inspect.cleandoc(fit.__doc__ or '')}\n\n{structures_help()}"
 
 
-def _default_structures() -> str:
-    return ", ".join(COMPARED_BY_DEFAULT)
-
-
 @with_fit_options
 @cli_errors
 def compare(
     data_paths: DataPaths,
     inputs: Inputs,
     outputs: Outputs,
-    estimation: Annotated[str, typer.Option(metavar="START:STOP", help="Estimation samples.")],
-    validation: Annotated[str, typer.Option(metavar="START:STOP", help="Validation samples.")],
-    structures: Annotated[
-        str | None,
-        typer.Option(
-            metavar="NAME,NAME..",
-            help=f"Comma-separated structures to compare, of {', '.join(STRUCTURES)} "
-            f"(default: {_default_structures()}).",
-            show_default=False,
-        ),
-    ] = None,
-    method: Annotated[
-        str | None,
-        typer.Option(
-            metavar="NAME", help="Method for the structures that offer it (others: their default)."
-        ),
-    ] = None,
+    estimation: EstimationRange,
+    validation: ValidationRange,
+    structures: ComparedStructures = None,
+    method: SharedMethod = None,
     ts: SamplingTime = None,
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,

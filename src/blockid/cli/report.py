@@ -30,8 +30,14 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
-from blockid.cli._options import given, with_fit_options
-from blockid.fitting.registry import COMPARED_BY_DEFAULT, STRUCTURES
+from blockid.cli._options import (
+    ComparedStructures,
+    EstimationRange,
+    SharedMethod,
+    ValidationRange,
+    given,
+    with_fit_options,
+)
 
 __all__ = ["ReportFile", "command_words", "report", "write_report_option"]
 
@@ -133,23 +139,10 @@ def report(
     data_paths: DataPaths,
     inputs: Inputs,
     outputs: Outputs,
-    estimation: Annotated[str, typer.Option(metavar="START:STOP", help="Estimation samples.")],
-    validation: Annotated[str, typer.Option(metavar="START:STOP", help="Validation samples.")],
-    structures: Annotated[
-        str | None,
-        typer.Option(
-            metavar="NAME,NAME..",
-            help=f"Comma-separated structures to compare, of {', '.join(STRUCTURES)} "
-            f"(default: {', '.join(COMPARED_BY_DEFAULT)}).",
-            show_default=False,
-        ),
-    ] = None,
-    method: Annotated[
-        str | None,
-        typer.Option(
-            metavar="NAME", help="Method for the structures that offer it (others: their default)."
-        ),
-    ] = None,
+    estimation: EstimationRange,
+    validation: ValidationRange,
+    structures: ComparedStructures = None,
+    method: SharedMethod = None,
     out: Annotated[
         Path, typer.Option("--out", "-o", metavar="FILE", help="HTML report file to write.")
     ] = Path("report.html"),
