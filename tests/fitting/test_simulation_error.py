@@ -558,7 +558,7 @@ def test_reported_mse_is_what_evaluate_gives_for_a_non_monotone_output_block():
     frame = electrohydraulic_experiment(seed=2)["estimation"]
     data = Dataset.from_frame(frame, ["current"], ["velocity"], time_column="t")
     fit = fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=8, r1=3, r2=3)
-    lo, hi = fit.model.monotone_branch()
+    lo, hi = fit.model.output_block.monotone_branch()
     x_lo, x_hi = fit.model.ranges["x"]
     assert x_lo < lo or x_hi > hi  # the case this test is about
     mse = evaluate(fit.model, data, "simulation").metrics["mse"]["velocity"]

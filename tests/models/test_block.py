@@ -110,7 +110,7 @@ def test_output_block_monotone_over_the_data_is_enough_for_one_step(rng):
     )
     u = rng.uniform(-1, 1, 300)
     y = model.simulate(u)
-    model.record_ranges([(u, y)])
+    model = model.with_ranges([(u, y)])
     np.testing.assert_allclose(model.predict(u, y), y, atol=1e-12)
 
 
@@ -121,7 +121,7 @@ def test_non_invertible_output_block_refuses_one_step_prediction(rng):
     )
     u = rng.uniform(-2, 2, 100)
     y = model.simulate(u)
-    model.record_ranges([(u, y)])
+    model = model.with_ranges([(u, y)])
     with pytest.raises(errors.EstimationError, match="not monotone over the range of x"):
         model.predict(u, y)
 
@@ -129,7 +129,7 @@ def test_non_invertible_output_block_refuses_one_step_prediction(rng):
 def test_extrapolation_is_flagged_outside_the_recorded_ranges(rng, tmp_path):
     model = hw()
     u = rng.uniform(-1.0, 1.0, 500)
-    model.record_ranges([(u, None)])
+    model = model.with_ranges([(u, None)])
     assert model.extrapolation(rng.uniform(-0.9, 0.9, 200)) == []
     notes = model.extrapolation(np.r_[u[:100], 1.6])
     assert len(notes) >= 1 and "input 'u' leaves the range seen in estimation" in notes[0]

@@ -448,10 +448,6 @@ class ChainModel(Model):
         extrapolation later and to bound inversions)."""
         return self.replace(ranges=self.estimation_ranges(experiments))
 
-    def record_ranges(self, experiments: Any) -> None:
-        """In place: :meth:`with_ranges` for code that builds a model step by step."""
-        self.ranges = self.estimation_ranges(experiments)
-
     def extrapolation(self, u: Any) -> list[str]:
         """Warnings when ``u`` (or a signal inside) leaves the recorded ranges of a block
         that extrapolates unreliably (polynomials: a cubic can run away there)."""
@@ -701,26 +697,6 @@ class BlockModel(OneLinearBlock, ChainModel):
     @property
     def fixed_b0(self) -> bool:
         return self.input_block is not None
-
-    def monotone_branch(self) -> tuple[float, float]:
-        """The interval around ``x = 0`` on which the output polynomial is monotone."""
-        return self.output_block.monotone_branch()  # type: ignore[union-attr]
-
-    def _replace(self, **changes: Any) -> BlockModel:
-        """A copy with blocks, ``a``/``b``, offsets or sampling time changed."""
-        blocks = list(self.blocks)
-        k = self.last_linear_index
-        if "input_block" in changes and self.input_block is not None:
-            blocks[0] = changes.pop("input_block")
-        if "output_block" in changes and self.output_block is not None:
-            blocks[-1] = changes.pop("output_block")
-        a, b = changes.pop("a", None), changes.pop("b", None)
-        if a is not None or b is not None:
-            g = self.linear
-            blocks[k] = LinearBlock(
-                g.na, g.nb, g.nk, g.a if a is None else a, g.b if b is None else b
-            )
-        return self.with_blocks(blocks, **changes)
 
 
 class Hammerstein(BlockModel):

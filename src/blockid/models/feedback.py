@@ -359,10 +359,6 @@ class LinearFeedback(OneLinearBlock, Model):
         """A copy that remembers the ranges seen in ``experiments``."""
         return self.replace(ranges=self.estimation_ranges(experiments))
 
-    def record_ranges(self, experiments: Any) -> None:
-        """In place: :meth:`with_ranges` for code that builds a model step by step."""
-        self.ranges = self.estimation_ranges(experiments)
-
     def extrapolation(self, u: Any) -> list[str]:
         """Warnings when the simulated output (from rest) leaves the range of ``y`` seen
         in estimation: the feedback polynomial extrapolates there."""
