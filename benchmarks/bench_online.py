@@ -36,11 +36,12 @@ def best_of(fn, repeats):
     return min(times)
 
 
-def hw_case(N):
+def hw_plant() -> HammersteinWiener:
+    """The Hammerstein-Wiener plant of the online and stream benchmarks (paper B's orders)."""
     n1 = TwoSegmentPolynomial.from_segments(
         positive=[0, 0.3, 0.1, -0.05], negative=[0, 0.15, -0.05, 0.03]
     )
-    plant = HammersteinWiener(
+    return HammersteinWiener(
         "u",
         "y",
         input_block=n1,
@@ -51,6 +52,10 @@ def hw_case(N):
         a=np.real(np.poly([0.7, 0.5, -0.3]))[1:],
         b=[1.0, 0.5, 0.2],
     )
+
+
+def hw_case(N):
+    plant = hw_plant()
     u = np.random.default_rng(1).uniform(-1.0, 1.0, (N, 1))
     options = {"na": 3, "nb": 3, "nk": 8, "forgetting": 0.999}
     data = Dataset.from_arrays(u, plant.simulate(u), inputs=["u"], outputs=["y"])

@@ -28,57 +28,28 @@ from pathlib import Path
 
 import numpy as np
 from _report import machine, write_section
+from bench_online import hw_plant
 
-from blockid.blocks import Polynomial, TwoSegmentPolynomial
 from blockid.data import Dataset
 from blockid.fitting.key_term import fit_key_term_rls
 from blockid.fitting.online import online_estimator
-from blockid.models import HammersteinWiener
 from blockid.workflows.stream import JsonLines, stream_identification
 
 OPTIONS = {"na": 3, "nb": 3, "nk": 8, "forgetting": 0.999}
 ARGS = ["-u", "u", "-y", "y", "--structure", "hammerstein-wiener", "--method", "key-term-rls"]
 ARGS += ["--na", "3", "--nb", "3", "--nk", "8", "--forgetting", "0.999"]
 
-# the command as cli/main.py registers it (used when this blockid does not have it yet)
-_APP = """
-import typer
-from blockid.cli.streaming import stream
-app = typer.Typer(add_completion=False)
-app.command("stream")(stream)
-@app.callback()
-def _root():
-    "blockid stream."
-app()
-"""
-
 
 def record(n: int) -> tuple[np.ndarray, np.ndarray]:
-    n1 = TwoSegmentPolynomial.from_segments(
-        positive=[0, 0.3, 0.1, -0.05], negative=[0, 0.15, -0.05, 0.03]
-    )
-    plant = HammersteinWiener(
-        "u",
-        "y",
-        input_block=n1,
-        output_block=Polynomial([1.0, 0.2, 0.05], constant=False),
-        na=3,
-        nb=3,
-        nk=8,
-        a=np.real(np.poly([0.7, 0.5, -0.3]))[1:],
-        b=[1.0, 0.5, 0.2],
-    )
+    plant = hw_plant()
     rng = np.random.default_rng(1)
     u = rng.uniform(-1.0, 1.0, (n, 1))
     return u, plant.simulate(u) + 0.001 * rng.standard_normal((n, 1))
 
 
 def command() -> list[str]:
-    """``blockid stream`` if registered, else the same command built here."""
-    blockid = str(Path(sys.executable).with_name("blockid"))
-    if subprocess.run([blockid, "stream", "-h"], capture_output=True).returncode == 0:
-        return [blockid, "stream"]
-    return [sys.executable, "-c", _APP, "stream"]
+    """The installed ``blockid stream``."""
+    return [str(Path(sys.executable).with_name("blockid")), "stream"]
 
 
 def piped(cmd: list[str], path: Path) -> tuple[tuple[float, float], list[str]]:
