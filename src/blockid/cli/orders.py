@@ -23,7 +23,7 @@ from blockid.cli._common import (
     stdout,
 )
 from blockid.errors import BlockidError
-from blockid.fitting.orders import DEFAULTS
+from blockid.fitting.order_defaults import DEFAULTS
 
 __all__ = ["orders"]
 

@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from blockid.errors import DataError, OrderError, ParameterError
+from blockid.fitting.order_defaults import DEFAULTS
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -52,20 +53,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from blockid.data import Dataset
 
 __all__ = ["OrderEvidence", "false_nearest_neighbours"]
-
-#: Defaults, in one place (the command line shows them in its help).
-DEFAULTS = {
-    "max_na": 4,
-    "max_nb": 4,
-    "max_nk": 3,
-    "r_tol": 2.0,
-    "a_tol": 2.0,
-    "noise": 0.0,
-    "threshold": 1.0,
-    "max_points": 2000,
-    "exclude": 0,
-    "seed": 0,
-}
 
 
 @dataclass(frozen=True)
