@@ -58,6 +58,9 @@ DEFAULT_SEARCH = (
 
 Progress = Callable[[str, int, int, str], None]
 
+#: Options that set how long a fit iterates, not which model it is.
+_ITERATION_SETTINGS = ("max_nfev", "tail_fraction", "patience")
+
 #: The linear structure of the order search (least squares: fast over a grid).
 LINEAR = "arx"
 
@@ -72,7 +75,7 @@ class Candidate:
     @property
     def label(self) -> str:
         shown = ", ".join(
-            f"{k}={v}" for k, v in self.options.items() if k not in ("max_nfev", "tail_fraction")
+            f"{k}={v}" for k, v in self.options.items() if k not in _ITERATION_SETTINGS
         )
         return f"{self.structure}({shown})"
 
@@ -376,7 +379,7 @@ def _grow(winner: Score, search: _Search, data: Dataset, tie: float) -> Score:
 def _key(candidate: Candidate) -> tuple:
     """A candidate without its iteration settings (a screened and a final fit of the same
     candidate share it)."""
-    opts = {k: v for k, v in candidate.options.items() if k not in ("max_nfev", "tail_fraction")}
+    opts = {k: v for k, v in candidate.options.items() if k not in _ITERATION_SETTINGS}
     return candidate.structure, tuple(sorted(opts.items()))
 
 
