@@ -13,6 +13,7 @@ from blockid.blocks import (
     TwoSegmentPolynomial,
     block_template,
 )
+from blockid.blocks.base import DynamicBlock
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import ParameterError
 
@@ -109,3 +110,64 @@ def test_default_inverse_on_a_decreasing_piecewise_linear_block():
     block = PiecewiseLinear([-1.0, 0.0, 1.0], [1.0, 0.0, -2.0])
     u = block.inverse_on(np.array([1.0, 0.5, 0.0, -1.0, -2.0, 5.0]), (-1.0, 1.0))
     np.testing.assert_allclose(u, [-1.0, -0.5, 0.0, 0.5, 1.0, -1.0], atol=1e-12)
+
+
+def test_backlash_plot_draws_the_loop_over_the_given_input():
+    import matplotlib.pyplot as plt
+
+    block = Backlash(1.0, 0.2, 1.5, 0.1)
+    u = np.array([0.0, 1.0, 2.0, 1.0, -1.0, -2.0])
+    ax = block.plot(u=u)
+    try:
+        loop, left, right = ax.get_lines()[:3]
+        np.testing.assert_array_equal(loop.get_xdata(), u)
+        # from x = 0: dead band at u = 0, right branch 1.5 (u - 0.1) up to u = 2, then
+        # left branch u + 0.2 on the way down
+        np.testing.assert_allclose(loop.get_ydata(), [0.0, 1.35, 2.85, 1.2, -0.8, -1.8])
+        np.testing.assert_array_equal(left.get_xdata(), [-2.0, 2.0])  # the input's span
+        np.testing.assert_allclose(right.get_ydata(), [-3.15, 2.85])
+    finally:
+        plt.close(ax.figure)
+
+
+class _FirstOrderLag(DynamicBlock):
+    """A user block with memory, x(k) = pole x(k-1) + gain u(k), relying on the default
+    ``sensitivity``; it builds its output like its input (``empty_like``)."""
+
+    def __init__(self, pole: float = 0.5, gain: float = 1.0) -> None:
+        self.pole, self.gain = float(pole), float(gain)
+
+    @property
+    def parameters(self):
+        return {"pole": self.pole, "gain": self.gain}
+
+    def simulate(self, u, x0=0.0):
+        x, prev = np.empty_like(u), x0
+        for k, uk in enumerate(u):
+            prev = x[k] = self.pole * prev + self.gain * uk
+        return x
+
+
+def test_default_dynamic_sensitivity_is_the_finite_difference_on_a_float_input():
+    block = _FirstOrderLag(0.5, 2.0)
+    u = [1, 0, 2, -1, 3]  # whole numbers: the default must hand simulate a float array
+    x, G = block.sensitivity(u)
+    # by hand from rest: x = 2 u(k) + 0.5 x(k-1)
+    np.testing.assert_allclose(x, [2.0, 1.0, 4.5, 0.25, 6.125])
+    # dx/dpole = x(k-1) + 0.5 dx/dpole(k-1), dx/dgain = u(k) + 0.5 dx/dgain(k-1)
+    d_pole, d_gain, x_prev = np.zeros(5), np.zeros(5), 0.0
+    for k in range(5):
+        d_pole[k] = x_prev + (0.5 * d_pole[k - 1] if k else 0.0)
+        d_gain[k] = u[k] + (0.5 * d_gain[k - 1] if k else 0.0)
+        x_prev = x[k]
+    assert G.shape == (5, 2)
+    np.testing.assert_allclose(G, np.column_stack([d_pole, d_gain]), atol=1e-5)
+
+
+def test_piecewise_linear_template_on_given_breakpoints_stays_there():
+    p = PiecewiseLinear.template(breakpoints=[-1, 0.5, 2])
+    assert p.parameters == {"breakpoints": [-1.0, 0.5, 2.0], "values": [0.0, 0.0, 0.0]}
+    # given breakpoints are not spread over the estimation input's range
+    assert p.adapted(np.array([-5.0, 5.0])) is p
+    with pytest.raises(ParameterError, match="breakpoints"):
+        PiecewiseLinear.template(breakpoints=[1.0])

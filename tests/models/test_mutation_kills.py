@@ -118,3 +118,37 @@ def test_arx_from_dict_without_offsets_has_zero_offsets():
     loaded = model_from_dict(data)
     np.testing.assert_array_equal(loaded.simulate(U), m.simulate(U))
     assert list(np.ravel(loaded.input_offset)) == [0.0]
+
+
+def test_extrapolation_names_the_linear_blocks_output_leaving_its_range():
+    m = Wiener(
+        "u",
+        "y",
+        output_block=Polynomial([1.0, 2.0], constant=False),
+        na=1,
+        nb=1,
+        nk=1,
+        a=[-0.5],
+        b=[1.0],
+    ).replace(ranges={"u": [-1.0, 1.0], "x": [-1.0, 1.0]})
+    # x(t) = 0.5 x(t-1) + u(t-1) = [0, 0, 3, 1.5]: 2 of 4 samples above 1 (by 2 = 100 %)
+    assert m.extrapolation(np.array([0.0, 3.0, 0.0, 0.0])) == [
+        "the linear block's output x (input of the output block) leaves the range seen in "
+        "estimation [-1, 1] in 2 of 4 samples (by up to 100 % of that range): the model "
+        "extrapolates there (along the block's tangent at the range's end)"
+    ]
+    assert m.extrapolation(np.array([0.0, 1.0, 0.0, 0.0])) == []
+
+
+def test_saved_chain_whose_blocks_do_not_fit_names_the_structure():
+    data = Wiener(
+        "u", "y", output_block=Polynomial([1.0, 0.5], constant=False), na=1, nb=1, nk=1, a=[-0.5]
+    ).to_dict()
+    data["chain"] = Hammerstein(
+        "u", "y", input_block=Polynomial([0.0, 1.0]), na=1, nb=1, nk=1, a=[-0.5]
+    ).to_dict()["chain"]
+    with pytest.raises(ModelFileError) as info:
+        model_from_dict(data)
+    assert (
+        str(info.value) == "the wiener model's blocks do not fit: a wiener model has no input block"
+    )
