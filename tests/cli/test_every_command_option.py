@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import io
 import json
 import sys
 from collections.abc import Callable
@@ -28,6 +29,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import typer
+from rich.console import Console
 from typer.testing import CliRunner
 
 import blockid.data
@@ -50,7 +52,7 @@ from blockid.data import Dataset
 from blockid.models import ARX, load_model, save_model
 
 # by their module paths: the package attributes of these names may be the functions
-_identify_cli = importlib.import_module("blockid.cli.identify")
+_common = importlib.import_module("blockid.cli._common")
 _identify_module = importlib.import_module("blockid.fitting.identify")
 _export_module = importlib.import_module("blockid.models.export")
 _stream_module = importlib.import_module("blockid.workflows.stream")
@@ -257,6 +259,45 @@ def _run(*args: Any, code: int = 0, input: str | None = None) -> Any:
 
 def _json(r: Any) -> Any:
     return json.loads(r.stdout)
+
+
+class _OnATerminal:
+    """``sys`` as the command line sees it, with stderr a terminal (where progress is
+    shown)."""
+
+    class stderr:
+        @staticmethod
+        def isatty() -> bool:
+            return True
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(sys, name)
+
+
+def _progress_text(run: Callable[[], Any]) -> str:
+    """What ``run`` (a command) shows as progress when stderr is a terminal: the
+    spinners and bars of :mod:`blockid.cli._common`, drawn on a terminal console."""
+    shown = io.StringIO()
+    console = Console(file=shown, force_terminal=True, width=200)
+    with mock.patch.object(_common, "sys", _OnATerminal()):
+        with mock.patch.object(_common, "stderr", console):
+            run()
+    return shown.getvalue()
+
+
+def _quiet(command: Callable[..., Any], *shown: str) -> Callable[[Files, Calls], None]:
+    """A check of ``--quiet``: ``command(f, *args)`` shows progress saying ``shown`` on a
+    terminal, and nothing with ``--quiet``, ``-q`` or ``--json`` (nor when stderr is not
+    a terminal: every other run of the table)."""
+
+    def check(f: Files, calls: Calls) -> None:
+        text = _progress_text(lambda: command(f))
+        assert all(what in text for what in shown), text
+        for args in (("--quiet",), ("-q",), ("--json",)):
+            assert _progress_text(lambda args=args: command(f, *args)) == "", args
+        assert _progress_text(lambda: command(f, "--quiet", "--json")) == ""
+
+    return check
 
 
 # ----------------------------------------------------------------------------- fit
@@ -657,19 +698,6 @@ def _searched(calls: Calls) -> tuple[Any, Any, dict[str, Any]]:
     return est, val, kwargs
 
 
-class _OnATerminal:
-    """``sys`` as ``blockid identify`` sees it, with stderr a terminal (where the
-    progress bar is shown)."""
-
-    class stderr:
-        @staticmethod
-        def isatty() -> bool:
-            return True
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(sys, name)
-
-
 def identify_input(f, calls):
     _identify(f, "-u", "u2", "--json")
     assert _searched(calls)[0].inputs == ("u", "u2")
@@ -746,11 +774,16 @@ def identify_experiment_column(f, calls):
 
 
 def identify_quiet(f, calls):
-    with mock.patch.object(_identify_cli, "sys", _OnATerminal()):
-        _identify(f)
-        _identify(f, "--quiet")
-    (_, shown), (_, quiet) = calls["identify"]
-    assert callable(shown["progress"]) and "progress" not in quiet
+    def search(*args: Any, progress: Any = None, **kwargs: Any) -> Any:
+        seen.append(progress)
+        if progress is not None:
+            progress("orders", 1, 4, "arx na=2 nb=2 nk=1")
+        return _identified()
+
+    seen: list[Any] = []
+    with mock.patch.object(_identify_module, "identify", search):
+        _quiet(_identify, "orders", "1/4", "arx na=2 nb=2 nk=1")(f, calls)
+    assert callable(seen[0]) and seen[1:] == [None] * 4
 
 
 def identify_report(f, calls):
@@ -775,7 +808,7 @@ def identify_force(f, calls):
 def identify_json(f, calls):
     plain = _identify(f).stdout
     assert "candidates ranked by free-run RMSE" in plain
-    with mock.patch.object(_identify_cli, "sys", _OnATerminal()):
+    with mock.patch.object(_common, "sys", _OnATerminal()):
         doc = _json(_identify(f, "--json"))  # no progress bar either
     assert doc == json.loads(json.dumps(_identified().to_dict()))
     assert "progress" not in calls["identify"][1][1]
@@ -1258,6 +1291,44 @@ def root_version(f, calls):
     assert _run("--version").stdout == f"blockid {__version__}\n"
 
 
+# ----------------------------------------------------------------------------- --quiet
+def _fit_to_file(f: Files, *args: Any) -> Any:
+    return _fit(f, "-o", f.path("m.json"), "--force", *args)
+
+
+def _compare_with_report(f: Files, *args: Any) -> Any:
+    return _compare(f, "--report", f.path("compare.html"), "--force", *args)
+
+
+def _network_to_file(f: Files, *args: Any) -> Any:
+    return _network(f, "-o", f.path("network.json"), "--force", *args)
+
+
+def _workflow(*command: Any) -> Callable[..., Any]:
+    """A reproduce or demo command writing into a folder of the test's own."""
+    return lambda f, *args: _run(*command, "--plot", f.path("figures"), "--force", *args)
+
+
+QUIET = {
+    "fit": _quiet(_fit_to_file, "fitting arx (default method)"),
+    "compare": _quiet(
+        _compare_with_report, "identifying and comparing the structures", "writing the report"
+    ),
+    "fit-network": _quiet(_network_to_file, "fitting the network's 1 subsystem(s)"),
+    "report": _quiet(
+        lambda f, *a: _report(f, "--force", *a),
+        "identifying and comparing the structures",
+        "writing the report",
+    ),
+    "fleet": _quiet(lambda f, *a: _fleet(f, "--force", *a), "fitting records"),
+    "demo": _quiet(_workflow("demo"), "paper B's experiment"),
+    "reproduce windtunnel": _quiet(_workflow("reproduce", "windtunnel"), "paper A's experiment"),
+    "reproduce electrohydraulic": _quiet(
+        _workflow("reproduce", "electrohydraulic"), "paper B's experiment"
+    ),
+}
+
+
 # ----------------------------------------------------------------------------- the table
 #: (command, option) -> a check that runs the command with the option off its default.
 CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
@@ -1382,6 +1453,7 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("example-data", "out"): example_out,
     ("example-data", "seed"): example_seed,
     ("example-data", "force"): example_force,
+    **{(command, "quiet"): check for command, check in QUIET.items()},
 }
 
 

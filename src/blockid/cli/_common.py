@@ -28,6 +28,7 @@ __all__ = [
     "Inputs",
     "Json",
     "Outputs",
+    "Quiet",
     "SamplingTime",
     "Seed",
     "TimeColumn",
@@ -38,6 +39,8 @@ __all__ = [
     "metrics_table",
     "print_json",
     "print_model",
+    "progress_bar",
+    "progress_shown",
     "refuse_to_overwrite",
     "stderr",
     "stdout",
@@ -133,19 +136,48 @@ ExperimentColumn = Annotated[
 ]
 Force = Annotated[bool, typer.Option("--force", help="Replace an existing output file.")]
 Json = Annotated[bool, typer.Option("--json", help="Print one JSON document on stdout.")]
+#: ``--quiet`` of every command that shows progress (:func:`busy`, :func:`progress_bar`).
+Quiet = Annotated[
+    bool,
+    typer.Option(
+        "--quiet",
+        "-q",
+        help="No progress on stderr (there is none when stderr is not a terminal, nor "
+        "with --json).",
+    ),
+]
 Seed = Annotated[
     int, typer.Option(metavar="N", help="Random seed: the same seed gives the same run.")
 ]
 
 
+def progress_shown(quiet: bool) -> bool:
+    """Whether a command shows progress: on a terminal's stderr, unless ``quiet``.
+
+    Commands pass ``quiet or json_out``: with ``--json`` nothing but the document is
+    written, and progress never goes to stdout.
+    """
+    return not quiet and sys.stderr.isatty()
+
+
 def busy(what: str, quiet: bool = False) -> Any:
-    """A spinner with elapsed time on a terminal while ``what`` runs; nothing when stderr
-    is piped or ``quiet`` (JSON output stays clean: the spinner writes to stderr only)."""
+    """A spinner on stderr while ``what`` runs, when :func:`progress_shown` (else a
+    context that does nothing)."""
     import contextlib
 
-    if quiet or not sys.stderr.isatty():
+    if not progress_shown(quiet):
         return contextlib.nullcontext()
     return stderr.status(f"{what} ...", spinner="dots")
+
+
+def progress_bar(quiet: bool, *columns: Any) -> Any:
+    """A rich progress bar on stderr (``columns``: rich's default without), cleared when
+    done, when :func:`progress_shown`; else None."""
+    if not progress_shown(quiet):
+        return None
+    from rich.progress import Progress
+
+    return Progress(*columns, console=stderr, transient=True)
 
 
 def refuse_to_overwrite(out: Path | None, force: bool) -> None:

@@ -13,6 +13,7 @@ import typer
 from blockid.cli._common import (
     Force,
     Json,
+    Quiet,
     Seed,
     busy,
     cli_errors,
@@ -37,6 +38,10 @@ FiguresDir = Annotated[
 ]
 #: ``--figures``, the flag's old name, kept (hidden) so that scripts do not break.
 OldFiguresDir = Annotated[Path | None, typer.Option("--figures", hidden=True)]
+#: What the spinner says while the papers' experiments run (demo and reproduce).
+_ELECTROHYDRAULIC = "paper B's experiment: simulating the arm, fitting 4 structures 2 ways"
+_WINDTUNNEL = "paper A's experiment: simulating the tunnel, fitting the networks"
+
 FolderForce = Annotated[
     bool, typer.Option("--force", help="Write into a folder that is not empty (files replaced).")
 ]
@@ -73,6 +78,7 @@ def demo(
     output_dir: Annotated[Path | None, typer.Option("--output-dir", hidden=True)] = None,
     seed: Annotated[int, typer.Option(metavar="N", help="Random seed of the simulated plant.")] = 0,
     force: FolderForce = False,
+    quiet: Quiet = False,
     json_out: Json = False,
 ) -> None:
     """Run the built-in example: paper B's experiment on the simulated excavator arm.
@@ -83,7 +89,7 @@ def demo(
     from blockid.workflows.demo import run_demo
 
     output_dir = _folder(plot, output_dir, "demo-output", force)
-    with busy("paper B's experiment: simulating the arm, fitting 4 structures 2 ways", json_out):
+    with busy(_ELECTROHYDRAULIC, quiet or json_out):
         result = run_demo(output_dir, seed=seed)
     if json_out:
         print_json(result.to_dict())
@@ -99,6 +105,7 @@ def reproduce_windtunnel(
     plot: FiguresDir = None,
     figures: OldFiguresDir = None,
     force: FolderForce = False,
+    quiet: Quiet = False,
     json_out: Json = False,
 ) -> None:
     """Paper A: block-oriented network vs conventional linear model (Table 2).
@@ -108,7 +115,7 @@ def reproduce_windtunnel(
     from blockid.workflows.reproduce_windtunnel import PAPER_TABLE, reproduce_windtunnel
 
     figures = _folder(plot, figures, "reproduce-windtunnel", force)
-    with busy("paper A's experiment: simulating the tunnel, fitting the networks", json_out):
+    with busy(_WINDTUNNEL, quiet or json_out):
         result = reproduce_windtunnel(seed=seed, figures_dir=figures)
     if json_out:
         print_json(result.to_dict())
@@ -191,6 +198,7 @@ def reproduce_electrohydraulic(
             "'none' for the step-like moves that ask the models to extrapolate in frequency.",
         ),
     ] = "0.5",
+    quiet: Quiet = False,
     json_out: Json = False,
 ) -> None:
     """Paper B: Hammerstein-Wiener vs Hammerstein, Wiener and ARX (Table 2).
@@ -201,7 +209,7 @@ def reproduce_electrohydraulic(
 
     figures = _folder(plot, figures, "reproduce-electrohydraulic", force)
     bandwidth = _bandwidth(validation_bandwidth)
-    with busy("paper B's experiment: simulating the arm, fitting 4 structures 2 ways", json_out):
+    with busy(_ELECTROHYDRAULIC, quiet or json_out):
         result = reproduce_electrohydraulic(
             seed=seed, figures_dir=figures, validation_bandwidth=bandwidth
         )

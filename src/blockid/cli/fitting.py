@@ -19,6 +19,7 @@ from blockid.cli._common import (
     Inputs,
     Json,
     Outputs,
+    Quiet,
     SamplingTime,
     TimeColumn,
     busy,
@@ -85,6 +86,7 @@ def fit(
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,
     force: Force = False,
+    quiet: Quiet = False,
     json_out: Json = False,
     **options: Any,
 ) -> None:
@@ -100,7 +102,7 @@ def fit(
     if plot is not None and "record_history" in accepted_options(structure, method):
         options["record_history"] = True  # parameter trajectories for the figure
     try:
-        with busy(f"fitting {structure} ({method or 'default method'})", quiet=json_out):
+        with busy(f"fitting {structure} ({method or 'default method'})", quiet or json_out):
             result = fit_model(data, structure, method=method, **options)
     except EstimationError as exc:
         if plot is not None:
@@ -155,6 +157,7 @@ def compare(
     json_out: Json = False,
     report: ReportFile = None,
     force: Force = False,
+    quiet: Quiet = False,
     **options: Any,
 ) -> None:
     """Identify several structures and compare them on validation data.
@@ -175,14 +178,15 @@ def compare(
     opts = given(options)
     if report is not None:  # trajectories and standard errors for the report's figures
         opts = {"record_history": True, "standard_errors": True, **opts}
-    with busy("identifying and comparing the structures", quiet=json_out):
+    with busy("identifying and comparing the structures", quiet or json_out):
         result = compare_structures(est, val, **names, method=method, options=opts)
     if report is not None:
-        write_report_option(
-            report, data_paths=data_paths, compare=result, data=data, estimation=est,
-            validation=val, estimation_range=estimation, validation_range=validation,
-            force=force,
-        )  # fmt: skip
+        with busy("writing the report", quiet or json_out):
+            write_report_option(
+                report, data_paths=data_paths, compare=result, data=data, estimation=est,
+                validation=val, estimation_range=estimation, validation_range=validation,
+                force=force,
+            )  # fmt: skip
     if json_out:
         print_json(result.to_dict())
         return
@@ -231,6 +235,7 @@ def fit_network(
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,
     force: Force = False,
+    quiet: Quiet = False,
     json_out: Json = False,
 ) -> None:
     """Identify a network of subsystems, each from its own measured signals (paper A).
@@ -248,7 +253,8 @@ def fit_network(
     specs = [parse_subsystem(text) for text in subsystems]
     inputs, outputs = network_signals(specs)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
-    result = fit(data, specs)
+    with busy(f"fitting the network's {len(specs)} subsystem(s)", quiet or json_out):
+        result = fit(data, specs)
     record = result.estimation_record()
     if out is not None:
         save_model(result.model, out, record, overwrite=force)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import glob
 import inspect
 import os
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -21,10 +20,12 @@ from blockid.cli._common import (
     Inputs,
     Json,
     Outputs,
+    Quiet,
     SamplingTime,
     TimeColumn,
     cli_errors,
     print_json,
+    progress_bar,
     stderr,
     stdout,
 )
@@ -93,6 +94,7 @@ def fleet(
     ts: SamplingTime = None,
     time_column: TimeColumn = None,
     force: Force = False,
+    quiet: Quiet = False,
     json_out: Json = False,
     **options: Any,
 ) -> None:
@@ -110,11 +112,8 @@ def fleet(
 
     files = _expand(patterns)
     read = {"sampling_time": ts, "time_column": time_column}
-    bar, on_result = None, None
-    if not json_out and sys.stderr.isatty():  # progress on a terminal only
-        from rich.progress import Progress
-
-        bar = Progress(console=stderr, transient=True)
+    bar, on_result = progress_bar(quiet or json_out), None
+    if bar is not None:
         task = bar.add_task("fitting records", total=len(files))
         on_result = lambda row: bar.advance(task)  # noqa: E731
         bar.start()

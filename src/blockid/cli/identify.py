@@ -7,7 +7,6 @@ saves the chosen model.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -20,15 +19,17 @@ from blockid.cli._common import (
     Inputs,
     Json,
     Outputs,
+    Quiet,
     SamplingTime,
     TimeColumn,
+    busy,
     cli_errors,
     load_data,
     metrics_table,
     print_json,
     print_model,
+    progress_bar,
     refuse_to_overwrite,
-    stderr,
     stdout,
 )
 from blockid.cli.report import ReportFile, write_report_option
@@ -36,21 +37,21 @@ from blockid.cli.report import ReportFile, write_report_option
 __all__ = ["identify"]
 
 
-def _progress(enabled: bool) -> tuple[Any, Any]:
-    """A rich progress bar on a terminal (stderr), or nothing."""
-    if not enabled:
-        return None, None
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+def _progress(quiet: bool) -> tuple[Any, Any]:
+    """A progress bar of the search's stages (:func:`~blockid.cli._common.progress_bar`)
+    and the callback that advances it, or (None, None)."""
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    bar = Progress(
+    bar = progress_bar(
+        quiet,
         TextColumn("{task.description:<15}"),
         BarColumn(),
         TextColumn("{task.completed}/{task.total}"),
         TimeElapsedColumn(),
         TextColumn("{task.fields[label]}", style="dim"),
-        console=stderr,
-        transient=True,
     )
+    if bar is None:
+        return None, None
     tasks: dict[str, Any] = {}
 
     def update(stage: str, done: int, total: int, label: str) -> None:
@@ -97,7 +98,7 @@ def identify(
     ts: SamplingTime = None,
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    quiet: Quiet = False,
     force: Force = False,
     json_out: Json = False,
 ) -> None:
@@ -127,7 +128,7 @@ def identify(
     elif validation_data:
         val = load_data(validation_data, inputs, outputs, ts, time_column, experiment_column)
     names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
-    bar, update = _progress(not (quiet or json_out) and sys.stderr.isatty())
+    bar, update = _progress(quiet or json_out)
     if bar is not None:
         with bar:
             result = run_identify(est, val, structures=names, budget=budget, progress=update)
@@ -145,11 +146,12 @@ def identify(
         whole = None
         if not validation_data:
             whole = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
-        write_report_option(
-            report, data_paths=[*data_paths, *(validation_data or [])], identify=result,
-            data=whole, estimation=est, validation=val, estimation_range=estimation,
-            validation_range=validation, force=force,
-        )  # fmt: skip
+        with busy("writing the report", quiet or json_out):
+            write_report_option(
+                report, data_paths=[*data_paths, *(validation_data or [])], identify=result,
+                data=whole, estimation=est, validation=val, estimation_range=estimation,
+                validation_range=validation, force=force,
+            )  # fmt: skip
     if json_out:
         print_json(result.to_dict())
         return

@@ -21,8 +21,10 @@ from blockid.cli._common import (
     Inputs,
     Json,
     Outputs,
+    Quiet,
     SamplingTime,
     TimeColumn,
+    busy,
     cli_errors,
     load_data,
     print_json,
@@ -150,6 +152,7 @@ def report(
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,
     force: Force = False,
+    quiet: Quiet = False,
     json_out: Json = False,
     **options: Any,
 ) -> None:
@@ -172,19 +175,21 @@ def report(
     names = {} if structures is None else {"structures": _names(structures)}
     # trajectories of the recursive methods and standard errors, for the figures
     opts = {"record_history": True, "standard_errors": True, **given(options)}
-    result = compare_structures(est, val, **names, method=method, options=opts)
-    path = write_report_option(
-        out,
-        data_paths=data_paths,
-        compare=result,
-        data=data,
-        estimation=est,
-        validation=val,
-        estimation_range=estimation,
-        validation_range=validation,
-        force=force,
-        announce=False,
-    )
+    with busy("identifying and comparing the structures", quiet or json_out):
+        result = compare_structures(est, val, **names, method=method, options=opts)
+    with busy("writing the report", quiet or json_out):
+        path = write_report_option(
+            out,
+            data_paths=data_paths,
+            compare=result,
+            data=data,
+            estimation=est,
+            validation=val,
+            estimation_range=estimation,
+            validation_range=validation,
+            force=force,
+            announce=False,
+        )
     if json_out:
         print_json({"report": str(path), "bytes": path.stat().st_size, **result.to_dict()})
         return
