@@ -111,3 +111,53 @@ def test_block_model_on_the_edge_of_stability_is_rejected(rng):
         check_model(edge, data, "test")
     fine = Hammerstein("u", "y", input_block=block, na=1, nb=1, nk=1, a=[0.95])
     check_model(fine, Dataset.from_arrays(u, fine.simulate(u)[:, 0]), "test")
+
+
+@pytest.mark.parametrize("method", ["batch", "rls", "aw-rls", "hierarchical-rls"])
+def test_chunked_regressors_give_the_whole_record_fit(rng, monkeypatch, method):
+    """Long records are fitted chunk by chunk (bounded memory): chunks of 7 rows, which
+    cut every experiment in many places and leave a short last chunk, give the fit of
+    one chunk per experiment (the recursions bit for bit, least squares to rounding)."""
+    import blockid.fitting.arx as arx_fitting
+
+    _, d1 = tito_data(rng, 700, noise=0.05)
+    _, d2 = tito_data(rng, 500, noise=0.05)
+    second = type(d2.experiments[0])("second", d2.experiments[0].u, d2.experiments[0].y)
+    data = Dataset(d1.inputs, d1.outputs, None, [d1.experiments[0], second])
+    options = {"forgetting": 0.99, "max_mse_ratio": None} if method == "hierarchical-rls" else {}
+    # fixed column scales: the recursion sees the same numbers whatever the chunks
+    fixed = {} if method == "batch" else {"scaling": (1.0, 1.0)}
+    whole = fit_arx(data, 2, 2, 1, method=method, **options, **fixed)
+    whole_rms = fit_arx(data, 2, 2, 1, method=method, **options)
+    monkeypatch.setattr(arx_fitting, "CHUNK_ROWS", 7)
+    assert len(list(arx_fitting.regressor_chunks(whole.model, data, 0))) == 100 + 72
+    chunked = fit_arx(data, 2, 2, 1, method=method, **options, **fixed)
+    if method == "batch":
+        np.testing.assert_allclose(params(chunked.model), params(whole.model), rtol=1e-12)
+    else:
+        np.testing.assert_array_equal(params(chunked.model), params(whole.model))
+        # RMS scales summed chunk by chunk differ in the last bits, which P(0) = 1e8
+        # amplifies to about 1e-9
+        chunked_rms = fit_arx(data, 2, 2, 1, method=method, **options)
+        np.testing.assert_allclose(params(chunked_rms.model), params(whole_rms.model), rtol=1e-7)
+    for key, values in whole.estimation_metrics.items():
+        for name, value in values.items():
+            assert chunked.estimation_metrics[key][name] == pytest.approx(value, rel=1e-9)
+
+
+def test_chunked_least_squares_names_a_column_the_whole_record_leaves_unexcited(rng):
+    """A chunk alone may not excite every column (an input at rest for the first
+    rows): only the whole record decides rank deficiency."""
+    u = rng.standard_normal((3000, 2))
+    u[:2000, 1] = 0.0  # the second input rests for the first chunks
+    y = reference.tito_arx().simulate(u)
+    data = Dataset.from_arrays(u, y, inputs=["v1", "v2"], outputs=["y1", "y2"])
+    import blockid.fitting.arx as arx_fitting
+
+    full = fit_arx(data, 2, 2, 1).model
+    chunked = arx_fitting.least_squares(full, data, 0)
+    np.testing.assert_allclose(chunked, full.parameter_vector(0), rtol=1e-10)
+    u[:, 1] = 0.0
+    dead = Dataset.from_arrays(u, y, inputs=["v1", "v2"], outputs=["y1", "y2"])
+    with pytest.raises(errors.EstimationError, match="v2"):
+        fit_arx(dead, 2, 2, 1)

@@ -73,9 +73,10 @@ def _means(case: Case) -> tuple[float, float]:
 
 def _regression(case: Case, model: ARX) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The ARX regressor, target and the column scales the recursive methods use."""
-    e = case.data().experiments[0]
+    data = case.data()
+    e = data.experiments[0]
     Phi, target = model.regressors(e.u, e.y, 0)
-    return Phi, target, regressor_scale(model, 0, "rms", Phi)
+    return Phi, target, regressor_scale(model, 0, "rms", data)
 
 
 def _one_step_mse(case: Case, model: Any) -> float:

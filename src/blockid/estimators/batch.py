@@ -8,6 +8,7 @@ answer as one solve of the whole record, with memory independent of its length.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -59,8 +60,38 @@ class BatchLeastSquares(RegressionEstimator):
             self.__dict__.pop(attr, None)
         return self.partial_fit(Phi, y, sample_weight)
 
+    def fit_chunks(self, chunks: Iterable[tuple[Any, Any]]) -> BatchLeastSquares:
+        """Solve the least-squares problem over ``(Phi, y)`` chunks of one record.
+
+        The same answer as :meth:`fit` on the stacked chunks, holding one chunk at a
+        time: the factor is folded chunk by chunk and solved once, at the end (so a
+        chunk that alone does not excite every column is no error).
+        """
+        for attr in ("_theta", "_R", "_state_shape"):
+            self.__dict__.pop(attr, None)
+        Phi = None
+        for Phi, y in chunks:
+            Phi = self._fold(Phi, y, None)
+        if Phi is None:
+            raise EstimationError("least squares needs at least one row of regressors")
+        n = self._state_shape[0]
+        if self.n_samples_seen_ < n:
+            raise EstimationError(
+                f"least squares needs at least {n} rows for {n} parameters, got "
+                f"{self.n_samples_seen_}"
+            )
+        self._solve(n, Phi)
+        return self
+
     def partial_fit(self, Phi: Any, y: Any, sample_weight: Any = None) -> BatchLeastSquares:
         """Fold more rows into the factorisation and re-solve."""
+        Phi = self._fold(Phi, y, sample_weight)
+        if self.n_samples_seen_ >= Phi.shape[1]:  # fewer rows than parameters: wait
+            self._solve(Phi.shape[1], Phi)
+        return self
+
+    def _fold(self, Phi: Any, y: Any, sample_weight: Any) -> np.ndarray:
+        """Fold rows into the triangular factor; returns the checked ``Phi``."""
         self._validate_params()
         Phi, Y, one_d = check_regression(Phi, y)
         n, m = Phi.shape[1], Y.shape[1]
@@ -84,9 +115,7 @@ class BatchLeastSquares(RegressionEstimator):
         self._state_shape = (n, m)
         self._one_d = one_d
         self.n_samples_seen_ = seen + Phi.shape[0]
-        if self.n_samples_seen_ >= n:  # fewer rows than parameters: wait for more chunks
-            self._solve(n, Phi)
-        return self
+        return Phi
 
     def _solve(self, n: int, Phi: np.ndarray) -> None:
         R11, R12, R22 = self._R[:n, :n], self._R[:n, n:], self._R[n:, n:]

@@ -14,6 +14,11 @@ about 1e-8 whatever the units of the signals. Online learning
 by a given scale of the signal it is a lag of, or by nothing, which ``scaling`` selects
 here too (:func:`regressor_scale`).
 
+Regressors are built :data:`CHUNK_ROWS` rows at a time (:func:`regressor_chunks`), so
+a long record costs one chunk of regressors on top of the data, whatever its length:
+batch least squares folds the chunks into one triangular factor, the recursive
+estimators run chunk after chunk with their state carried over.
+
 The fitted model is checked before it is returned: finite parameters, a stable
 ``A(z)`` (unless ``allow_unstable``), and, for the recursive methods, convergence: the
 one-step mean squared error on the estimation data may not exceed ``max_mse_ratio``
@@ -24,6 +29,7 @@ regressors stalls this way, see docs/convergence.md) is reported, not returned.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -41,7 +47,19 @@ from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
 
-__all__ = ["ARX_METHODS", "fit_arx", "make_estimator", "regressor_scale", "signal_scales"]
+__all__ = [
+    "ARX_METHODS",
+    "CHUNK_ROWS",
+    "fit_arx",
+    "least_squares",
+    "make_estimator",
+    "regressor_chunks",
+    "regressor_scale",
+    "signal_scales",
+]
+
+#: Rows of regressors built at a time (a few MB for the usual orders).
+CHUNK_ROWS = 1 << 16
 
 #: Method names accepted by :func:`fit_arx` (and ``blockid fit --method``).
 ARX_METHODS = ("batch", "rls", "aw-rls", "hierarchical-rls")
@@ -97,17 +115,42 @@ def signal_scales(scaling: Any, n_inputs: int, n_outputs: int) -> Any:
     return su, sy
 
 
-def regressor_scale(model: ARX, i: int, scaling: Any, Phi: np.ndarray | None = None) -> np.ndarray:
+def regressor_chunks(
+    model: ARX, data: Dataset, i: int, rows: int | None = None
+) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """``(Phi, target)`` of output ``i`` over ``data``, at most ``rows`` rows at a time
+    (default :data:`CHUNK_ROWS`).
+
+    Experiment after experiment, in order: stacked, the chunks are
+    ``model.regressors`` of every experiment, but only one chunk is held at a time.
+    """
+    lag, rows = model.max_lag, rows or CHUNK_ROWS
+    for e in data.experiments:
+        for start in range(lag, e.n_samples, rows):
+            stop = min(start + rows, e.n_samples)
+            yield model.regressors(e.u[start - lag : stop], e.y[start - lag : stop], i)
+
+
+def least_squares(model: ARX, data: Dataset, i: int) -> np.ndarray:
+    """Least-squares parameters of output ``i`` of ``model`` over ``data``, by chunks."""
+    return BatchLeastSquares().fit_chunks(regressor_chunks(model, data, i)).coef_
+
+
+def regressor_scale(model: ARX, i: int, scaling: Any, data: Dataset | None = None) -> np.ndarray:
     """Divisors of the regressor columns of output ``i`` before a recursive estimator runs.
 
-    ``"rms"``: every column's RMS over ``Phi`` (1 for an all-zero column); ``"none"``:
+    ``"rms"``: every column's RMS over ``data`` (1 for an all-zero column); ``"none"``:
     1; ``(input_scales, output_scales)`` from :func:`signal_scales`: the scale of the
     signal a column is a lag of (columns as :meth:`~blockid.models.ARX.regressors`).
     """
     if isinstance(scaling, str):
         if scaling == "none":
             return np.ones(model.n_parameters(i))
-        scale = np.sqrt(np.mean(Phi**2, axis=0))
+        squares, rows = np.zeros(model.n_parameters(i)), 0
+        for Phi, _ in regressor_chunks(model, data, i):
+            squares += np.sum(Phi**2, axis=0)
+            rows += Phi.shape[0]
+        scale = np.sqrt(squares / max(rows, 1))
         scale[scale == 0] = 1.0
         return scale
     su, sy = scaling
@@ -144,23 +187,33 @@ CONVERGENCE_FLOOR = 1e-8
 
 
 def _check_converged(
-    Phi: np.ndarray,
-    target: np.ndarray,
+    model: ARX,
+    data: Dataset,
+    i: int,
     theta: np.ndarray,
     method: str,
-    name: str,
     ratio: float,
     advice: str,
 ) -> None:
-    """Raise when a recursive estimate is far from the least-squares optimum.
+    """Raise when a recursive estimate of output ``i`` is far from the least-squares
+    optimum.
 
     The estimate passes when its one-step MSE is at most ``ratio`` times the optimum
     plus :data:`CONVERGENCE_FLOOR` times the variance of the output.
     """
-    best = BatchLeastSquares().fit(Phi, target).coef_
-    mse_best = float(np.mean((target - Phi @ best) ** 2))
-    mse = float(np.mean((target - Phi @ theta) ** 2))
-    floor = CONVERGENCE_FLOOR * float(np.var(target)) + 1e-300
+    name = model.outputs[i]
+    best = least_squares(model, data, i)
+    sse_best = sse = total = total2 = 0.0
+    rows = 0
+    for Phi, target in regressor_chunks(model, data, i):
+        sse_best += float(np.sum((target - Phi @ best) ** 2))
+        sse += float(np.sum((target - Phi @ theta) ** 2))
+        total += float(np.sum(target))
+        total2 += float(np.sum(target**2))
+        rows += target.shape[0]
+    mse_best, mse = sse_best / rows, sse / rows
+    variance = max(total2 / rows - (total / rows) ** 2, 0.0)
+    floor = CONVERGENCE_FLOOR * variance + 1e-300
     if mse > ratio * mse_best + floor:
         raise EstimationError(
             f"output {name!r}: {method} did not converge: its one-step MSE on the estimation "
@@ -321,9 +374,6 @@ def fit_arx(
     for i, name in enumerate(model.outputs):
         if model.n_parameters(i) == 0:
             continue
-        blocks = [model.regressors(e.u, e.y, i) for e in data.experiments]
-        Phi = np.vstack([b[0] for b in blocks])
-        target = np.concatenate([b[1] for b in blocks])
         est = make_estimator(
             method,
             forgetting=schedule,
@@ -334,29 +384,26 @@ def fit_arx(
         )
         if method == "batch":
             try:
-                theta = est.fit(Phi, target).coef_
+                theta = est.fit_chunks(regressor_chunks(model, data, i)).coef_
             except EstimationError as exc:
                 raise _rank_deficient(exc, model, i, data) from None
         else:
-            scale = regressor_scale(model, i, scaling, Phi)
+            scale = regressor_scale(model, i, scaling, data)
             try:
-                for _ in range(int(passes)):
-                    start = 0
-                    for rows, _ in blocks:  # one experiment after another
-                        stop = start + rows.shape[0]
-                        est.partial_fit(Phi[start:stop] / scale, target[start:stop])
-                        start = stop
+                for _ in range(int(passes)):  # chunk after chunk, experiment after experiment
+                    for Phi, target in regressor_chunks(model, data, i):
+                        est.partial_fit(Phi / scale, target)
             except EstimationError as exc:
                 raise EstimationError(f"output {name!r}: {exc}") from None
             theta = est.coef_ / scale
             if max_mse_ratio is not None:
                 try:
                     _check_converged(
-                        Phi,
-                        target,
+                        model,
+                        data,
+                        i,
                         theta,
                         method,
-                        name,
                         max_mse_ratio,
                         _advice(method, schedule, int(passes)),
                     )

@@ -29,8 +29,8 @@ import numpy as np
 
 from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError
-from blockid.estimators import BatchLeastSquares
 from blockid.evaluation.metrics import metrics_by_output
+from blockid.fitting.arx import least_squares
 from blockid.models.arx import ARX
 
 __all__ = [
@@ -66,10 +66,7 @@ def linear_baseline(data: Dataset, na: int, nb: int, nk: int) -> ARX | None:
     model = ARX(data.inputs, data.outputs, na, nb, nk, input_offset=u_off, output_offset=y_off)
     try:
         for i in range(len(model.outputs)):
-            rows = [model.regressors(e.u, e.y, i) for e in data.experiments]
-            Phi = np.vstack([r[0] for r in rows])
-            target = np.concatenate([r[1] for r in rows])
-            model.set_parameter_vector(i, BatchLeastSquares().fit(Phi, target).coef_)
+            model.set_parameter_vector(i, least_squares(model, data, i))
     except EstimationError:
         return None
     return model if model.is_stable() else None

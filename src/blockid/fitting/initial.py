@@ -60,7 +60,7 @@ unstable has its unstable poles reflected into the unit circle.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -70,6 +70,7 @@ from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
+from blockid.fitting import arx as arx_fitting
 from blockid.fitting.checks import STABILITY_MARGIN, simulation_mse
 from blockid.fitting.registry import STRUCTURES
 from blockid.models.block import BlockModel
@@ -150,15 +151,65 @@ def _lagged(sig: np.ndarray, lag: int, n0: int) -> np.ndarray:
     return sig[n0 - lag : sig.shape[0] - lag]
 
 
-def _least_squares(Phi: np.ndarray, target: np.ndarray, what: str) -> np.ndarray:
-    """QR least squares on RMS-scaled columns (powers of ``u`` differ wildly in scale)."""
-    scale = np.sqrt(np.mean(Phi**2, axis=0))
+Chunks = Callable[[], Iterator[tuple[np.ndarray, np.ndarray]]]
+
+
+def _row_chunks(
+    signals: Sequence[tuple[np.ndarray, ...]],
+    n0: int,
+    build: Callable[..., tuple[np.ndarray, np.ndarray]],
+) -> Chunks:
+    """Regression rows of every experiment, at most ``CHUNK_ROWS`` at a time.
+
+    ``signals`` holds one tuple of equally long signals per experiment; ``build`` maps
+    slices of them to ``(rows, target)`` for the slice's samples ``n0 ..`` (as for a
+    whole experiment). Returns a function that starts a fresh pass over the chunks, so
+    that a long record never has all its regressors in memory at once.
+    """
+
+    def chunks() -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        rows = arx_fitting.CHUNK_ROWS
+        for parts in signals:
+            N = parts[0].shape[0]
+            for start in range(n0, N, rows):
+                stop = min(start + rows, N)
+                yield build(*(p[start - n0 : stop] for p in parts))
+
+    return chunks
+
+
+def _chunked_least_squares(chunks: Chunks, what: str) -> np.ndarray:
+    """QR least squares on RMS-scaled columns (powers of ``u`` differ wildly in scale),
+    over chunks of rows: one pass for the scales, one folding the scaled rows."""
+    squares, rows = 0.0, 0
+    for Phi, _ in chunks():
+        squares = squares + np.sum(Phi**2, axis=0)
+        rows += Phi.shape[0]
+    scale = np.sqrt(np.asarray(squares, dtype=float) / max(rows, 1))
     scale[scale == 0] = 1.0
     try:
-        theta = BatchLeastSquares().fit(Phi / scale, target).coef_
+        theta = BatchLeastSquares().fit_chunks((P / scale, t) for P, t in chunks()).coef_
     except EstimationError as exc:
         raise EstimationError(f"initial estimate ({what}): {exc}") from None
     return theta / scale
+
+
+def _least_squares(Phi: np.ndarray, target: np.ndarray, what: str) -> np.ndarray:
+    """:func:`_chunked_least_squares` of rows held in memory."""
+    return _chunked_least_squares(lambda: iter([(Phi, target)]), what)
+
+
+def _minimum_norm(chunks: Chunks) -> tuple[np.ndarray, float]:
+    """``lstsq(G, t)`` over chunks ``(G, t)``, and the residual norm: the triangular
+    factor of ``[G | t]`` folded chunk by chunk, then the small system solved."""
+    R = None
+    for G, t in chunks():
+        rows = np.column_stack((G, t))
+        R = np.linalg.qr(rows if R is None else np.vstack((R, rows)), mode="r")
+    n = R.shape[1] - 1
+    v, *_ = np.linalg.lstsq(R[:n, :n], R[:n, n], rcond=None)
+    residual = np.hypot(np.linalg.norm(R[:n, :n] @ v - R[:n, n]), np.linalg.norm(R[n:, n]))
+    return v, float(residual)
 
 
 def _stabilise(a: np.ndarray) -> np.ndarray:
@@ -180,16 +231,23 @@ def _max_lag(na: int, nb: int, nk: int) -> int:
     return max(na, nk + nb - 1, 1)
 
 
-def _constant_rotation(G: np.ndarray) -> tuple[np.ndarray, bool]:
-    """Basis change ``T`` with ``(G T)[:, 0] == 1`` when the constant is in span(G).
+def _constant_rotation(
+    u: Sequence[np.ndarray], basis: Callable[[np.ndarray], np.ndarray]
+) -> tuple[np.ndarray, bool]:
+    """Basis change ``T`` with ``(G T)[:, 0] == 1`` when the constant is in span(G),
+    ``G = basis(u)`` over all experiments.
 
     Returns ``(T, True)``, ``T = [v, Q]`` with ``G v = 1`` and ``Q`` an orthonormal
     complement of ``v``; or ``(I, False)`` when the basis does not span constants.
     """
-    n = G.shape[1]
-    ones = np.ones(G.shape[0])
-    v, *_ = np.linalg.lstsq(G, ones, rcond=None)
-    if np.linalg.norm(G @ v - ones) > 1e-8 * np.sqrt(G.shape[0]):
+
+    def rows(ui: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        G = np.asarray(basis(ui), dtype=float)
+        return G, np.ones(G.shape[0])
+
+    v, residual = _minimum_norm(_row_chunks([(ui,) for ui in u], 0, rows))
+    n, N = v.shape[0], sum(ui.shape[0] for ui in u)
+    if residual > 1e-8 * np.sqrt(N):
         return np.eye(n), False
     Q, _ = np.linalg.qr(v[:, None], mode="complete")
     return np.column_stack((v, Q[:, 1:])), True
@@ -200,17 +258,14 @@ def _arx_fit(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares ARX from ``w`` to ``z`` (``b_0`` free); returns stable ``a`` and ``b``."""
     n0 = _max_lag(na, nb, nk)
-    Phi = np.vstack(
-        [
-            np.column_stack(
-                [-_lagged(zi, j, n0) for j in range(1, na + 1)]
-                + [_lagged(wi, nk + i, n0) for i in range(nb)]
-            )
-            for wi, zi in zip(w, z, strict=True)
-        ]
-    )
-    target = np.concatenate([zi[n0:] for zi in z])
-    theta = _least_squares(Phi, target, "linear block")
+
+    def rows(wi: np.ndarray, zi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        cols = [-_lagged(zi, j, n0) for j in range(1, na + 1)]
+        cols += [_lagged(wi, nk + i, n0) for i in range(nb)]
+        return np.column_stack(cols), zi[n0:]
+
+    chunks = _row_chunks(list(zip(w, z, strict=True)), n0, rows)
+    theta = _chunked_least_squares(chunks, "linear block")
     return _stabilise(theta[:na]), theta[na:]
 
 
@@ -229,20 +284,19 @@ def _rank_one_fit(
     coefficient vector, a stable ``a`` and ``b`` with ``b_0 = 1``.
     """
     n0 = _max_lag(na, nb, nk)
-    G = [np.asarray(basis(ui), dtype=float) for ui in u]
-    T, has_constant = _constant_rotation(np.vstack(G))
-    Gt = [g @ T for g in G]
-    k0 = 1 if has_constant else 0  # columns of Gt that vary
-    rows = []
-    for gi, zi in zip(Gt, z, strict=True):
+    T, has_constant = _constant_rotation(u, basis)
+    k0 = 1 if has_constant else 0  # columns of G T that vary
+
+    def rows(ui: np.ndarray, zi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        gi = np.asarray(basis(ui), dtype=float) @ T
         cols = [-_lagged(zi, j, n0) for j in range(1, na + 1)]
         if has_constant:
             cols.append(np.ones(zi.shape[0] - n0))
         for i in range(nb):
             cols.extend(_lagged(gi[:, l], nk + i, n0) for l in range(k0, gi.shape[1]))
-        rows.append(np.column_stack(cols))
-    target = np.concatenate([zi[n0:] for zi in z])
-    theta = _least_squares(np.vstack(rows), target, what)
+        return np.column_stack(cols), zi[n0:]
+
+    theta = _chunked_least_squares(_row_chunks(list(zip(u, z, strict=True)), n0, rows), what)
     a = _stabilise(theta[:na])
     C = theta[na + k0 :].reshape(nb, -1)  # C[i, l] = b_i theta_l: rank one by (B1)-(B2)
     U, s, Vt = np.linalg.svd(C, full_matrices=False)
@@ -395,10 +449,14 @@ def _linear_start(
         return None, a, b
     if not block.linear_in_parameters or not b[0] != 0:
         return None
-    u_all = np.concatenate(u)
-    G = np.asarray(block.regressors(u_all), dtype=float)  # type: ignore[attr-defined]
-    v, *_ = np.linalg.lstsq(G, u_all, rcond=None)
-    if np.max(np.abs(G @ v - u_all)) > 1e-9 * (np.max(np.abs(u_all)) + 1e-300):
+
+    def rows(ui: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(block.regressors(ui), dtype=float), ui  # type: ignore[attr-defined]
+
+    chunks = _row_chunks([(ui,) for ui in u], 0, rows)
+    v, _ = _minimum_norm(chunks)
+    worst = max(float(np.max(np.abs(G @ v - ui), initial=0.0)) for G, ui in chunks())
+    if worst > 1e-9 * (max(float(np.max(np.abs(ui), initial=0.0)) for ui in u) + 1e-300):
         return None
     return block.with_vector(b[0] * v), a, b / b[0]
 
@@ -418,9 +476,12 @@ def _with_output_fit(
     start = model.output_block
     if not start.linear_in_parameters:  # no least-squares fit: the template stays
         return None, np.concatenate(x)
-    Phi = np.vstack([start.regressors(xi[n0:]) for xi in x])  # type: ignore[union-attr]
-    target = np.concatenate([yi[n0:] for yi in y])
-    theta = _least_squares(Phi, target, f"{start.kind} output block")
+
+    def rows(xi: np.ndarray, yi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return start.regressors(xi[n0:]), yi[n0:]  # type: ignore[union-attr]
+
+    chunks = _row_chunks(list(zip(x, y, strict=True)), n0, rows)
+    theta = _chunked_least_squares(chunks, f"{start.kind} output block")
     normalised = start.with_vector(theta).normalised_input()
     if normalised is None:
         return None, np.concatenate(x)

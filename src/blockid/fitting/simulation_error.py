@@ -21,6 +21,17 @@ with the ``a``/``b`` sensitivities in one compiled all-pole recursion
 (:mod:`blockid._kernels.simulation`) and multiplied by ``N_2'(x)``; the first
 ``max_lag`` samples' dependence on ``q`` through ``x = N_2^{-1}(y)`` is included.
 
+Long records: the Jacobian has one row per fitted sample. Above
+:data:`LARGE_JACOBIAN` bytes it is not formed: :func:`sensitivity_chunks` walks the
+chain in pieces (each linear block continues from the previous piece's last inputs and
+outputs, exactly), ``J^T J`` and ``J^T r`` are summed piece by piece, and
+Levenberg-Marquardt on these normal equations (:func:`_levenberg_marquardt`, same
+column scaling, stopping rules and early stopping) replaces ``least_squares``. Memory
+then stays a few copies of the data (5 million samples: docs/performance.md).
+Squaring the condition number is harmless here: the columns are scaled to unit norm
+and the problems have tens of parameters, not thousands. ``settings["solver"]`` says
+which solver ran. Chains with a dynamic block (backlash) keep the whole Jacobian.
+
 Stability is enforced by rejection, not by a reparameterisation: a candidate whose
 linear block is unstable, whose parameters are invalid for its block (e.g. a negative
 dead band), or whose simulation is not finite or exceeds ``10^6`` times the output
@@ -57,6 +68,7 @@ non-finite or exploding raises :class:`~blockid.errors.EstimationError`.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -71,9 +83,33 @@ from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.result import FitResult
 from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
 
-__all__ = ["NESTED_START", "fit_simulation_error", "refine", "simulate_with_sensitivities"]
+__all__ = [
+    "LARGE_JACOBIAN",
+    "NESTED_START",
+    "chunkable",
+    "fit_simulation_error",
+    "refine",
+    "sensitivity_chunks",
+    "simulate_with_sensitivities",
+]
 
 METHOD = "simulation-error"
+
+#: Above this many bytes of Jacobian (fitted samples x free parameters x 8) the
+#: refinement does not form it: :func:`_levenberg_marquardt` sums ``J^T J`` and ``J^T r``
+#: piece by piece (:func:`sensitivity_chunks`), so memory stays a few copies of the
+#: data however long the record (chains of static and linear blocks; a dynamic block
+#: keeps the whole-record Jacobian).
+LARGE_JACOBIAN = 64 * 2**20
+
+#: Samples per piece of the sensitivity walk of a large problem.
+_PIECE_ROWS = 1 << 16
+
+#: ``settings["solver"]`` of a refinement, by whether the problem was large.
+SOLVERS = {
+    False: "scipy.optimize.least_squares (trust-region reflective)",
+    True: "Levenberg-Marquardt on the normal equations, in pieces (a long record)",
+}
 
 #: A candidate whose simulation MSE exceeds this multiple of the output variance is
 #: treated as exploding (the bound :func:`check_model` uses).
@@ -159,6 +195,60 @@ def _initial_state(
     return x0, S0
 
 
+def chunkable(model: Any) -> bool:
+    """Whether :func:`sensitivity_chunks` can walk the model in pieces: a chain of
+    static and linear blocks (a dynamic block such as a backlash starts from rest and
+    is run over the whole record)."""
+    return isinstance(model, ChainModel) and all(
+        b.role in ("static", "linear") for b in model.blocks
+    )
+
+
+def sensitivity_chunks(
+    model: ChainModel, u: Any, y_initial: Any = None, rows: int = 1 << 16
+) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """:func:`simulate_with_sensitivities` in pieces of at most ``rows`` samples.
+
+    Yields ``(start, y, dy)`` for consecutive samples ``start .. start + len(y)``: the
+    same values as the whole-record function, holding one piece at a time. A linear
+    block continues from its last ``max_lag`` inputs and outputs (and their
+    sensitivities) of the previous piece, which is exactly the recursion's state; a
+    static block needs no state. Only for :func:`chunkable` models.
+    """
+    if not chunkable(model):
+        raise ParameterError("sensitivity_chunks needs a chain of static and linear blocks")
+    u_arr, _ = model._check_signals(u)
+    signal = u_arr[:, 0] - model.input_offset
+    columns = model.block_columns()
+    n_par = int(sum(int((c >= 0).sum()) for c in columns))
+    last = model.last_linear_index
+    init = _initial_state(model, columns, y_initial, n_par)
+    rows = max(int(rows), max(b.max_lag for b in model.linear_blocks), 1)
+    state: dict[int, tuple[np.ndarray, ...]] = {}
+    for start in range(0, signal.shape[0], rows):
+        s = np.ascontiguousarray(signal[start : start + rows])
+        S = np.zeros((s.shape[0], n_par))
+        for i, block in enumerate(model.blocks):
+            if block.role != "linear":
+                s, S = block.forward(s, S, columns[i], None)
+                continue
+            lag = block.max_lag
+            if start == 0:
+                w_all, Sw_all = s, S
+                x_all, Sx_all = block.forward(s, S, columns[i], init if i == last else None)
+                x, Sx = x_all, Sx_all
+            else:  # the previous piece's last inputs and outputs start this one
+                w_prev, Sw_prev, x_prev, Sx_prev = state[i]
+                w_all = np.concatenate((w_prev, s))
+                Sw_all = np.vstack((Sw_prev, S))
+                x_all, Sx_all = block.forward(w_all, Sw_all, columns[i], (x_prev, Sx_prev))
+                x, Sx = x_all[lag:], Sx_all[lag:]
+            if lag:
+                state[i] = (w_all[-lag:], Sw_all[-lag:], x_all[-lag:], Sx_all[-lag:])
+            s, S = x, Sx
+        yield start, s + model.output_offset, S
+
+
 # ----------------------------------------------------------------------------- problem
 @dataclass
 class _Segment:
@@ -234,8 +324,6 @@ class _Problem:
 
     def jacobian(self, theta: np.ndarray) -> np.ndarray:
         """Jacobian at an accepted iterate; also the early-stopping monitor."""
-        tracker = self.tracker
-        tracker.njev += 1
         model = self.template.with_free_parameters(theta)
         n0 = self.n0
         blocks = []
@@ -243,6 +331,32 @@ class _Problem:
             _, dy = simulate_with_sensitivities(model, s.u[: s.n_fit], s.y[:n0])
             blocks.append(-dy[n0 : s.n_fit])
         J = np.vstack(blocks)
+        self._monitor(theta, model)
+        return J
+
+    def normal_equations(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(J^T J, J^T r)`` at an accepted iterate, summed piece by piece
+        (:func:`sensitivity_chunks`) so that ``J`` is never formed; also the
+        early-stopping monitor."""
+        model = self.template.with_free_parameters(theta)
+        n0, n = self.n0, theta.size
+        H, g = np.zeros((n, n)), np.zeros(n)
+        for s in self.segments:
+            pieces = sensitivity_chunks(model, s.u[: s.n_fit], s.y[:n0], rows=_PIECE_ROWS)
+            for start, y_hat, dy in pieces:
+                skip = max(n0 - start, 0)  # the measured initial outputs are not fitted
+                J = -dy[skip:]
+                r = s.y[start + skip : start + y_hat.shape[0]] - y_hat[skip:]
+                H += J.T @ J
+                g += J.T @ r
+        self._monitor(theta, model)
+        return H, g
+
+    def _monitor(self, theta: np.ndarray, model: BlockModel) -> None:
+        """Book-keeping at an accepted iterate: the fitted MSE, and the tail error for
+        early stopping (raises :class:`_EarlyStop` when it has not improved)."""
+        tracker = self.tracker
+        tracker.njev += 1
         last_theta, last_r = self._last
         if np.array_equal(last_theta, theta):  # the solver evaluates fun first
             tracker.cost.append(float(np.mean(last_r**2)))
@@ -257,7 +371,6 @@ class _Problem:
                 if tracker.since_best >= tracker.patience:
                     tracker.triggered = True
                     raise _EarlyStop
-        return J
 
     def tail_mse(self, model: BlockModel) -> float:
         """Free-run MSE on the held-out tails (each experiment simulated from its start)."""
@@ -269,6 +382,66 @@ class _Problem:
                 errs.append(s.y[s.n_fit :] - sim)
         err = np.concatenate(errs)
         return float(np.mean(err**2)) if np.all(np.isfinite(err)) else np.inf
+
+
+def _levenberg_marquardt(
+    problem: _Problem,
+    theta0: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    max_nfev: int,
+    ftol: float,
+    xtol: float,
+    gtol: float,
+) -> tuple[np.ndarray, str]:
+    """Levenberg-Marquardt on the normal equations, for records whose Jacobian is too
+    large to hold (:data:`LARGE_JACOBIAN`).
+
+    Columns scaled to unit norm (as ``x_scale="jac"``), damping by Nielsen's rule from
+    the gain ratio, steps clipped to the bounds; a rejected residual (unstable, invalid
+    or exploding candidate: :meth:`_Problem.residuals`) raises the damping. Stops like
+    ``scipy.optimize.least_squares``: relative cost reduction below ``ftol``, step below
+    ``xtol`` relative to the parameters, every scaled gradient entry below ``gtol``
+    times the residual norm (the cosine between the residual and each column), or
+    ``max_nfev`` residual evaluations. Returns the final iterate and why it stopped.
+    """
+    lower, upper = bounds
+    theta = theta0.copy()
+    r = problem.residuals(theta)
+    cost = 0.5 * float(r @ r)
+    H, g = problem.normal_equations(theta)
+    mu, nu = 1e-3, 2.0
+    while problem.tracker.nfev < max_nfev:
+        d = np.sqrt(np.diag(H))
+        d[d == 0] = 1.0
+        Hs, gs = H / np.outer(d, d), g / d
+        if np.max(np.abs(gs), initial=0.0) <= gtol * np.sqrt(2.0 * cost):
+            return theta, "`gtol` termination condition is satisfied."
+        try:
+            p = -np.linalg.solve(Hs + mu * np.eye(theta.size), gs)
+        except np.linalg.LinAlgError:
+            mu, nu = mu * nu, 2.0 * nu
+            continue
+        new = np.clip(theta + p / d, lower, upper)
+        r_new = problem.residuals(new)
+        cost_new = 0.5 * float(r_new @ r_new)
+        predicted = 0.5 * float(p @ (mu * p - gs))
+        rho = (cost - cost_new) / predicted if predicted > 0 else -1.0
+        if rho > 0 and cost_new < cost:
+            reduction = cost - cost_new
+            small = np.linalg.norm(new - theta) <= xtol * (xtol + np.linalg.norm(theta))
+            theta, cost = new, cost_new
+            if reduction <= ftol * (cost + reduction):
+                return theta, "`ftol` termination condition is satisfied."
+            if small:
+                return theta, "`xtol` termination condition is satisfied."
+            H, g = problem.normal_equations(theta)
+            mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+            nu = 2.0
+        else:
+            mu, nu = mu * nu, 2.0 * nu
+            if mu > 1e16:
+                return theta, "no step reduces the error"
+    return theta, "max_nfev reached"
 
 
 def _describe(model: ChainModel) -> dict[str, Any]:
@@ -397,22 +570,28 @@ def refine(
 
     lower, upper = model.parameter_bounds()
     stop_reason, theta = "", theta0
+    large = problem.size * n_par * 8 > LARGE_JACOBIAN and chunkable(model)
     try:
         with np.errstate(all="ignore"):
-            sol = least_squares(
-                problem.residuals,
-                theta0,
-                jac=problem.jacobian,
-                bounds=(lower, upper),
-                method="trf",
-                x_scale="jac",
-                ftol=ftol,
-                xtol=xtol,
-                gtol=gtol,
-                max_nfev=int(max_nfev),
-            )
-        theta = sol.x
-        stop_reason = "max_nfev reached" if sol.status == 0 else sol.message
+            if large:
+                theta, stop_reason = _levenberg_marquardt(
+                    problem, theta0, (lower, upper), int(max_nfev), ftol, xtol, gtol
+                )
+            else:
+                sol = least_squares(
+                    problem.residuals,
+                    theta0,
+                    jac=problem.jacobian,
+                    bounds=(lower, upper),
+                    method="trf",
+                    x_scale="jac",
+                    ftol=ftol,
+                    xtol=xtol,
+                    gtol=gtol,
+                    max_nfev=int(max_nfev),
+                )
+                theta = sol.x
+                stop_reason = "max_nfev reached" if sol.status == 0 else sol.message
     except _EarlyStop:
         stop_reason = f"early stopping: no better tail error in {patience} accepted iteration(s)"
     if problem.has_tail and tracker.best_theta is not None:
@@ -437,6 +616,7 @@ def refine(
         "tail_mse": tracker.best_tail if problem.has_tail else None,
         "early_stopping": tracker.triggered,
         "stop_reason": stop_reason,
+        "solver": SOLVERS[large],
     }
     return FitResult(
         model=fitted,

@@ -258,9 +258,26 @@ class ARX(Model):
         """One-step-ahead prediction from measured past outputs."""
         u, y = self._check_signals(u, y)
         out = y.copy()
+        n0, N = self.max_lag, u.shape[0]
+        if N <= n0:
+            return out
+        u = u - self.input_offset
+        y = y - self.output_offset
+        # the sum over the columns of regressors(), without building them: a long
+        # record costs one column of memory per output instead of the regressor matrix
         for i in range(len(self.outputs)):
-            Phi, _ = self.regressors(u, y, i)
-            out[self.max_lag :, i] = Phi @ self.parameter_vector(i) + self.output_offset[i]
+            theta, c = self.parameter_vector(i), 0
+            acc = np.zeros(N - n0)
+            for j in range(len(self.outputs)):
+                for k in range(1, self.na[i, j] + 1):
+                    acc -= theta[c] * y[n0 - k : N - k, j]
+                    c += 1
+            for m in range(len(self.inputs)):
+                for lag in range(self.nb[i, m]):
+                    d = self.nk[i, m] + lag
+                    acc += theta[c] * u[n0 - d : N - d, m]
+                    c += 1
+            out[n0:, i] = acc + self.output_offset[i]
         return out
 
     # ------------------------------------------------------------------ files
