@@ -6,7 +6,8 @@ Both run the same recursion on the same samples, measured in the same run: paper
 key-term RLS for the Hammerstein-Wiener plant (15 parameters, forgetting 0.999) and ARX
 RLS (two inputs, two outputs, 5 and 6 parameters). The online path is Python: input
 checks, the state bookkeeping and one compiled call per sample (key-term:
-``key_term_step``; ARX: the generic chunk path with one sample). Target: ``update``
+``key_term_step``; ARX: one regressor row gathered per output and one kernel call per
+output). Target: ``update``
 within about 5 us per sample. The estimates of both paths are checked to be equal.
 """
 
@@ -162,8 +163,10 @@ def main() -> None:
         "Target: `update` within about 5 us per sample. The key-term path is one compiled "
         "call per sample (`key_term_step`: window shift, roll-back copy and the pass "
         "kernel); what remains is the Python call itself, input checks and the numba "
-        "dispatch. ARX `update` goes through the generic chunk path (regressor matrix "
-        "built with `ARX.regressors` on the window, one kernel call per output).",
+        "dispatch. ARX `update` gathers one regressor row per output from the last samples "
+        "(no regressor matrix) and calls the RLS kernel once per output, in Python: "
+        "about a dozen small NumPy operations per output are what it costs (it was the "
+        "generic chunk path, 116-170 us per sample, before).",
     ]
     report = "\n".join(lines)
     print(report)

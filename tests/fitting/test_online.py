@@ -329,3 +329,40 @@ def test_partial_fit_after_fit_with_a_batch_method_is_refused_clearly():
     est = ARXEstimator(method="batch", **ARX_ORDERS).fit(_dataset(TITO, u, y))
     with pytest.raises(ParameterError, match="method='batch' of arx is not recursive"):
         est.partial_fit(_dataset(TITO, u, y))
+
+
+@pytest.mark.parametrize("method", ["rls", "aw-rls", "hierarchical-rls"])
+def test_arx_update_predictions_equal_the_chunk_path_and_it_mixes_with_partial_fit(method):
+    """ARX ``update`` gathers one regressor row per output without building matrices;
+    its a-priori predictions are the chunk path's bit for bit, also with different
+    orders per output (H-RLS column groups permuted) and updates interleaved with
+    chunks."""
+    orders = {**ARX_ORDERS, "na": [[2, 0], [1, 2]], "nk": [[1, 2], [0, 1]], **ARX_METHODS[method]}
+    u, y = _record(TITO, 300, noise=0.01)
+    names = (["u1", "u2"], ["y1", "y2"])
+    whole = online_estimator("arx", method, orders, *names).partial_fit(u, y)
+    single = online_estimator("arx", method, orders, *names)
+    predictions = np.array([single.update(u[k], y[k]) for k in range(len(u))])
+    np.testing.assert_array_equal(predictions, whole.predictions_)
+    assert np.isnan(predictions[: whole.template.max_lag]).all()
+    mixed = online_estimator("arx", method, orders, *names)
+    for k in range(100):
+        mixed.update(u[k], y[k])
+    mixed.partial_fit(u[100:180], y[100:180])
+    for k in range(180, 300):
+        mixed.update(u[k], y[k])
+    np.testing.assert_array_equal(_vector(mixed), _vector(whole))
+
+
+def test_arx_update_divergence_rolls_back_every_output():
+    u, y = _record(TITO, 200, noise=0.01)
+    y[150, 1] = 1e300
+    orders = {**ARX_ORDERS, "na": [[2, 0], [1, 2]]}
+    online = online_estimator("arx", "rls", orders, ["u1", "u2"], ["y1", "y2"])
+    for k in range(151):
+        online.update(u[k], y[k])
+    good = _vector(online)
+    with pytest.raises(EstimationError, match="output 'y2' diverged at sample 151"):
+        online.update(u[151], y[151])
+    np.testing.assert_array_equal(_vector(online), good)  # y1 rolled back too
+    assert online.n_samples == 151

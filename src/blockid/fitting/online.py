@@ -699,6 +699,69 @@ class _OnlineARX(OnlineEstimator):
                 }
             )
 
+    def _lean_regressors(self) -> None:
+        """For the per-sample path: where every regressor column of every output sits in
+        the vector ``[y(t-L) .. y(t), u(t-L) .. u(t)]`` (rows flattened), its sign and
+        its scale, in the kernel's column order."""
+        model, L = self.template, self.L
+        ny, nu = len(model.outputs), len(model.inputs)
+        for i, out in enumerate(self.outputs):
+            index, sign = [], []
+            for j in range(ny):
+                for k in range(1, model.na[i, j] + 1):
+                    index.append((L - k) * ny + j)
+                    sign.append(-1.0)
+            for m in range(nu):
+                for lag in range(model.nb[i, m]):
+                    index.append((L + 1) * ny + (L - model.nk[i, m] - lag) * nu + m)
+                    sign.append(1.0)
+            perm = out["perm"]
+            out["index"] = np.asarray(index, dtype=np.int64)[perm]
+            out["sign"] = np.asarray(sign)[perm]
+            out["divisor"] = np.asarray(out["scale"], dtype=float)[perm]
+
+    def _step(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """One sample without building regressor matrices: the regressor rows gathered
+        from the last ``L`` samples and this one, the same kernels (bit-identical to
+        :meth:`_learn` on a one-sample chunk)."""
+        L = self.L
+        if L == 0 or self._u.shape[0] < L:  # still filling the regressor
+            return self._learn(u[None, :], y[None, :])[0]
+        if "index" not in self.outputs[0]:
+            self._lean_regressors()
+        ny = y.shape[0]
+        V = np.concatenate((self._y.ravel(), y, self._u.ravel(), u))
+        pred = np.full(ny, np.nan)
+        new = []
+        for i, out in enumerate(self.outputs):
+            if out["theta"].size == 0:
+                new.append(None)
+                continue
+            # negated, then divided, as the chunk path: the same bits
+            Phi = (out["sign"] * V[out["index"]] / out["divisor"])[None, :]
+            target = y[i : i + 1].copy()
+            theta, P = out["theta"].copy(), out["P"].copy()
+            E = np.empty(1)
+            status = self._kernel(out, Phi, target, theta, P, E)
+            if status != _kr.OK or not np.all(np.isfinite(theta)):
+                raise self._diverged(
+                    f"{_ARX_NAMES[self.method]} of output {self.template.outputs[i]!r}",
+                    0,
+                    "the covariance or the estimate became non-finite or lost positive "
+                    "definiteness",
+                )
+            pred[i] = target[0] - E[0]
+            new.append((theta, P))
+        for out, state in zip(self.outputs, new, strict=True):  # commit every output
+            if state is not None:
+                out["theta"], out["P"] = state
+                out["updates"] += 1
+        n_y = (L + 1) * ny
+        self._y = V[ny:n_y].reshape(L, ny)
+        self._u = V[n_y + u.shape[0] :].reshape(L, u.shape[0])
+        self.n_samples += 1
+        return pred
+
     def _kernel(self, out: dict, Phi: np.ndarray, target: np.ndarray, theta, P, E) -> int:
         m = target.size
         if self.method == "aw-rls":
