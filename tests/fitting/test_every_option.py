@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from blockid.blocks import Polynomial
+from blockid.blocks import Integrator, Polynomial
 from blockid.errors import BlockidError, EstimationError
 from blockid.fitting import fit_model
 from blockid.fitting.arx import regressor_scale
@@ -329,6 +329,28 @@ def _check_output_block(case, default, changed, value):
     assert changed.settings["output_block"] == "polynomial"
 
 
+def _integrating_record(case: Case) -> Any:
+    """The case's plant with an integrator after its last linear block, without noise."""
+    plant = case.plant()
+    blocks = list(plant.blocks)
+    blocks.insert(plant.last_linear_index + 1, Integrator(1))
+    chain = ChainModel("u", "y", blocks)
+    return record(chain, case.n, amplitude=case.amplitude, mean=case.mean, snr_db=None)
+
+
+def _check_integrator(case, default, changed, value):
+    # on the plant followed by an integrator, the fit with one follows the record; the
+    # plain fit (its poles held inside the margin) cannot, or fails
+    model = _returned(changed).model
+    assert [b.kind for b in model.blocks].count("integrator") == 1
+    assert changed.settings["integrator"] == value
+    data = _integrating_record(case)
+    mse = simulation_mse(model, data)
+    assert mse < 1e-3 * float(np.var(data.experiments[0].y)), mse
+    if not isinstance(default, BlockidError):
+        assert simulation_mse(default.model, data) > 100 * mse
+
+
 def _check_max_nfev(case, default, changed, value):
     assert changed.settings["max_nfev"] == value
     assert changed.settings["function_evaluations"] <= value + 1  # + the start
@@ -423,6 +445,9 @@ EXPECT: dict[str, Expect] = {
     "r": Expect(_plus_one("r"), _check_r),
     "input_block": Expect("dead-zone", _check_input_block),
     "output_block": Expect("polynomial:degree=4", _check_output_block),
+    # not centred (the plants have no offsets): from centred data the Wiener-Hammerstein
+    # split of the differenced record lands in another local minimum within max_nfev = 5
+    "integrator": Expect(1, _check_integrator, {"center": False}, data=_integrating_record),
     "center": Expect(lambda case: not STRUCTURES[case.structure].center_default, _check_center),
     "refine": Expect(True, _check_refine),
     "allow_unstable": Expect(True, _check_allow_unstable, data=_unstable_record),

@@ -13,11 +13,13 @@ import pytest
 
 import blockid.fitting.simulation_error as se
 from blockid.blocks import LinearBlock, Polynomial, TwoSegmentPolynomial
+from blockid.blocks.integrator import Integrator
 from blockid.data import Dataset
 from blockid.fitting import arx as arx_fitting
 from blockid.fitting.initial import initial_estimate
 from blockid.models.block import (
     BacklashModel,
+    ChainModel,
     Hammerstein,
     HammersteinWiener,
     Wiener,
@@ -60,6 +62,11 @@ def chains():
             static=Polynomial([0.05, 1.0, 0.2, -0.15]),
             second=LinearBlock(2, 2, 0, a=[-0.9, 0.3], b=[1.0, 0.5]),
         ),
+        "hammerstein, double integrator": ChainModel(
+            "u",
+            "y",
+            [N1, LinearBlock(1, 2, 1, a=[-0.5], b=[1.0, 0.3], unit_b0=True), Integrator(2)],
+        ),
     }
 
 
@@ -70,7 +77,8 @@ def test_sensitivity_pieces_are_the_whole_record_walk(name, measured_start, rows
     """Every piece continues the linear blocks from the previous piece's last inputs and
     outputs: the stacked pieces equal the whole-record walk bit for bit, also with
     pieces shorter than a block's memory would allow (they are widened to it) and a
-    short last piece."""
+    short last piece; through an integrator, which restarts its cumulative sums from
+    the last outputs' differences, to rounding."""
     model = chains()[name]
     u = rng.uniform(-1, 1, 250)
     y0 = model.simulate(u)[: model.max_lag, 0] + 0.01 if measured_start else None
@@ -78,6 +86,10 @@ def test_sensitivity_pieces_are_the_whole_record_walk(name, measured_start, rows
     pieces = list(se.sensitivity_chunks(model, u, y0, rows=rows))
     starts = [p[0] for p in pieces]
     assert starts[0] == 0 and len(set(np.diff(starts))) == 1  # equal pieces but the last
+    if "integrator" in name:  # restarted from differences: equal to rounding
+        np.testing.assert_allclose(np.concatenate([p[1] for p in pieces]), y, rtol=1e-13)
+        np.testing.assert_allclose(np.vstack([p[2] for p in pieces]), J, rtol=1e-13, atol=1e-13)
+        return
     np.testing.assert_array_equal(np.concatenate([p[1] for p in pieces]), y)
     np.testing.assert_array_equal(np.vstack([p[2] for p in pieces]), J)
 

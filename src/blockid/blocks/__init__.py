@@ -1,4 +1,5 @@
-"""Blocks: static curves, the backlash (hysteresis) block and the linear dynamic block."""
+"""Blocks: static curves, the backlash (hysteresis) block, the linear dynamic block and
+the integrator."""
 
 from blockid.blocks.backlash import Backlash
 from blockid.blocks.base import (
@@ -9,6 +10,7 @@ from blockid.blocks.base import (
     block_from_dict,
     block_template,
 )
+from blockid.blocks.integrator import Integrator
 from blockid.blocks.linear import LinearBlock
 from blockid.blocks.polynomial import Polynomial, TwoSegmentPolynomial
 from blockid.blocks.static import DeadZone, PiecewiseLinear, Saturation
@@ -19,6 +21,7 @@ __all__ = [
     "Block",
     "DeadZone",
     "DynamicBlock",
+    "Integrator",
     "LinearBlock",
     "PiecewiseLinear",
     "Polynomial",

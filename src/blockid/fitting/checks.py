@@ -17,8 +17,13 @@ data; blockid reports that instead of handing out a bad model. A model is accept
 One more look does not reject the model but warns (:func:`linear_block_notes`): a
 static block that is affine to within ``LINEARITY_TOLERANCE`` of its output spread over
 the estimation data makes the block-oriented model a linear one in disguise (a
-Hammerstein fit that stayed at its ARX start, input-block coefficients ~1e-19). The
-notes belong in the result's ``settings["warnings"]``.
+Hammerstein fit that stayed at its ARX start, input-block coefficients ~1e-19; a block
+affine by its form, such as a degree-1 polynomial carrying an input offset, is not
+noted). A fitted linear block with a pole within twice the stability margin of the
+unit circle (``|p| >= 1 - 2 STABILITY_MARGIN``) sits on the margin the fit enforces: near
++1 the plant probably integrates, and an explicit integrator (``integrator=1``, a block
+whose pole at 1 is not fitted) is the model to try. The notes belong in the result's
+``settings["warnings"]``.
 """
 
 from __future__ import annotations
@@ -40,6 +45,7 @@ __all__ = [
     "linear_baseline",
     "check_model",
     "linear_block_notes",
+    "margin_notes",
 ]
 
 #: Poles must lie inside the circle of radius ``1 - STABILITY_MARGIN``.
@@ -135,8 +141,69 @@ def check_model(
     return metrics_by_output(y, y_sim, data.outputs)
 
 
+def margin_notes(model: Any) -> list[str]:
+    """Warnings for fitted linear blocks with a pole on the stability margin.
+
+    A pole with ``|p| >= 1 - 2 STABILITY_MARGIN`` sits where the fit's stability bound
+    stops it. Near +1 (within ``2 STABILITY_MARGIN``) the plant probably integrates: a
+    pole at 0.999 is a leak that lets a simulated position drift; the note suggests an
+    explicit integrator (the structures that take one are read from the registry).
+    Integrators themselves pass :meth:`is_stable` and give no note. Models without
+    linear blocks (ARX, networks) give none.
+    """
+    from blockid.fitting.registry import STRUCTURES
+
+    linear = getattr(model, "linear_blocks", ())
+    integrates = sum(getattr(b, "integrates", 0) for b in getattr(model, "blocks", ()))
+    near = 2.0 * STABILITY_MARGIN
+    notes = []
+    for k, block in enumerate(linear):
+        if block.is_stable(near):
+            continue
+        poles = np.asarray(block.poles(), dtype=complex)
+        at_one = np.abs(poles - 1.0) <= near
+        index = np.argmin(np.abs(poles - 1.0)) if at_one.any() else np.argmax(np.abs(poles))
+        worst = complex(poles[int(index)])
+        shown = f"{worst.real:.6g}" if worst.imag == 0 else f"{worst:.6g}"
+        which = f"linear block {k + 1} of {len(linear)}" if len(linear) > 1 else "linear block"
+        text = (
+            f"the {which} has a pole at {shown} (magnitude {abs(worst):.6g}), within "
+            f"{near:g} of the unit circle: it sits on the stability margin the fit keeps "
+            f"(|p| < {1 - STABILITY_MARGIN:g}). "
+        )
+        takes = [s.name for s in STRUCTURES.values() if "integrator" in s.accepted(None)]
+        if at_one.any() and integrates < 2:
+            n = integrates + 1
+            text += (
+                "The plant probably integrates (position from force, level from flow), and "
+                "a pole held just inside 1 leaks, so a simulation drifts: try an explicit "
+                f"integrator, integrator={n} (--integrator {n}), with {', '.join(takes)}"
+            )
+        else:
+            text += (
+                "The model is nearly undamped there and may ring or drift on other data; "
+                "check it on validation data"
+            )
+        notes.append(text)
+    return notes
+
+
+def _affine_by_form(block: Any, s: np.ndarray) -> bool:
+    """True for a block linear in its parameters whose regressors are affine in its
+    input (a degree-1 polynomial: an input offset and gain): linear by choice."""
+    if not block.linear_in_parameters:
+        return False
+    G = np.asarray(block.regressors(s), dtype=float)
+    design = np.column_stack([np.ones_like(s), s])
+    coef = np.linalg.lstsq(design, G, rcond=None)[0]
+    return float(np.max(np.abs(G - design @ coef), initial=0.0)) <= LINEARITY_TOLERANCE * (
+        float(np.max(np.ptp(G, axis=0), initial=0.0)) + 1e-300
+    )
+
+
 def linear_block_notes(model: Any, data: Dataset) -> list[str]:
-    """Warnings for the static blocks of a chain that are linear over ``data``.
+    """Warnings for the static blocks of a chain that are linear over ``data``, and for
+    fitted poles on the stability margin (:func:`margin_notes`).
 
     Each static block is evaluated on the signal that enters it over every experiment
     (simulated from rest, as :meth:`~blockid.models.block.ChainModel.block_inputs`
@@ -149,22 +216,24 @@ def linear_block_notes(model: Any, data: Dataset) -> list[str]:
     list of str
         One note per such block, meant for ``settings["warnings"]``.
     """
+    notes = margin_notes(model)
     blocks = getattr(model, "blocks", ())
     if not blocks or not hasattr(model, "block_inputs"):  # ARX, networks, feedback loops
-        return []
+        return notes
     static = [i for i, block in enumerate(blocks) if block.role == "static"]
     if not static:
-        return []
+        return notes
     inputs: dict[int, list[np.ndarray]] = {i: [] for i in static}
     for e in data.experiments:
         entering = model.block_inputs(e.u)
         for i in static:
             inputs[i].append(entering[i])
-    notes = []
     for i in static:
         s = np.concatenate(inputs[i])
         out = blocks[i].run(s)
         if not (np.all(np.isfinite(s)) and np.all(np.isfinite(out))):
+            continue
+        if _affine_by_form(blocks[i], s):
             continue
         spread = float(np.ptp(out))
         design = np.column_stack([np.ones_like(s), s])

@@ -19,6 +19,10 @@ data**, scored as the user will use the model: by free-run simulation.
    screened on their first ``screen_samples``), centred or not where that matters (the
    two-segment polynomial's break sits at ``u = 0``). A candidate that fails, is
    unstable or does not simulate finitely is **rejected with its reason**, not ranked.
+   When the estimation data suggest a plant that integrates (the best least-squares ARX
+   models have poles within ``INTEGRATING_POLE`` of +1), the structures that take an
+   integrator are tried first with one (and, for two such poles, two) integrators
+   after their linear block, which then has ``n`` fewer poles and one sample less delay.
 4. **Selection.** Ranked by hold-out RMSE; among near-ties (within ``tie`` = 2 % of the
    best RMSE) the one with the fewest parameters wins. The best few are fitted again
    with the full iteration budget, re-scored, and the winner (again parsimonious among
@@ -42,7 +46,7 @@ from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import BlockidError, DataError, ParameterError
 from blockid.fitting.registry import STRUCTURES
 
-__all__ = ["Candidate", "Score", "IdentifyResult", "identify", "DEFAULT_SEARCH"]
+__all__ = ["Candidate", "Score", "IdentifyResult", "identify", "DEFAULT_SEARCH", "INTEGRATING_POLE"]
 
 #: Structures searched by default (when registered).
 DEFAULT_SEARCH = (
@@ -63,6 +67,9 @@ _ITERATION_SETTINGS = ("max_nfev", "tail_fraction", "patience")
 
 #: The linear structure of the order search (least squares: fast over a grid).
 LINEAR = "arx"
+
+#: A least-squares ARX pole this close to +1 suggests that the plant integrates.
+INTEGRATING_POLE = 1e-2
 
 
 @dataclass(frozen=True)
@@ -351,6 +358,50 @@ def _nonlinear_candidates(
     return unique
 
 
+def _integrations(linear: Sequence[Score], orders: list[tuple[int, int, int]]) -> int:
+    """Integrators the estimation data suggest (0, 1 or 2): the most poles within
+    :data:`INTEGRATING_POLE` of +1 of the best ARX model of any kept order set (each
+    fitted on the estimation data's fit part)."""
+    count, seen = 0, set()
+    for s in sorted(linear, key=lambda s: s.rmse):
+        o = s.candidate.orders()
+        key = (o["na"], o["nb"], o["nk"])
+        if key not in orders or key in seen or not hasattr(s.model, "poles"):
+            continue
+        seen.add(key)
+        poles = np.asarray(s.model.poles(), dtype=complex)
+        count = max(count, int(np.sum(np.abs(poles - 1.0) < INTEGRATING_POLE)))
+    return min(count, 2)
+
+
+def _integrating_candidates(
+    structures: Sequence[str], orders: list[tuple[int, int, int]], nfev: int, integrations: int
+) -> list[Candidate]:
+    """The first search plan of every structure that takes an integrator, with ``n = 1 ..
+    integrations`` integrators: the linear block before them gets ``na - n`` poles and
+    ``nk - 1`` delay (the integrator's sample)."""
+    fast = {"max_nfev": nfev, "tail_fraction": 0.0}
+    usable = [STRUCTURES[s] for s in structures if s in STRUCTURES]
+    usable = [d for d in usable if "integrator" in d.accepted(None)]
+    out: list[Candidate] = []
+    for n in range(1, integrations + 1):
+        for na, nb, nk in orders:
+            for decl in usable:
+                na_n = max(na - n, 1)
+                o = {
+                    "na": na_n,
+                    "nb": na_n + 1 if decl.proper else nb,
+                    "nk": max(nk - 1, decl.min_delay),
+                    "integrator": n,
+                }
+                accepted = decl.accepted(None)
+                opts = {k: v for k, v in {**o, **decl.search[0], **fast}.items() if k in accepted}
+                candidate = Candidate(decl.name, opts)
+                if candidate not in out:
+                    out.append(candidate)
+    return out
+
+
 def _patient(structure: str) -> dict[str, Any]:
     """Full fits stop early only on a real rise of the held-out error: a patience of 20
     iterations where the method takes one (5 stopped long records while they improved)."""
@@ -537,7 +588,15 @@ def identify(
 
     # stage 2: structures on the best orders, screened
     screen = _screen(split.fit, screen_samples)
-    candidates = _nonlinear_candidates(chosen, orders, screen_nfev)
+    integrations = _integrations(best_linear, orders)
+    candidates = _integrating_candidates(chosen, orders, screen_nfev, integrations)
+    if candidates:
+        notes.append(
+            f"the estimation data suggest a plant that integrates (least-squares ARX poles "
+            f"within {INTEGRATING_POLE:g} of 1): {len(candidates)} candidates with up to "
+            f"{integrations} integrator(s) tried first"
+        )
+    candidates += _nonlinear_candidates(chosen, orders, screen_nfev)
     for i, cand in enumerate(candidates):
         if search.left() < 0.35 * budget:
             notes.append(f"{len(candidates) - i} structure candidates skipped by the budget")

@@ -25,6 +25,11 @@ wiener-hammerstein     simulation-error                            simulation-er
 feedback               simulation-error                            simulation-error
 =====================  ==========================================  ==================
 
+``integrator`` (output-error, hammerstein, backlash, wiener-hammerstein with method
+simulation-error) puts an :class:`~blockid.blocks.integrator.Integrator` after the last
+linear block, for plants that integrate; :meth:`Method.run` wires it for any such method
+(:func:`_fit_with_integrator`).
+
 Modules are named as text and imported only when a fit runs, so that importing the
 registry (and starting the command line) stays cheap.
 """
@@ -84,19 +89,18 @@ def parse_orders(value: Any, name: str) -> Any:
     return rows
 
 
-def _count(value: Any, name: str, low: float) -> int:
+def _count(value: Any, name: str, low: float, high: float | None = None) -> int:
+    allowed = f">= {low:g}" if high is None else f"from {low:g} to {high:g}"
     text = _text(value)
     if text is not None:
         try:
             value = int(text)
         except ValueError:
-            raise ParameterError(
-                f"{name} must be a whole number >= {low:g}, got {text!r}"
-            ) from None
+            raise ParameterError(f"{name} must be a whole number {allowed}, got {text!r}") from None
     if isinstance(value, bool) or not isinstance(value, int) and not _is_integer(value):
-        raise ParameterError(f"{name} must be a whole number >= {low:g}, got {value!r}")
-    if value < low:
-        raise ParameterError(f"{name} must be a whole number >= {low:g}, got {value!r}")
+        raise ParameterError(f"{name} must be a whole number {allowed}, got {value!r}")
+    if value < low or (high is not None and value > high):
+        raise ParameterError(f"{name} must be a whole number {allowed}, got {value!r}")
     return int(value)
 
 
@@ -192,10 +196,11 @@ class Option:
     """One estimator option: its Python name, type, allowed range and help text.
 
     ``kind`` is one of ``"orders"`` (whole number or ARX matrix), ``"count"`` (whole
-    number ``>= low``), ``"real"`` (number in ``[low, high]``, ``(low, high]`` with
-    ``open_low``), ``"bool"``, ``"forgetting"`` (factor or schedule, parsed once into a
-    :class:`~blockid.estimators.ForgettingSchedule`), ``"block"`` (a block or its
-    name, see :func:`blockid.blocks.base.block_template`) and ``"numbers"``.
+    number ``>= low``, ``<= high`` when given), ``"real"`` (number in ``[low, high]``,
+    ``(low, high]`` with ``open_low``), ``"bool"``, ``"forgetting"`` (factor or
+    schedule, parsed once into a :class:`~blockid.estimators.ForgettingSchedule`),
+    ``"block"`` (a block or its name, see :func:`blockid.blocks.base.block_template`)
+    and ``"numbers"``.
     """
 
     name: str
@@ -224,7 +229,7 @@ class Option:
         if self.kind == "orders":
             return parse_orders(value, self.name)
         if self.kind == "count":
-            return _count(value, self.name, 0 if self.low is None else self.low)
+            return _count(value, self.name, 0 if self.low is None else self.low, self.high)
         if self.kind == "real":
             return _real(value, self.name, self.low, self.high, self.open_low)
         if self.kind == "bool":
@@ -263,6 +268,15 @@ OPTIONS: dict[str, Option] = _options(
         "block",
         "Output block: polynomial[:degree=N] or a user block's kind.",
         metavar="KIND",
+    ),
+    Option(
+        "integrator",
+        "count",
+        "Integrators after the last linear block, for a plant that integrates (position "
+        "from force): 0, 1 or 2; na, nb, nk are the linear block's before it.",
+        low=0,
+        high=2,
+        metavar="N",
     ),
     Option(
         "center",
@@ -382,6 +396,10 @@ class Method:
         return getattr(importlib.import_module(module), name)
 
     def run(self, data: Any, structure: str, options: dict[str, Any]) -> Any:
+        options = dict(options)
+        integrations = options.pop("integrator", 0)
+        if integrations:
+            return _fit_with_integrator(self, data, structure, integrations, options)
         extra = {"structure": structure, "method": self.name}
         extra = {k: v for k, v in extra.items() if k in self.passes}
         return self.function()(data, **extra, **options)
@@ -407,6 +425,10 @@ class Structure:
     min_delay: int = 0
     #: The search gives the structure ``nb = na + 1`` (a proper BLA of a chain).
     proper: bool = False
+    #: With ``integrator``: the structure and options fitted to the differenced output
+    #: for the start, where the structure's own blocks cannot carry the operating point
+    #: (None: the structure itself).
+    integrator_start: tuple[str, dict[str, Any]] | None = None
     method_names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -513,7 +535,7 @@ STRUCTURES: dict[str, Structure] = {
             "hammerstein",
             "blockid.models.block:Hammerstein",
             "static input block, then a linear block (N1-L)",
-            _block_methods(("r1", "input_block"), _key_term(("r1",))),
+            _block_methods(("r1", "input_block", "integrator"), _key_term(("r1",))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
             search=(
                 {"input_block": "polynomial:degree=3", "center": True},
@@ -544,7 +566,7 @@ STRUCTURES: dict[str, Structure] = {
             "blockid.models.block:BacklashModel",
             "backlash, then a linear block (paper A's pseudo-Hammerstein)",
             _block_methods(
-                (),
+                ("integrator",),
                 Method(
                     "aw-rls",
                     "blockid.fitting.backlash:fit_backlash_aw_rls",
@@ -564,13 +586,16 @@ STRUCTURES: dict[str, Structure] = {
                 Method(
                     "simulation-error",
                     "blockid.fitting.simulation_error:fit_simulation_error",
-                    _SIMULATION_ERROR,
+                    ("integrator",) + _SIMULATION_ERROR,
                     "minimise the free-run simulation error from a least-squares ARX start",
                     passes=("structure",),
                 ),
             ),
             common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
+            # an input offset: the velocity of an integrating plant need not vanish at
+            # the mean input, so the start carries an affine input block
+            integrator_start=("hammerstein", {"input_block": "polynomial:degree=1"}),
         ),
         Structure(
             "wiener-hammerstein",
@@ -580,7 +605,7 @@ STRUCTURES: dict[str, Structure] = {
                 Method(
                     "simulation-error",
                     "blockid.fitting.wiener_hammerstein:fit_wiener_hammerstein",
-                    ("r2",) + _SIMULATION_ERROR,
+                    ("r2", "integrator") + _SIMULATION_ERROR,
                     "split the best linear approximation's poles and zeros, score every "
                     "split, refine the best on free-run simulation error",
                 ),
@@ -614,6 +639,60 @@ STRUCTURES: dict[str, Structure] = {
 
 #: The structures ``compare`` identifies unless told otherwise (paper B's four).
 COMPARED_BY_DEFAULT = ("arx", "hammerstein", "wiener", "hammerstein-wiener")
+
+
+def _fit_with_integrator(
+    method: Method, data: Any, structure: str, order: int, options: dict[str, Any]
+) -> Any:
+    """Fit ``structure`` with ``order`` integrators after its last linear block.
+
+    The integrator, ``(1 - z^-1)^n x(k) = w(k - 1)``
+    (:class:`~blockid.blocks.integrator.Integrator`), has no parameters, so the blocks
+    before it map ``u`` to ``w(k) = Δ^n y(k + 1)``: they start as the method fitted to
+    the ``n`` times differenced output (of the structure's ``integrator_start``, where
+    its own blocks cannot carry the operating point). The chain of those blocks and the
+    integrator is then refined on the free-run simulation error of ``y`` itself (the
+    integrator starts from the measured output). The result is a
+    :class:`~blockid.models.block.ChainModel`: the named cascades hold one linear block.
+    """
+    import time
+    from dataclasses import replace
+
+    from blockid.blocks.integrator import Integrator
+    from blockid.data.dataset import Dataset, Experiment
+    from blockid.fitting.simulation_error import refine
+    from blockid.models.block import ChainModel
+
+    t0 = time.perf_counter()
+    name, extra = STRUCTURES[structure].integrator_start or (structure, {})
+    base = STRUCTURES[name]
+    integrator = Integrator(order)
+    differenced = Dataset(
+        data.inputs,
+        data.outputs,
+        data.sampling_time,
+        [Experiment(e.name, *integrator.differenced(e.u, e.y)) for e in data.experiments],
+        data.source,
+    )
+    accepted = base.accepted(method.name)
+    given = {k: v for k, v in options.items() if k in accepted}
+    given.update({k: OPTIONS[k].convert(v) for k, v in extra.items()})
+    start = base.method(method.name).run(differenced, name, given).model
+    chain = ChainModel(
+        data.inputs,
+        data.outputs,
+        [*start.blocks, integrator],
+        sampling_time=data.sampling_time,
+        input_offset=start.input_offset,
+    )
+    t_start = time.perf_counter() - t0
+    result = refine(chain, data, **{k: v for k, v in options.items() if k in _SIMULATION_ERROR})
+    origin = f"{name} fit to the output differenced {order} time(s), then the integrator"
+    return replace(
+        result,
+        settings={**result.settings, "integrator": order, "initial": origin},
+        history={**result.history, "initial_seconds": t_start},
+    )
 
 
 def get_structure(name: Any) -> Structure:
