@@ -161,3 +161,29 @@ def test_initial_estimate_from_pieces_is_the_whole_record_estimate(monkeypatch, 
     np.testing.assert_allclose(
         pieces.free_parameters(), whole.free_parameters(), rtol=1e-8, atol=1e-10
     )
+
+
+def test_linearity_note_uses_the_closed_form_affine_fit(rng):
+    """The 'linear in disguise' check fits a line in closed form (no design matrix on
+    a long record): the same deviation as least squares, and the note fires for a
+    fitted polynomial that is a line and not for a curved one."""
+    from blockid.fitting.checks import _affine_deviation, linear_block_notes
+
+    s = rng.uniform(-1, 1, 500)
+    out = 0.3 + 2.0 * s + 0.05 * s**2
+    design = np.column_stack([np.ones_like(s), s])
+    coef = np.linalg.lstsq(design, out, rcond=None)[0]
+    expected = float(np.max(np.abs(out - design @ coef)))
+    assert _affine_deviation(s, out) == pytest.approx(expected, rel=1e-10)
+    assert _affine_deviation(s, 1.0 - 3.0 * s) < 1e-14
+    assert _affine_deviation(np.ones(5), np.ones(5)) == 0.0
+    u = rng.uniform(-1, 1, 400)
+    data = Dataset.from_arrays(u, np.zeros(400), ["u"], ["y"])
+    linear = Hammerstein(
+        "u", "y", input_block=Polynomial([0.0, 1.0, 1e-12]), na=1, nb=1, nk=1, a=[-0.5]
+    )
+    curved = Hammerstein(
+        "u", "y", input_block=Polynomial([0.0, 1.0, 0.5]), na=1, nb=1, nk=1, a=[-0.5]
+    )
+    assert any("is linear over the estimation data" in n for n in linear_block_notes(linear, data))
+    assert not any("is linear" in n for n in linear_block_notes(curved, data))

@@ -193,12 +193,27 @@ def _affine_by_form(block: Any, s: np.ndarray) -> bool:
     input (a degree-1 polynomial: an input offset and gain): linear by choice."""
     if not block.linear_in_parameters:
         return False
+    # a property of the block's form over the range of s: a grid (with 0, where
+    # two-segment blocks switch) stands for the data, whatever their length
+    lo, hi = float(np.min(s)), float(np.max(s))
+    grid = np.linspace(lo, hi, 257)
+    s = np.union1d(grid, [0.0]) if lo < 0.0 < hi else grid
     G = np.asarray(block.regressors(s), dtype=float)
     design = np.column_stack([np.ones_like(s), s])
     coef = np.linalg.lstsq(design, G, rcond=None)[0]
     return float(np.max(np.abs(G - design @ coef), initial=0.0)) <= LINEARITY_TOLERANCE * (
         float(np.max(np.ptp(G, axis=0), initial=0.0)) + 1e-300
     )
+
+
+def _affine_deviation(s: np.ndarray, out: np.ndarray) -> float:
+    """Largest deviation of ``out`` from its least-squares affine fit in ``s`` (closed
+    form: a few vectors of the data's length, not a design matrix)."""
+    s_mean, out_mean = float(np.mean(s)), float(np.mean(out))
+    ds = s - s_mean
+    variance = float(np.dot(ds, ds))
+    slope = float(np.dot(ds, out - out_mean)) / variance if variance > 0 else 0.0
+    return float(np.max(np.abs(out - out_mean - slope * ds), initial=0.0))
 
 
 def linear_block_notes(model: Any, data: Dataset) -> list[str]:
@@ -236,9 +251,7 @@ def linear_block_notes(model: Any, data: Dataset) -> list[str]:
         if _affine_by_form(blocks[i], s):
             continue
         spread = float(np.ptp(out))
-        design = np.column_stack([np.ones_like(s), s])
-        coef = np.linalg.lstsq(design, out, rcond=None)[0]
-        deviation = float(np.max(np.abs(out - design @ coef)))
+        deviation = _affine_deviation(s, out)
         if deviation > LINEARITY_TOLERANCE * spread:
             continue
         where = (
