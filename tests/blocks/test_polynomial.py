@@ -280,3 +280,14 @@ def test_kinds():
     assert Polynomial.kind == "polynomial"
     assert TwoSegmentPolynomial.kind == "two-segment-polynomial"
     assert Polynomial.linear_in_parameters and TwoSegmentPolynomial.linear_in_parameters
+
+
+@pytest.mark.parametrize("tiny", [1e-308, 5e-324, -1e-300, 1e-20])
+def test_negligible_leading_coefficient_puts_turning_points_at_infinity(tiny):
+    """A leading coefficient far below the others (found by the round-trip property
+    test: q_3 = 1e-308 made the root finder overflow to NaN) acts where its roots are,
+    beyond any input: the monotone branch is the lower-degree one's."""
+    block = Polynomial([1.0, 0.3, tiny], constant=False)
+    assert block.monotone_branch() == pytest.approx((-1 / 0.6, np.inf))
+    w = np.array([-0.1, 0.5, 1.0])
+    np.testing.assert_allclose(block(block.invert(w)), w, rtol=1e-12)

@@ -29,6 +29,19 @@ from blockid.errors import EstimationError, ParameterError
 __all__ = ["Polynomial", "TwoSegmentPolynomial"]
 
 
+def _roots(coef: np.ndarray) -> np.ndarray:
+    """Roots of a polynomial (lowest power first) whose negligible highest-power
+    coefficients (below 1e-15 of the largest) are dropped first: a leading coefficient
+    of 1e-308 would put roots beyond the float range (overflow, then NaN in the
+    companion matrix); dropped, they are at infinity, which is where they act."""
+    coef = np.asarray(coef, dtype=float)
+    largest = float(np.max(np.abs(coef), initial=0.0))
+    coef = npoly.polytrim(coef, 1e-15 * largest)
+    if coef.size < 2:
+        return np.zeros(0)
+    return npoly.polyroots(coef)
+
+
 def _monotone_sign(dcoef: np.ndarray, u_min: float, u_max: float) -> int:
     """Sign (+1 / -1) of a derivative polynomial that keeps one sign on the interval.
 
@@ -45,7 +58,7 @@ def _monotone_sign(dcoef: np.ndarray, u_min: float, u_max: float) -> int:
     dcoef = npoly.polytrim(dcoef)
     if dcoef.size == 1:
         return int(np.sign(dcoef[0]))
-    cuts = np.unique(npoly.polyroots(dcoef).real)
+    cuts = np.unique(_roots(dcoef).real)
     edges = np.concatenate(([u_min], cuts[(cuts > u_min) & (cuts < u_max)], [u_max]))
     left, right = edges[:-1], edges[1:]
     with np.errstate(invalid="ignore"):
@@ -185,7 +198,7 @@ class Polynomial(_PlottableStaticBlock):
         It runs to the nearest stationary points on either side (infinite where there
         is none).
         """
-        crit = npoly.polyroots(npoly.polyder(self._powers))
+        crit = _roots(npoly.polyder(self._powers))
         real = crit[np.abs(crit.imag) < 1e-12].real if crit.size else np.zeros(0)
         lo = max((r for r in real if r < 0), default=-np.inf)
         hi = min((r for r in real if r > 0), default=np.inf)
