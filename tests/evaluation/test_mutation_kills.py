@@ -1,6 +1,7 @@
 """ModelOutput.to_dict, the JSON summary every command prints, key by key; the warnings
-of a network's subsystems and of a single model; data one sample too short (gaps found by
-mutation testing, see docs/testing.md)."""
+of a network's subsystems and of a single model; data one sample too short; standard
+errors and the simulation band on small models with known numbers (gaps found by mutation
+testing, see docs/testing.md)."""
 
 import numpy as np
 import pytest
@@ -89,3 +90,241 @@ def test_too_short_data_name_the_model_and_the_shortest_length_passes():
     assert out.skip == 2
     np.testing.assert_allclose(out.outputs[0][:, 0], [0.5, -1.0, 1.375])
     assert out.metrics["mse"] == {"y": pytest.approx(0.0625)}
+
+
+# ---------------------------------------------------------------- uncertainty
+# Standard errors and the band on small models whose every number is known: an
+# output-error model y(t) = 0.5 y(t-1) + u(t-1) and the same as an ARX model (gaps found
+# by mutation testing, see docs/testing.md). The offsets are 0, so none of these models
+# counts as centred on its data.
+_U = np.array([1.0, 0.0, 2.0, -1.0, 0.5, 0.0, 1.0, 3.0, -2.0, 1.0,
+               0.0, -1.0, 2.0, 1.0, -0.5, 0.0, 1.5, -1.0, 0.5, 2.0])  # fmt: skip
+_D = np.array([0.0, 0.1, -0.2, 0.05, 0.3, -0.1, 0.0, 0.2, -0.3, 0.1,
+               0.15, -0.05, 0.25, -0.2, 0.1, 0.0, -0.1, 0.2, 0.05, -0.15])  # fmt: skip
+
+
+def _oe(a=-0.5, b=1.0):
+    from blockid.models import OutputError
+
+    return OutputError("u", "y", na=1, nb=1, nk=1, a=[a], b=[b])
+
+
+def _oe_data():
+    # the model's free run from y(0) = 2 plus a known disturbance (0 at the start)
+    return Dataset.from_arrays(_U, _oe().simulate(_U, [2.0])[:, 0] + _D, ["u"], ["y"])
+
+
+def _oe_jacobian(stop):
+    # d y_hat / d (a_1, b_0) on rows 1 .. stop - 1 by central differences, from y(0) = 2
+    cols = []
+    for da, db in ((1e-6, 0.0), (0.0, 1e-6)):
+        up = _oe(-0.5 + da, 1.0 + db).simulate(_U[:stop], [2.0])[1:stop, 0]
+        down = _oe(-0.5 - da, 1.0 - db).simulate(_U[:stop], [2.0])[1:stop, 0]
+        cols.append((up - down) / 2e-6)
+    return np.column_stack(cols)
+
+
+def test_output_error_covariance_is_sigma2_times_the_inverse_gram_matrix():
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    cov = parameter_covariance(_oe(), _oe_data())
+    sigma2 = float(_D[1:] @ _D[1:]) / 17  # 19 residuals (y(0) starts the run), 2 parameters
+    J = _oe_jacobian(20)
+    assert cov.names == ["a_1", "b_0"]
+    np.testing.assert_array_equal(cov.estimate, [-0.5, 1.0])
+    assert cov.degrees_of_freedom == 17
+    assert cov.noise_variance == {"y": pytest.approx(sigma2, rel=1e-12)}
+    np.testing.assert_allclose(cov.matrix, sigma2 * np.linalg.inv(J.T @ J), rtol=1e-6)
+    assert cov.basis == "free-run simulation Jacobian (output-error noise model)"
+
+
+def test_the_held_out_tail_is_left_out_unless_too_little_would_remain():
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    # a quarter of 20 samples held out: rows 1..14 remain, 14 - 2 degrees of freedom
+    cov = parameter_covariance(_oe(), _oe_data(), tail_fraction=0.25)
+    assert cov.degrees_of_freedom == 12
+    assert cov.noise_variance["y"] == pytest.approx(float(_D[1:15] @ _D[1:15]) / 12, rel=1e-12)
+    J = _oe_jacobian(15)
+    np.testing.assert_allclose(
+        cov.matrix, cov.noise_variance["y"] * np.linalg.inv(J.T @ J), rtol=1e-6
+    )
+    # 10 samples, 8 held out would leave 1 row for 2 parameters: nothing is held out
+    short = Dataset.from_arrays(_U[:10], _oe_data().experiments[0].y[:10, 0], ["u"], ["y"])
+    cov = parameter_covariance(_oe(), short, tail_fraction=0.8)
+    assert cov.degrees_of_freedom == 7
+    assert cov.noise_variance["y"] == pytest.approx(float(_D[1:10] @ _D[1:10]) / 7, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("method", "suffix"),
+    [
+        (None, ""),
+        ("simulation-error", ""),
+        ("key-term-rls+refine", ""),
+        ("key-term-rls", ", at the key-term-rls estimate"),
+    ],
+)
+def test_the_basis_names_the_estimate_a_covariance_is_taken_at(method, suffix):
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    cov = parameter_covariance(_oe(), _oe_data(), method)
+    assert cov.basis == "free-run simulation Jacobian (output-error noise model)" + suffix
+
+
+def test_a_simulation_that_blows_up_has_no_standard_errors():
+    from blockid.errors import DataError
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    data = Dataset.from_arrays(np.ones(2000), np.ones(2000), ["u"], ["y"])
+    with pytest.raises(DataError) as info:
+        parameter_covariance(_oe(a=-2.0), data)  # pole at 2: overflows
+    assert str(info.value) == "the model's simulation on the data is not finite: no standard errors"
+
+
+def test_data_with_other_signals_are_refused_by_name():
+    from blockid.errors import DataError
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    data = Dataset.from_arrays(_U, _U, ["u"], ["z"])
+    with pytest.raises(DataError) as info:
+        parameter_covariance(_oe(), data)
+    assert str(info.value) == (
+        "the model maps ['u'] to ['y'] but the data have inputs ['u'] and outputs ['z']"
+    )
+
+
+def _arx():
+    return ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-0.5]}}, b={"y": {"u": [1.0]}})
+
+
+def test_arx_covariance_records_estimate_basis_and_degrees_of_freedom():
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    # equation error _D: y(t) = 0.5 y(t-1) + u(t-1) + d(t)
+    y = np.zeros(20)
+    y[0] = 2.0
+    for k in range(1, 20):
+        y[k] = 0.5 * y[k - 1] + _U[k - 1] + _D[k]
+    data = Dataset.from_arrays(_U, y, ["u"], ["y"])
+    cov = parameter_covariance(_arx(), data)
+    np.testing.assert_array_equal(cov.estimate, [-0.5, 1.0])
+    assert cov.degrees_of_freedom == 17
+    assert cov.noise_variance == {"y": pytest.approx(float(_D[1:] @ _D[1:]) / 17, rel=1e-12)}
+    phi = np.column_stack([-y[:-1], _U[:-1]])
+    np.testing.assert_allclose(
+        cov.matrix, cov.noise_variance["y"] * np.linalg.inv(phi.T @ phi), rtol=1e-9
+    )
+    assert cov.basis == "least squares, sigma^2 (Phi^T Phi)^-1"
+    assert parameter_covariance(_arx(), data, "rls").basis == (
+        "least squares, sigma^2 (Phi^T Phi)^-1 at the final rls estimate "
+        "(the recursion's P is not kept)"
+    )
+
+
+def test_too_few_residuals_for_the_parameters_are_refused_with_the_counts():
+    from blockid.errors import DataError
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    data = Dataset.from_arrays(_U[:3], _U[:3], ["u"], ["y"])  # 2 regression rows
+    with pytest.raises(DataError) as info:
+        parameter_covariance(_arx(), data)
+    assert str(info.value) == (
+        "2 residual sample(s) for 2 parameter(s): too few to estimate the noise variance "
+        "and the parameters' standard errors"
+    )
+
+
+def test_an_arx_model_without_parameters_has_an_empty_covariance_and_a_zero_band():
+    from blockid.evaluation.uncertainty import parameter_covariance, simulation_band
+
+    model = ARX(["u"], ["y"], 0, 0, 1)  # y = 0
+    cov = parameter_covariance(model, Dataset.from_arrays(_U, _U, ["u"], ["y"]))
+    assert cov.names == [] and cov.matrix.shape == (0, 0) and cov.noise_variance == {}
+    assert cov.degrees_of_freedom == 0
+    assert cov.to_dict()["degrees_of_freedom"] == 0
+    band = simulation_band(model, cov, _U)
+    np.testing.assert_array_equal(band.simulated, np.zeros((20, 1)))
+    np.testing.assert_array_equal(band.std, np.zeros((20, 1)))
+    np.testing.assert_array_equal(band.upper, np.zeros((20, 1)))
+
+
+def test_a_direction_below_the_relative_rank_tolerance_is_unidentifiable():
+    from blockid.evaluation.uncertainty import _least_squares_covariance
+
+    # unit columns at an angle of sqrt(2) 1e-10: singular values sqrt(2) and 1e-10, the
+    # smaller one below 1e-10 times the larger (it would pass 1e-10 / sqrt(2))
+    J = np.array([[1.0, 1.0], [0.0, np.sqrt(2.0) * 1e-10], [0.0, 0.0]])
+    cov, sigma2, dof = _least_squares_covariance(J, np.array([1.0, 2.0, 2.0]))
+    assert (sigma2, dof) == (9.0, 1)
+    assert np.all(np.isinf(cov))
+
+
+def test_an_unexcited_parameter_has_infinite_rows_and_columns():
+    from blockid.evaluation.uncertainty import _least_squares_covariance
+
+    J = np.array([[1.0, 0.0], [2.0, 0.0], [2.0, 0.0]])  # the second parameter does nothing
+    cov, sigma2, dof = _least_squares_covariance(J, np.array([1.0, 2.0, 2.0]))
+    assert (sigma2, dof) == (9.0, 1)  # both columns count as parameters
+    assert cov[0, 0] == pytest.approx(9.0 / 9.0)
+    assert np.isposinf(cov[0, 1]) and np.isposinf(cov[1, 0]) and np.isposinf(cov[1, 1])
+
+
+def test_arx_sensitivities_by_differences_are_the_derivatives():
+    from blockid.evaluation.uncertainty import _output_sensitivities
+    from blockid.fitting.simulation_error import simulate_with_sensitivities
+
+    # the ARX model's central differences equal the output-error model's analytic
+    # derivatives with respect to the same (a_1, b_0), sign included
+    y, dy = _output_sensitivities(_arx(), _U, [2.0], ["a_1", "b_0"])
+    y_oe, dy_oe = simulate_with_sensitivities(_oe(), _U, [2.0])
+    assert dy.shape == (20, 1, 2)
+    np.testing.assert_allclose(y[:, 0], y_oe, atol=1e-12)
+    np.testing.assert_allclose(dy[:, 0, :], dy_oe, rtol=1e-6, atol=1e-9)
+
+
+def test_the_arx_band_starts_from_the_measured_outputs():
+    from blockid.evaluation.uncertainty import simulation_band
+
+    band = simulation_band(_arx(), np.diag([1e-4, 2e-4]), _U[:8], [2.0])
+    np.testing.assert_allclose(
+        band.simulated[:, 0], [2.0, 2.0, 1.0, 2.5, 0.25, 0.625, 0.3125, 1.15625]
+    )
+
+
+def test_a_band_level_of_0_is_refused():
+    from blockid.errors import ParameterError
+    from blockid.evaluation.uncertainty import simulation_band
+
+    with pytest.raises(ParameterError) as info:
+        simulation_band(_oe(), np.eye(2), _U, level=0.0)
+    assert str(info.value).startswith("level must be between 0 and 1, got 0.0")
+
+
+def test_a_matrix_as_json_stores_it_gives_an_infinite_band_for_null_entries():
+    from blockid.evaluation.uncertainty import simulation_band
+
+    band = simulation_band(_oe(), [[None, 0.0], [0.0, 1e-4]], _U)  # null: infinite
+    assert np.all(np.isposinf(band.std)) and np.all(np.isneginf(band.lower))
+    band = simulation_band(_oe(), [[0, 0], [0, 0]], _U)  # integers are numbers
+    np.testing.assert_array_equal(band.std, np.zeros((20, 1)))
+
+
+def test_band_columns_use_the_level_given():
+    from blockid.evaluation.uncertainty import band_columns, simulation_band
+
+    cov = np.array([[1e-3, 2e-4], [2e-4, 4e-3]])
+    columns = band_columns(_oe(), cov, _oe_data(), level=0.5)
+    band = simulation_band(_oe(), cov, _U, [2.0], level=0.5)
+    z = 0.6744897501960817  # the 75 % quantile of N(0, 1)
+    np.testing.assert_allclose(columns["y_upper"], band.simulated[:, 0] + z * band.std[:, 0])
+    np.testing.assert_allclose(columns["y_lower"], band.simulated[:, 0] - z * band.std[:, 0])
+
+
+def test_a_covariance_read_back_without_an_estimate_has_one_nan_per_parameter():
+    from blockid.evaluation.uncertainty import ParameterCovariance, parameter_covariance
+
+    doc = parameter_covariance(_oe(), _oe_data()).to_dict()
+    back = ParameterCovariance.from_dict(doc)
+    assert back.estimate.shape == (2,) and np.all(np.isnan(back.estimate))
+    np.testing.assert_array_equal(ParameterCovariance.from_dict(doc, [1.0, 2.0]).estimate, [1, 2])
