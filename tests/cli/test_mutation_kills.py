@@ -279,3 +279,27 @@ def test_block_option_refusals_name_the_option():
         option.convert(3)
     with pytest.raises(ParameterError, match=r"^input_block: "):
         option.convert("no-such-block")
+
+
+def test_boolean_flags_carry_their_declared_help():
+    def command(data: str, **options):
+        return options
+
+    p = inspect.signature(with_fit_options(command)).parameters
+    bools = [o.name for o in cli_options() if o.kind == "bool"]
+    assert "center" in bools
+    for name in bools:
+        info = p[name].annotation.__metadata__[0]
+        assert info.help == OPTIONS[name].help and info.help
+
+
+def test_key_term_method_help_is_declared():
+    for name in ("hammerstein", "wiener", "hammerstein-wiener"):
+        method = STRUCTURES[name].method("key-term-rls")
+        assert method.help == "paper B's key-term RLS with internal-variable estimation (B4, B5)"
+
+
+def test_real_strips_text_as_str_strip_does():
+    # str.strip() also removes the ASCII separators \x1c-\x1f, which float() refuses
+    assert _convert("real", "\x1f2.5\x1c") == 2.5
+    assert _convert("real", "\t 0.5\n", low=0.0) == 0.5

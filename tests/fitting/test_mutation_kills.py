@@ -181,3 +181,269 @@ def test_refined_recursive_fit_keeps_the_recursion_trajectory():
         np.testing.assert_array_equal(refined.history[key], plain.history[key])
     assert refined.history["names"] == plain.history["names"]
     assert plain.history["theta"].shape == (len(plain.history["update"]), 5)
+
+
+# ----------------------------------------------------------------------------- second round
+def test_rank_deficiency_from_a_constant_output_names_it_an_output():
+    rng = np.random.default_rng(0)
+    data = Dataset.from_arrays(rng.standard_normal(50), np.full(50, 3.0), ["u"], ["y"])
+    from blockid.errors import EstimationError
+
+    with pytest.raises(EstimationError) as info:
+        fit_arx(data, na=2, nb=1, nk=1)
+    assert str(info.value) == (
+        "output 'y': least squares is rank deficient: the regressors y at lag 2 are (nearly) "
+        "linear combinations of the others; output 'y' is constant over the estimation data "
+        "(3 at every sample): a constant signal tells nothing about the dynamics and its "
+        "lags repeat one another; use data in which it varies"
+    )
+
+
+def test_estimator_classes_carry_their_structure_and_a_docstring():
+    from blockid.fitting.registry import STRUCTURES
+
+    for name, cls in ESTIMATORS.items():
+        assert cls.structure == name
+        assert cls.__doc__.startswith(f"Estimator of {STRUCTURES[name].help} models")
+        assert f"(structure ``{name}``)" in cls.__doc__
+    doc = ESTIMATORS["hammerstein"].__doc__
+    assert "Methods: simulation-error, key-term-rls (default simulation-error)." in doc
+
+
+def _duffing_data(n=600):
+    # noise free: y from A y = z^-1 B [u - 0.2 y^2 - y^3], nb = 2
+    from blockid.blocks import Polynomial
+    from blockid.blocks.linear import LinearBlock
+    from blockid.models.feedback import LinearFeedback
+
+    plant = LinearFeedback(
+        "u",
+        "y",
+        linear=LinearBlock(2, 2, 1, a=[-1.5, 0.7], b=[0.2, 0.1]),
+        feedback=Polynomial([0.0, 0.2, 1.0], constant=False),
+    )
+    u = np.random.default_rng(4).normal(0.0, 0.5, n)
+    return plant, Dataset.from_arrays(u, plant.simulate(u), ["u"], ["y"])
+
+
+def test_feedback_rank_one_candidate_recovers_b_and_c_on_noise_free_data():
+    from blockid.fitting.feedback import _candidates
+    from blockid.models.feedback import LinearFeedback
+
+    plant, data = _duffing_data()
+    template = LinearFeedback.template("u", "y", na=2, nb=2, nk=1, r=3)
+    a, b, c = _candidates(template, data, 3)["equation error, rank one"]
+    np.testing.assert_allclose(a, [-1.5, 0.7], atol=1e-8)
+    np.testing.assert_allclose(b, [0.2, 0.1], atol=1e-8)
+    np.testing.assert_allclose(c, [0.2, 1.0], atol=1e-7)
+
+
+def test_feedback_start_counts_the_parameters_of_degree_r():
+    # r = 5: a_1, b_0, c_2..c_5 = 6 parameters; 6 samples give 5 rows
+    from blockid.errors import OrderError
+    from blockid.fitting.feedback import initial_feedback
+
+    _, data = _duffing_data()
+    short = data.select(0, 6)
+    with pytest.raises(OrderError, match=r"^feedback model r=5 has 6 parameters and needs at"):
+        initial_feedback(short, na=1, nb=1, nk=1, r=5)
+
+
+def test_feedback_start_that_explodes_for_every_candidate_is_reported(monkeypatch):
+    import blockid.fitting.feedback as feedback
+    from blockid.errors import EstimationError
+
+    _, data = _duffing_data()
+    monkeypatch.setattr(feedback, "simulation_mse", lambda model, data: float("inf"))
+    with pytest.raises(EstimationError) as info:
+        feedback.initial_feedback(data, na=2, nb=2, nk=1, r=3)
+    assert str(info.value) == (
+        "the feedback model's initial estimate explodes in free-run simulation for every "
+        "candidate; try other orders (na, nb, nk) or a lower degree r"
+    )
+
+
+def test_holdout_fit_percent_of_a_small_signal():
+    # the output's spread about its mean is far below 1: the fit is still a percentage
+    from blockid.fitting.identify import _holdout_score, _Split
+    from blockid.models import ARX
+
+    model = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-0.5]}}, b={"y": {"u": [1.0]}})
+    rng = np.random.default_rng(3)
+    u = 0.01 * rng.standard_normal((40, 1))
+    y = model.simulate(u) + 0.001 * rng.standard_normal((40, 1))
+    sim = model.simulate(u, y[:1])
+    err, y_s = y[5:] - sim[5:], y[5:]
+    spread = np.linalg.norm(y_s - y_s.mean())
+    assert spread < 0.2
+    rmse, fit = _holdout_score(model, _Split(None, [(u, y, 5)], ""))
+    assert rmse == pytest.approx(np.sqrt(np.mean(err**2)), rel=1e-12)
+    assert fit == pytest.approx(100.0 * (1.0 - np.linalg.norm(err) / spread), rel=1e-12)
+    assert 0.0 < fit < 100.0
+
+
+def test_split_holds_out_the_last_experiment_whole():
+    from blockid.data.dataset import Experiment
+    from blockid.fitting.identify import _split
+
+    rng = np.random.default_rng(0)
+    exps = [Experiment(n, rng.standard_normal((30, 1)), rng.standard_normal((30, 1))) for n in "ab"]
+    data = Dataset(["u"], ["y"], None, exps, None)
+    split = _split(data, 0.25)
+    assert [e.name for e in split.fit.experiments] == ["a"]
+    ((u, y, start),) = split.scored
+    assert start == 0 and u is exps[1].u and y is exps[1].y
+    assert split.text == "last experiment 'b' held out"
+
+
+def _arx_plant_data(n=600):
+    from blockid.models import ARX
+
+    plant = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-0.7]}}, b={"y": {"u": [0.5]}})
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal(n)
+    y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(n)
+    return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+
+def test_identify_cuts_the_order_grid_when_forty_percent_of_the_budget_is_spent(monkeypatch):
+    # a clock frozen at half the budget left: the order grid stops at once (ten delays
+    # scored already), the structure and finalist stages still run; ARX finalists are
+    # not fitted again
+    import blockid.fitting.identify as identify_module
+
+    monkeypatch.setattr(identify_module._Search, "left", lambda self: 0.5 * self.budget)
+    result = identify_module.identify(
+        _arx_plant_data(), structures=["arx"], budget=60.0, max_order=2, max_delay=9,
+        use_orders_test=False, finalists=2,
+    )  # fmt: skip
+    grid_notes = [n for n in result.notes if n.startswith("order grid cut")]
+    assert len(grid_notes) == 1 and grid_notes[0].startswith("order grid cut at 0 of ")
+    assert len(result.ranked) + len(result.rejected) == 10  # the delays nk = 0..9 only
+    assert {s.stage for s in result.ranked} == {"orders"}
+    assert result.selected.candidate.options["nk"] == 1
+    doc = result.to_dict()
+    assert [m["stage"] for m in doc["models"]] == ["orders"] * len(result.ranked)
+
+
+def _network_data(n=200):
+    rng = np.random.default_rng(7)
+    u = rng.standard_normal(n)
+    v = np.zeros(n)
+    for t in range(1, n):
+        v[t] = 0.6 * v[t - 1] + 0.4 * u[t - 1]
+    return Dataset.from_arrays(u, v, ["u"], ["v"])
+
+
+def test_network_fit_records_methods_and_scores_by_simulation():
+    from blockid.fitting.network import SubsystemSpec, fit_network
+
+    spec = SubsystemSpec("S1", ["u"], ["v"], "arx", "batch", {"na": 1, "nb": 1, "nk": 1})
+    fit = fit_network(_network_data(), [spec])
+    assert fit.metrics_mode == "simulation"
+    assert fit.settings["subsystems"]["S1"]["method"] == "batch"
+    assert fit.settings["subsystems"]["S1"]["structure"] == "arx"
+
+
+def test_network_option_that_does_not_fit_is_named_with_the_subsystem_options():
+    # method given among the options as well as the spec's method: fit_model's TypeError
+    from blockid.fitting.network import SubsystemSpec, fit_network
+
+    opts = {"na": 1, "nb": 1, "nk": 1, "method": "rls"}
+    with pytest.raises(
+        ParameterError,
+        match=r"^subsystem S1: an option value does not fit \(na=1 nb=1 nk=1 method=rls\): ",
+    ):
+        fit_network(_network_data(), [SubsystemSpec("S1", ["u"], ["v"], "arx", None, opts)])
+
+
+def test_online_backlash_predicts_nothing_before_its_first_update():
+    # orders na=2, nb=1, nk=1: the first update is at sample 2, as offline
+    from blockid.fitting.online import online_estimator
+
+    _, data = _backlash_data()
+    u, y = data.experiments[0].u[:40], data.experiments[0].y[:40]
+    whole = online_estimator("backlash", "aw-rls", {"na": 2}, "u", "y").partial_fit(u, y)
+    assert np.all(np.isnan(whole.predictions_[:2])) and np.all(np.isfinite(whole.predictions_[2:]))
+    single = online_estimator("backlash", "aw-rls", {"na": 2}, "u", "y")
+    steps = np.array([single.update(u[k], y[k]) for k in range(len(u))])
+    assert np.all(np.isnan(steps[:2])) and np.all(np.isfinite(steps[2:]))
+    np.testing.assert_array_equal(steps, whole.predictions_)
+
+
+def test_false_nearest_neighbour_shares_with_the_noise_allowance_by_brute_force():
+    from blockid.fitting.orders import false_nearest_neighbours
+
+    rng = np.random.default_rng(5)
+    n = 90
+    u = rng.standard_normal(n)
+    y = np.convolve(u, [0.0, 1.0, 0.5])[:n] + 0.3 * rng.standard_normal(n)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    r_tol, a_tol, noise = 2.0, 10.0, 0.1
+    ev = false_nearest_neighbours(
+        data, max_na=1, max_nb=2, max_nk=1, r_tol=r_tol, a_tol=a_tol, noise=noise,
+        max_points=None, exclude=0,
+    )  # fmt: skip
+    us, ys = (u - u.mean()) / u.std(), (y - y.mean()) / y.std()
+    lag = 2  # max(max_na, max_nk + max_nb - 1)
+    for i, na in enumerate(ev.na):
+        for j, nb in enumerate(ev.nb):
+            for m, nk in enumerate(ev.nk):
+                cols = [ys[lag - k : n - k] for k in range(1, na + 1)]
+                cols += [us[lag - d : n - d] for d in range(nk, nk + nb)]
+                x, out = np.column_stack(cols), ys[lag:]
+                dist = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=2)
+                np.fill_diagonal(dist, np.inf)
+                nearest = dist.argmin(axis=1)
+                dy = np.abs(out - out[nearest])
+                slack = 2 * r_tol * np.sqrt(na * noise**2 + nb * noise**2) + 2 * noise
+                false = (dy > r_tol * dist.min(axis=1) + slack) | (dy > a_tol)
+                assert ev.percent[i, j, m] == pytest.approx(100.0 * false.mean(), abs=1e-9)
+    assert ev.percent.max() > 50.0  # (0, 1, 0): a wrong order, mostly false neighbours
+
+
+def test_bla_arx_start_skips_the_first_sample_even_for_a_static_gain():
+    # na = 0, nb = 1, nk = 0: y(k) = b u(k); the regression still starts at k = 1
+    from blockid.fitting.wiener_hammerstein import _arx
+
+    rng = np.random.default_rng(1)
+    u, y = rng.standard_normal(20), rng.standard_normal(20)
+    a, b = _arx([u], [y], 0, 1, 0)
+    assert a.size == 0
+    assert b[0] == pytest.approx(np.dot(u[1:], y[1:]) / np.dot(u[1:], u[1:]), rel=1e-12)
+
+
+def test_roots_with_a_tiny_imaginary_part_are_a_conjugate_pair():
+    from blockid.fitting.wiener_hammerstein import _units
+
+    # |imag| = 1.5e-9 > 1e-9 * max(1, |r|) for |r| = 0.5: a pair, not two real roots
+    roots = np.array([0.5 + 1.5e-9j, 0.3, 0.5 - 1.5e-9j])
+    units = _units(roots)
+    assert [u.size for u in units] == [2, 1]
+    np.testing.assert_array_equal(units[0], [0.5 + 1.5e-9j, 0.5 - 1.5e-9j])
+    # within the tolerance: real
+    assert [u.size for u in _units(np.array([0.5 + 0.5e-9j, 0.5 - 0.5e-9j]))] == [1, 1]
+    # the tolerance grows with |r| beyond 1
+    assert [u.size for u in _units(np.array([3.0 + 2e-9j, 3.0 - 2e-9j]))] == [1, 1]
+
+
+def test_wiener_hammerstein_passes_gtol_to_the_refinement():
+    from blockid.blocks import LinearBlock, Polynomial
+    from blockid.fitting.wiener_hammerstein import fit_wiener_hammerstein
+    from blockid.models import WienerHammerstein
+
+    truth = WienerHammerstein(
+        "u",
+        "y",
+        first=LinearBlock(1, 1, 1, a=[-0.5], b=[0.4]),
+        static=Polynomial([0.0, 1.0, 0.2]),
+        second=LinearBlock(1, 1, 0, a=[-0.3], b=[1.0]),
+    )
+    u = np.random.default_rng(0).standard_normal(400)
+    data = Dataset.from_arrays(u, truth.simulate(u)[:, 0] + 0.01, ["u"], ["y"])
+    kwargs = dict(na=2, nb=1, nk=1, r2=2, starts=1, tail_fraction=0.0, max_nfev=20)
+    loose = fit_wiener_hammerstein(data, gtol=1e6, **kwargs)
+    assert loose.settings["stop_reason"] == "`gtol` termination condition is satisfied."
+    assert loose.settings["iterations"] == 0
+    tight = fit_wiener_hammerstein(data, **kwargs)
+    assert tight.settings["iterations"] > 0  # the default gtol lets it iterate
