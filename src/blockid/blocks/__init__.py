@@ -10,6 +10,7 @@ from blockid.blocks.base import (
     block_from_dict,
     block_template,
 )
+from blockid.blocks.free_pwl import FreePiecewiseLinear
 from blockid.blocks.integrator import Integrator
 from blockid.blocks.linear import LinearBlock
 from blockid.blocks.polynomial import Polynomial, TwoSegmentPolynomial
@@ -21,6 +22,7 @@ __all__ = [
     "Block",
     "DeadZone",
     "DynamicBlock",
+    "FreePiecewiseLinear",
     "Integrator",
     "LinearBlock",
     "PiecewiseLinear",

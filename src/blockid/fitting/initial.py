@@ -374,13 +374,16 @@ def _grid_search(
     block = template.input_block
     u_all = np.concatenate(u)
     a_lin, b_lin = _arx_fit(u, z, template.na, template.nb, template.nk)
-    if np.sum(b_lin) / (1.0 + np.sum(a_lin)) < 0:  # static gain of a linear fit
+    grid = block.initial_grid(u_all)
+    # shapes with positive slopes (backlash, dead zone, saturation) cannot follow a
+    # negative gain; a family fitted by least squares (free values) can
+    profiles = not all(isinstance(g, LinearFamily) for g in grid)
+    if profiles and np.sum(b_lin) / (1.0 + np.sum(a_lin)) < 0:  # static gain of a linear fit
         raise EstimationError(
             f"initial estimate: the plant's static gain from u is negative, but a "
             f"{block.kind} block has positive slopes and b_0 = 1. Negate the input (or the "
             "output) and fit again"
         )
-    grid = block.initial_grid(u_all)
     if not grid:
         raise ParameterError(
             f"no initial estimate for a {block.kind or type(block).__name__} input block; "

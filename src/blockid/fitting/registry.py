@@ -260,13 +260,15 @@ OPTIONS: dict[str, Option] = _options(
         "input_block",
         "block",
         "Input block: two-segment-polynomial, polynomial[:degree=N], dead-zone, "
-        "saturation, piecewise-linear[:knots=N] or a user block's kind.",
+        "saturation, piecewise-linear[:knots=N], piecewise-linear-free[:knots=N] (breakpoints "
+        "estimated too) or a user block's kind.",
         metavar="KIND",
     ),
     Option(
         "output_block",
         "block",
-        "Output block: polynomial[:degree=N] or a user block's kind.",
+        "Output block: polynomial[:degree=N], piecewise-linear-free[:knots=N] or a user "
+        "block's kind.",
         metavar="KIND",
     ),
     Option(

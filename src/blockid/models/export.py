@@ -65,6 +65,7 @@ EXPORTABLE_KINDS = (
     "dead-zone",
     "saturation",
     "piecewise-linear",
+    "piecewise-linear-free",
     "backlash",
 )
 
@@ -322,7 +323,7 @@ def _static(p, s):
         )
     if kind == "saturation":
         return np.clip(p["slope"] * s, p["lower"], p["upper"])
-    if kind == "piecewise-linear":
+    if kind in ("piecewise-linear", "piecewise-linear-free"):
         bp, v = np.array(p["breakpoints"]), np.array(p["values"])
         j = np.clip(np.searchsorted(bp, s, side="right") - 1, 0, bp.size - 2)
         t = (s - bp[j]) / (bp[j + 1] - bp[j])
