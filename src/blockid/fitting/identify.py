@@ -488,8 +488,12 @@ def identify(
         Structures to search (default :data:`DEFAULT_SEARCH`; block structures need one
         input and one output, otherwise only ARX is searched).
     budget : float, default 600
-        Seconds for the search; stages stop starting new candidates when it is spent
-        (the richer-nonlinearity trial of the winner and the final refit always run).
+        Seconds for the search; stages stop starting new candidates when it is spent,
+        and a refinement running when it is spent returns its best iterate so far
+        (:func:`~blockid.fitting.simulation_error.time_limit`). The finalists and the
+        richer-nonlinearity trial get at least a tenth of it, the final refit (which
+        always runs) at least a fifth: a search ends within about 1.3 times the budget
+        plus the initial estimates running at that moment.
     holdout : float, default 0.25
         Fraction of a single record held out for scoring.
     max_order, max_delay : int
@@ -513,6 +517,8 @@ def identify(
     -------
     IdentifyResult
     """
+
+    from blockid.fitting.simulation_error import time_limit
 
     if not isinstance(data, Dataset):
         raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
@@ -597,35 +603,41 @@ def identify(
             f"{integrations} integrator(s) tried first"
         )
     candidates += _nonlinear_candidates(chosen, orders, screen_nfev)
-    for i, cand in enumerate(candidates):
-        if search.left() < 0.35 * budget:
-            notes.append(f"{len(candidates) - i} structure candidates skipped by the budget")
-            break
-        search.run(cand, screen, "screen")
-        search.tell("structures", i + 1, len(candidates), cand.label)
+    with time_limit(search.left()):  # a refinement stops when the budget is spent
+        for i, cand in enumerate(candidates):
+            if search.left() < 0.35 * budget:
+                notes.append(f"{len(candidates) - i} structure candidates skipped by the budget")
+                break
+            search.run(cand, screen, "screen")
+            search.tell("structures", i + 1, len(candidates), cand.label)
 
     # stage 3: finalists with the full iteration budget, on the whole fit part
     screened = _ranked([s for s in search.scores if s.stage in ("screen", "orders")], tie)
     finals = []
-    for i, s in enumerate(screened[:finalists]):
-        cheap = not STRUCTURES[s.candidate.structure].block_oriented  # ARX: nothing to add
-        if cheap or search.left() < 0.15 * budget and finals:
-            finals.append(s)
-            continue
-        opts = {k: v for k, v in s.candidate.options.items() if k != "max_nfev"}
-        opts.pop("tail_fraction", None)
-        opts.update(_patient(s.candidate.structure))
-        finals.append(search.run(Candidate(s.candidate.structure, opts), split.fit, "final"))
-        search.tell("finalists", i + 1, min(finalists, len(screened)), s.candidate.label)
-    # a full refit can score worse on the hold-out than its screening fit: rank both
-    ranked_final = _ranked(finals + screened[:finalists], tie) or screened
-    winner = ranked_final[0]
-    if STRUCTURES[winner.candidate.structure].block_oriented:
-        winner = _grow(winner, search, split.fit, tie)
+    # the finalists and the richer nonlinearity get what is left, at least a tenth of
+    # the budget; the refit at least a fifth (it always runs): past these limits a
+    # refinement returns its best iterate so far
+    with time_limit(max(search.left(), 0.1 * budget)):
+        for i, s in enumerate(screened[:finalists]):
+            cheap = not STRUCTURES[s.candidate.structure].block_oriented  # ARX: nothing to add
+            if cheap or search.left() < 0.15 * budget and finals:
+                finals.append(s)
+                continue
+            opts = {k: v for k, v in s.candidate.options.items() if k != "max_nfev"}
+            opts.pop("tail_fraction", None)
+            opts.update(_patient(s.candidate.structure))
+            finals.append(search.run(Candidate(s.candidate.structure, opts), split.fit, "final"))
+            search.tell("finalists", i + 1, min(finalists, len(screened)), s.candidate.label)
+        # a full refit can score worse on the hold-out than its screening fit: rank both
+        ranked_final = _ranked(finals + screened[:finalists], tie) or screened
+        winner = ranked_final[0]
+        if STRUCTURES[winner.candidate.structure].block_oriented:
+            winner = _grow(winner, search, split.fit, tie)
 
     # refit on all estimation data: block models start from the finalist (warm start)
     search.tell("refit", 0, 1, winner.candidate.label)
-    fit = _refit(winner, data)
+    with time_limit(max(search.left(), 0.2 * budget)):
+        fit = _refit(winner, data)
     search.tell("refit", 1, 1, winner.candidate.label)
 
     from blockid.evaluation.validate import evaluate
