@@ -171,3 +171,53 @@ def test_piecewise_linear_template_on_given_breakpoints_stays_there():
     assert p.adapted(np.array([-5.0, 5.0])) is p
     with pytest.raises(ParameterError, match="breakpoints"):
         PiecewiseLinear.template(breakpoints=[1.0])
+
+
+def test_backlash_with_vector_reports_a_missing_value_as_not_finite():
+    # the vector is read as floats first: None becomes NaN, refused as not finite
+    with pytest.raises(ParameterError, match=r"^m_left must be finite, got nan$"):
+        Backlash.template().with_vector([None, 0.0, 1.0, 0.0])
+
+
+def test_default_invert_widens_the_seen_range_by_half_on_both_sides():
+    # StaticBlock.invert (PiecewiseLinear has no own): seen (-1, 1) becomes (-2, 2); the
+    # outer segments continue their slopes (2 on the left, 1 on the right)
+    block = PiecewiseLinear([-1.0, 0.0, 1.0], [-2.0, 0.0, 1.0])
+    u = block.invert(np.array([-3.0, -1.0, 0.5, 1.5, 5.0]), (-1.0, 1.0))
+    np.testing.assert_allclose(u, [-1.5, -0.5, 0.5, 1.5, 2.0], atol=1e-9)
+
+
+def test_polynomial_is_monotone_names_its_range_argument():
+    with pytest.raises(
+        ParameterError, match=r"^\(u_min, u_max\) must have low < high, got \(1\.0, 0\.0\)$"
+    ):
+        Polynomial([0.0, 1.0]).is_monotone(1.0, 0.0)
+
+
+def test_two_segment_from_segments_names_the_bad_segment():
+    with pytest.raises(ParameterError, match=r"^positive needs at least 1 value\(s\), got 0$"):
+        TwoSegmentPolynomial.from_segments([], [1.0])
+
+
+def test_piecewise_linear_vector_names():
+    p = PiecewiseLinear([-1.0, 0.0, 1.0], [0.0, 1.0, 2.0])
+    assert p.vector_names() == ["values_0", "values_1", "values_2"]
+    assert p.vector_names({"values": "v"}) == ["v_0", "v_1", "v_2"]
+
+
+def test_saturation_names_a_bad_lower_limit():
+    with pytest.raises(ParameterError, match=r"^lower must be a real number, got 'low'$"):
+        Saturation("low", 1.0)
+
+
+def test_static_block_plot_draws_the_block_over_the_given_range():
+    import matplotlib.pyplot as plt
+
+    ax = DeadZone(-0.5, 0.5, slope_left=2.0).plot(u_range=(-1.0, 1.0), n_points=5)
+    try:
+        (line,) = ax.get_lines()
+        np.testing.assert_array_equal(line.get_xdata(), [-1.0, -0.5, 0.0, 0.5, 1.0])
+        np.testing.assert_array_equal(line.get_ydata(), [-1.0, 0.0, 0.0, 0.0, 0.5])
+        assert line.get_label() == "DeadZone"
+    finally:
+        plt.close(ax.figure)
