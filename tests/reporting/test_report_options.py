@@ -176,6 +176,41 @@ def json_out(run: Run) -> None:
     assert doc["models"][0]["structure"] == "arx"
 
 
+def quiet(run: Run) -> None:
+    """On a terminal the report shows its progress on stderr; ``--quiet`` shows none,
+    and the report is written either way."""
+    import io
+    import sys
+    from unittest import mock
+
+    from rich.console import Console
+
+    from blockid.cli import _common
+
+    class OnATerminal:
+        class stderr:
+            @staticmethod
+            def isatty() -> bool:
+                return True
+
+        def __getattr__(self, name: str) -> Any:
+            return getattr(sys, name)
+
+    def shown(*args: str) -> str:
+        text = io.StringIO()
+        console = Console(file=text, force_terminal=True, width=200)
+        with mock.patch.object(_common, "sys", OnATerminal()):
+            with mock.patch.object(_common, "stderr", console):
+                run(*args, "--force")
+        assert run.out.exists()
+        return text.getvalue()
+
+    text = shown()
+    assert "comparing the structures" in text and "writing the report" in text, text
+    assert shown("--quiet") == ""
+    assert shown("-q") == ""
+
+
 CHECKS: dict[str, Callable[[Run], None]] = {
     f.__name__: f
     for f in (
@@ -191,6 +226,7 @@ CHECKS: dict[str, Callable[[Run], None]] = {
         experiment_column,
         force,
         json_out,
+        quiet,
     )  # fmt: skip
 }
 
