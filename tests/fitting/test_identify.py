@@ -88,3 +88,39 @@ def test_cli_refuses_overlapping_ranges_and_writes_the_model(tmp_path):
     doc = json.loads(r.stdout)
     assert doc["selected"]["scored_on"] == "validation"
     assert json.loads(out.read_text())["model"]["structure"] == "arx"
+
+
+def test_output_error_order_scan_is_carried_to_the_block_structures():
+    """The grid around the best ARX orders: na - 1 .. na + 1, nb = na + 1, delays from
+    the ARX one down by up to 3. On a plant measured with coloured output noise, the
+    scan's output-error fits are scored (stage 'screen') and the block structures are
+    screened on the best scanned orders."""
+    from scipy.signal import lfilter
+
+    from blockid.fitting.identify import OUTPUT_ERROR, _output_error_orders
+
+    grid = _output_error_orders((4, 5, 2), max_order=4, nfev=7)
+    assert [(c.options["na"], c.options["nb"], c.options["nk"]) for c in grid] == [
+        (3, 4, 2), (4, 5, 2), (3, 4, 1), (4, 5, 1), (3, 4, 0), (4, 5, 0),
+    ]  # fmt: skip
+    assert all(c.structure == OUTPUT_ERROR and c.options["max_nfev"] == 7 for c in grid)
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-1, 1, 500), 3)
+    noise = np.convolve(rng.standard_normal(u.size), np.ones(8) / 8, mode="same")
+    y = lfilter([0.0, 0.0, 0.2, 0.3, 0.1], [1.0, -1.5, 0.7], u) + 0.05 * noise
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    result = identify(data, structures=["arx", "output-error", "hammerstein"], **FAST)
+    scores = result.ranked + result.rejected
+    arx = min((s for s in scores if s.candidate.structure == "arx"), key=lambda s: s.rmse)
+    a = arx.candidate.options
+    scan = _output_error_orders((a["na"], a["nb"], a["nk"]), 3, 15)
+    assert a["nk"] >= 1 and any(c.options["nk"] < a["nk"] for c in scan)
+    assert all(c in [s.candidate for s in scores] for c in scan)  # every scan fit scored
+    from blockid.fitting.identify import _ranked
+
+    o = _ranked([s for s in scores if s.candidate in scan], 0.02)[0].candidate.options
+    hammerstein = [s.candidate.options for s in scores if s.candidate.structure == "hammerstein"]
+    from blockid.fitting.registry import STRUCTURES
+
+    nk = max(o["nk"], STRUCTURES["hammerstein"].min_delay)
+    assert any((h["na"], h["nk"]) == (o["na"], nk) for h in hammerstein)

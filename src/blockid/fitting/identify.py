@@ -67,6 +67,7 @@ _ITERATION_SETTINGS = ("max_nfev", "tail_fraction", "patience")
 
 #: The linear structure of the order search (least squares: fast over a grid).
 LINEAR = "arx"
+OUTPUT_ERROR = "output-error"
 
 #: A least-squares ARX pole this close to +1 suggests that the plant integrates.
 INTEGRATING_POLE = 1e-2
@@ -319,6 +320,20 @@ def _order_grid(
         near = [g for g in grid if abs(g[0] - na0) <= 2 and abs(g[1] - nb0) <= 2]
         grid = near + [g for g in grid if g not in near]
     return grid
+
+
+def _output_error_orders(arx: tuple[int, int, int], max_order: int, nfev: int) -> list[Candidate]:
+    """Output-error candidates around the best ARX orders ``(na, nb, nk)``: ``na - 1`` to
+    ``na + 1``, ``nb = na + 1`` (a proper best linear approximation) and the delays from
+    ``nk`` down to ``max(nk - 3, 0)`` (equation error overestimates delays under output
+    noise); the ARX orders themselves are scored by the structure screening."""
+    na0, _, nk0 = arx
+    out = []
+    for nk in range(nk0, max(nk0 - 3, 0) - 1, -1):
+        for na in range(max(na0 - 1, 1), min(na0 + 1, max_order) + 1):
+            options = {"na": na, "nb": na + 1, "nk": nk, "max_nfev": nfev, "tail_fraction": 0.0}
+            out.append(Candidate(OUTPUT_ERROR, options))
+    return out
 
 
 def _screen(data: Dataset, samples: int) -> Dataset:
@@ -591,9 +606,29 @@ def identify(
             orders.append(key)
         if len(orders) >= linear_keep:
             break
+    screen = _screen(split.fit, screen_samples)
+
+    # stage 1c: the orders of the best linear approximation. ARX minimises the equation
+    # error, which with output noise favours other delays and orders than the dynamics
+    # a block structure's linear part needs; an output-error model is the best linear
+    # approximation itself, scored by free-run simulation like everything else. Its best
+    # orders near the ARX ones replace the last ARX order set carried on.
+    if OUTPUT_ERROR in chosen and len(orders) >= 1 and search.left() >= 0.6 * budget:
+        oe = _output_error_orders(orders[0], max_order, screen_nfev)
+        for i, cand in enumerate(oe):
+            if search.left() < 0.5 * budget:
+                notes.append(f"output-error order scan cut at {i} of {len(oe)} by the budget")
+                break
+            search.run(cand, screen, "screen")
+            search.tell("output-error orders", i + 1, len(oe), cand.label)
+        best_oe = _ranked([s for s in search.scores if s.candidate in oe], tie)
+        if best_oe:
+            o = best_oe[0].candidate.orders()
+            key = (o["na"], o["nb"], o["nk"])
+            if key not in orders:
+                orders = [*orders[: max(linear_keep - 1, 1)], key]
 
     # stage 2: structures on the best orders, screened
-    screen = _screen(split.fit, screen_samples)
     integrations = _integrations(best_linear, orders)
     candidates = _integrating_candidates(chosen, orders, screen_nfev, integrations)
     if candidates:
