@@ -124,3 +124,34 @@ def test_output_error_order_scan_is_carried_to_the_block_structures():
 
     nk = max(o["nk"], STRUCTURES["hammerstein"].min_delay)
     assert any((h["na"], h["nk"]) == (o["na"], nk) for h in hammerstein)
+
+
+def test_the_richer_nonlinearity_grows_while_the_hold_out_improves():
+    """_grow steps the degree by 2 while each step lowers the hold-out RMSE by more than
+    the tie; it stops at the first step that does not (here r2 = 9 is not better than
+    7) and never goes above 9."""
+    from blockid.fitting.identify import Candidate, Score, _grow
+
+    class FakeSearch:
+        def __init__(self, rmse):
+            self.rmse, self.tried = rmse, []
+
+        def left(self):
+            return 100.0
+
+        def tell(self, *args):
+            pass
+
+        def run(self, candidate, data, stage):
+            self.tried.append(candidate.options["r2"])
+            score = Score(candidate, stage=stage)
+            score.rmse = self.rmse[candidate.options["r2"]]
+            return score
+
+    winner = Score(Candidate("wiener", {"na": 2, "nb": 2, "nk": 1, "r2": 3}), stage="final")
+    winner.rmse = 1.0
+    search = FakeSearch({5: 0.8, 7: 0.5, 9: 0.499})
+    best = _grow(winner, search, None, 0.02)
+    assert search.tried == [5, 7, 9] and best.candidate.options["r2"] == 7
+    search = FakeSearch({5: 0.99, 7: 0.1})
+    assert _grow(winner, search, None, 0.02) is winner and search.tried == [5]

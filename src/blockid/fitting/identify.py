@@ -424,20 +424,26 @@ def _patient(structure: str) -> dict[str, Any]:
 
 
 def _grow(winner: Score, search: _Search, data: Dataset, tie: float) -> Score:
-    """Try the winner with a richer nonlinearity (each polynomial degree + 2, up to 9);
-    keep it only when the hold-out RMSE falls by more than ``tie``."""
+    """Try the winner with a richer nonlinearity (each polynomial degree + 2, up to 9,
+    again while it helps); keep a step only when the hold-out RMSE falls by more than
+    ``tie``."""
     best = winner
     for key in ("r1", "r2", "r"):
-        degree = best.candidate.options.get(key)
-        # one fit per degree, tried even when the budget is spent: the search found the
-        # structure, and its nonlinearity may be too poor (a polynomial of the winner's
-        # screening degree)
-        if not isinstance(degree, int) or degree + 2 > 9:
-            continue
-        opts = {**best.candidate.options, key: degree + 2, **_patient(best.candidate.structure)}
-        trial = search.run(Candidate(best.candidate.structure, opts), data, "grow")
-        search.tell("nonlinearity", 1, 1, trial.candidate.label)
-        if trial.ok and trial.rmse < best.rmse * (1.0 - tie):
+        while True:
+            degree = best.candidate.options.get(key)
+            # the first step is tried even when the budget is spent: the search found
+            # the structure, and its nonlinearity may be too poor (a polynomial of the
+            # winner's screening degree); further steps only within the budget
+            if not isinstance(degree, int) or degree + 2 > 9:
+                break
+            if best is not winner and search.left() <= 0:
+                break
+            structure = best.candidate.structure
+            opts = {**best.candidate.options, key: degree + 2, **_patient(structure)}
+            trial = search.run(Candidate(structure, opts), data, "grow")
+            search.tell("nonlinearity", 1, 1, trial.candidate.label)
+            if not (trial.ok and trial.rmse < best.rmse * (1.0 - tie)):
+                break
             best = trial
     return best
 
