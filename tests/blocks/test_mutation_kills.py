@@ -13,9 +13,10 @@ from blockid.blocks import (
     TwoSegmentPolynomial,
     block_template,
 )
-from blockid.blocks.base import DynamicBlock
+from blockid.blocks.base import DynamicBlock, StaticBlock
+from blockid.blocks.integrator import Integrator
 from blockid.blocks.linear import LinearBlock
-from blockid.errors import ParameterError
+from blockid.errors import EstimationError, OrderError, ParameterError
 
 
 def test_backlash_template_is_the_unit_backlash():
@@ -221,3 +222,123 @@ def test_static_block_plot_draws_the_block_over_the_given_range():
         assert line.get_label() == "DeadZone"
     finally:
         plt.close(ax.figure)
+
+
+class _QuadraticGain(StaticBlock):
+    """A user block ``w = gain u^2`` with ``gain >= 0``, on the default (finite-difference)
+    jacobian: at ``gain = 0`` the step down is refused by the constructor."""
+
+    def __init__(self, gain: float = 1.0) -> None:
+        if gain < 0:
+            raise ParameterError(f"gain must be >= 0, got {gain}")
+        self.gain = float(gain)
+
+    @property
+    def parameters(self):
+        return {"gain": self.gain}
+
+    def __call__(self, u):
+        return self.gain * np.asarray(u, dtype=float) ** 2
+
+
+class _Sign(StaticBlock):
+    """A user block without parameters whose output is whole numbers (an int array)."""
+
+    @property
+    def parameters(self):
+        return {}
+
+    def __call__(self, u):
+        return np.sign(np.asarray(u, dtype=float)).astype(int)
+
+
+def test_default_jacobian_is_one_sided_at_a_parameter_bound():
+    u = np.array([-2.0, 0.5, 3.0])
+    # gain - h is refused: (w(gain + h) - w(gain)) / h = u^2 exactly for w linear in gain
+    np.testing.assert_allclose(_QuadraticGain(0.0).jacobian(u), [[4.0], [0.25], [9.0]])
+    np.testing.assert_allclose(_QuadraticGain(2.0).jacobian(u), [[4.0], [0.25], [9.0]])
+
+
+def test_static_forward_hands_on_a_float_output():
+    w, S = _Sign().forward(np.array([-2.0, 0.0, 3.0]), np.zeros((3, 1)), np.zeros(0, int))
+    assert w.dtype == np.float64
+    assert w.tolist() == [-1.0, 0.0, 1.0]
+    np.testing.assert_array_equal(S, np.zeros((3, 1)))
+
+
+def test_integrator_refuses_a_complex_initial_output():
+    # read as floats: a complex start is an error, not cut to its real part
+    np.testing.assert_array_equal(Integrator().simulate(np.ones(3), x_init=[2]), [2.0, 3.0, 4.0])
+    with pytest.raises(TypeError):
+        Integrator().simulate(np.ones(3), x_init=[2.0 + 1.0j])
+
+
+def test_linear_block_defaults_and_stored_coefficients():
+    g = LinearBlock(1, 2, 1)
+    assert g.a.tolist() == [0.0] and g.b.tolist() == [0.0, 0.0]  # b_0 = 0 unless unit_b0
+    assert LinearBlock(1, 2, 1, unit_b0=True).b.tolist() == [1.0, 0.0]
+    h = LinearBlock(1, 2, 1, a=[0], b=[1, 2])  # whole numbers are stored as floats
+    assert h.a.dtype == np.float64 and h.b.dtype == np.float64
+    assert all(type(v) is float for v in h.to_dict()["b"])
+    with pytest.raises(ValueError, match="read-only"):
+        h.a[0] = 0.5
+    with pytest.raises(ValueError, match="read-only"):
+        h.b[0] = 0.5
+
+
+def test_linear_block_names_a_bad_na():
+    with pytest.raises(OrderError, match=r"^na=-1: a block-oriented \(single-input"):
+        LinearBlock(-1)
+
+
+def test_linear_block_simulate_takes_a_column_of_initial_outputs():
+    g = LinearBlock(2, 1, 1, a=[-0.5, 0.0], b=[1.0])
+    # the first max_lag = 2 outputs given (x(0) = 2, x(1) = 4), the third row unused; then
+    # x(k) = 0.5 x(k-1) + w(k-1): 3, 2.5
+    x = g.simulate(np.ones(4), x_init=np.array([[2.0], [4.0], [7.0]]))
+    np.testing.assert_array_equal(x, [2.0, 4.0, 3.0, 2.5])
+
+
+def test_polynomial_inverse_checks_tol_and_reports_non_convergence():
+    p = Polynomial([0.0, 0.0, 0.0, 1.0])  # w = u^3
+    for bad in (0.0, -1e-3):
+        with pytest.raises(ParameterError, match=r"^tol must be > 0, got -?0\.0"):
+            p.inverse(np.array([8.0]), tol=bad)
+    # from the bracket's middle 0, w = 0 is solved at once; 8 and 1 need more steps
+    with pytest.raises(
+        EstimationError,
+        match=r"^polynomial inverse did not converge in 1 iterations for 2 sample\(s\); "
+        r"raise max_iter or tol$",
+    ):
+        p.inverse(np.array([8.0, 1.0, 0.0]), max_iter=1)
+
+
+def test_two_segment_check_data_message():
+    with pytest.raises(EstimationError) as info:
+        TwoSegmentPolynomial.template().check_data(np.array([1.0, 2.0]))
+    assert str(info.value) == (
+        "the input never changes sign, so the two polynomials of the two-segment input "
+        "block (B1) cannot both be identified; use data that span both signs of u, or a "
+        "Polynomial input block"
+    )
+
+
+def test_dead_zone_jacobian_edges_do_not_move_on_the_band():
+    d = DeadZone(-0.5, 1.0, slope_left=2.0, slope_right=3.0)
+    # columns d/d(lower, upper, slope_left, slope_right); at u = lower and u = upper the
+    # output is 0 on the band side, as the derivative
+    np.testing.assert_array_equal(
+        d.jacobian(np.array([-0.5, 1.0, -1.0, 2.0])),
+        [[0, 0, 0, 0], [0, 0, 0, 0], [-2, 0, -0.5, 0], [0, -3, 0, 1]],
+    )
+
+
+def test_piecewise_linear_and_saturation_name_the_bad_argument():
+    with pytest.raises(ParameterError, match=r"^values needs at least 2 value\(s\), got 1$"):
+        PiecewiseLinear([0.0, 1.0], [0.0])
+    with pytest.raises(ParameterError, match=r"^upper must be a real number, got 'x'$"):
+        Saturation(-1.0, "x")
+
+
+def test_saturation_template_is_the_unit_saturation():
+    assert Saturation.template().parameters == {"lower": -1.0, "upper": 1.0, "slope": 1.0}
