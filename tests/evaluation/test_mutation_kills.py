@@ -328,3 +328,158 @@ def test_a_covariance_read_back_without_an_estimate_has_one_nan_per_parameter():
     back = ParameterCovariance.from_dict(doc)
     assert back.estimate.shape == (2,) and np.all(np.isnan(back.estimate))
     np.testing.assert_array_equal(ParameterCovariance.from_dict(doc, [1.0, 2.0]).estimate, [1, 2])
+
+
+# ----------------------------------------------------------------- second mutation round
+def test_undefined_notes_say_why_for_every_metric():
+    from blockid.evaluation.metrics import undefined_notes
+
+    notes = undefined_notes({"mse": {"y": float("nan")}, "fit_percent": {"y": 5.0}})
+    assert notes == ["mse of output 'y' is undefined (null): not defined on these samples"]
+
+
+def test_effective_samples_of_lag_one_correlated_residuals():
+    from blockid.evaluation.uncertainty import _effective_samples
+
+    # centre 0, power 6, lag-1 products 1 + 1 - 1 + 1 + 1 = 3: rho = 0.5, N (0.5 / 1.5)
+    r = np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0])
+    assert _effective_samples([r], 6) == pytest.approx(2.0, rel=1e-12)
+    assert _effective_samples([r], 9) == pytest.approx(3.0, rel=1e-12)
+
+
+def test_fitted_rows_keep_the_tail_while_one_row_is_left_for_one_parameter():
+    from blockid.evaluation.uncertainty import _fitted_rows
+
+    assert _fitted_rows(10, 0, 1, 0.9) == 1  # 10 - 9 - 0 = 1 row >= 1 parameter
+    assert _fitted_rows(10, 1, 1, 0.9) == 10  # no row left: the tail is fitted too
+    assert _fitted_rows(10, 0, 0, 0.9) == 1
+
+
+def _offset_arx_data():
+    # y(t) = u(t-1) + 0.5: the simulation (no offsets) misses it by 0.5 at every sample
+    u = np.array([1.0, -1.0, 2.0, 0.0, 3.0, -2.0])
+    y = np.concatenate([[0.5], u[:-1] + 0.5])
+    model = ARX(["u"], ["y"], 0, 1, 1, b={"y": {"u": [1.0]}})
+    return model, Dataset.from_arrays(u, y, inputs=["u"], outputs=["y"])
+
+
+def test_arx_offsets_bias_is_minus_the_mean_simulation_error():
+    from blockid.evaluation.uncertainty import _arx_offsets
+
+    model, data = _offset_arx_data()
+    out = _arx_offsets(model, data, {"y": 0.6})
+    assert out == {"y": {"variance": pytest.approx(0.1, rel=1e-12), "bias": -0.5}}
+    # an output without a noise variance has none
+    assert _arx_offsets(model, data, {}) == {"y": {"variance": 0.0, "bias": -0.5}}
+
+
+def test_arx_offsets_of_an_integrator_have_infinite_variance():
+    from blockid.evaluation.uncertainty import _arx_offsets
+
+    u = np.array([1.0, -1.0, 2.0, 0.0, 3.0, -2.0])
+    y = np.zeros(6)
+    for k in range(1, 6):  # y(t) = y(t-1) + u(t-1): A(1) = 0
+        y[k] = y[k - 1] + u[k - 1]
+    data = Dataset.from_arrays(u, y, inputs=["u"], outputs=["y"])
+    model = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-1.0]}}, b={"y": {"u": [1.0]}})
+    out = _arx_offsets(model, data, {"y": 1.0})
+    assert out["y"]["variance"] == np.inf
+    assert out["y"]["bias"] == 0.0
+
+
+def test_with_standard_errors_follows_the_fits_center_setting():
+    from blockid.evaluation.uncertainty import with_standard_errors
+    from blockid.fitting.result import FitResult
+
+    model, data = _offset_arx_data()
+    base = {"estimation_metrics": {}, "n_samples": 6}
+    on = with_standard_errors(FitResult(model, "arx", {"center": True}, **base), data)
+    # sigma^2 = 5 rows * 0.5^2 / (5 - 1) = 0.3125; its mean over N = 6 samples
+    offsets = on.settings["covariance"]["offsets"]
+    assert offsets == {"y": {"variance": pytest.approx(0.3125 / 6, rel=1e-12), "bias": -0.5}}
+    off = with_standard_errors(FitResult(model, "arx", {"center": False}, **base), data)
+    assert "offsets" not in off.settings["covariance"]
+
+
+def test_free_positions_of_a_saturation_keep_its_knees_ordered():
+    from blockid.blocks import Saturation
+    from blockid.evaluation.uncertainty import _free_positions, named_standard_errors
+
+    model = Hammerstein("u", "y", input_block=Saturation(-1.0, 1.0), na=1, nb=1, nk=1, a=[-0.5])
+    assert _free_positions(model) == [0, 1, 2, 3]  # b_0 = 1 (index 4) is fixed
+    se = named_standard_errors(model, np.diag([1.0, 4.0, 9.0, 16.0]))
+    assert se == {"lower": 1.0, "upper": 2.0, "slope": 3.0, "a": [4.0], "b": [0.0]}
+
+
+def test_load_covariance_without_one_names_the_file_and_the_remedy(tmp_path):
+    from blockid.errors import ModelFileError
+    from blockid.evaluation.uncertainty import load_covariance
+
+    path = tmp_path / "none.json"
+    path.write_text("{}", encoding="utf-8")
+    with pytest.raises(ModelFileError) as info:
+        load_covariance(path)
+    assert str(info.value) == (
+        f"{path} holds no parameter covariance: fit the model with standard errors "
+        "to get a confidence band"
+    )
+
+
+def test_covariance_names_a_block_whose_parameters_are_not_all_in_its_vector():
+    from blockid.blocks.base import StaticBlock
+    from blockid.evaluation.uncertainty import parameter_covariance
+
+    class _Tanh(StaticBlock):  # "width" is a parameter but not in the vector
+        def __init__(self, limit: float = 1.0, width: float = 2.0) -> None:
+            self.limit, self.width = float(limit), float(width)
+
+        @property
+        def parameters(self):
+            return {"limit": self.limit, "width": self.width}
+
+        def to_vector(self):
+            return np.array([self.limit])
+
+        def with_vector(self, theta):
+            return type(self)(float(np.asarray(theta).reshape(-1)[0]), self.width)
+
+        def __call__(self, x):
+            return self.limit * np.tanh(np.asarray(x, dtype=float) / self.width)
+
+    model = Hammerstein("u", "y", input_block=_Tanh(), na=1, nb=1, nk=1, a=[-0.5])
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-2, 2, 60)
+    y = model.simulate(u, [0.0])[:, 0] + 0.01 * rng.standard_normal(60)
+    cov = parameter_covariance(model, Dataset.from_arrays(u, y, ["u"], ["y"]))
+    assert cov.names == ["theta_0", "theta_1"]
+    assert cov.matrix.shape == (2, 2) and np.all(np.isfinite(cov.matrix))
+
+
+def test_arx_band_sensitivity_matches_the_exact_one_for_a_slow_pole():
+    from blockid.evaluation.uncertainty import _output_sensitivities
+
+    # y(t) = 0.999 y(t-1) + u(t-1): dy/da follows s(t) = -y(t-1) - a s(t-1) exactly; the
+    # central difference (step 1e-6 for |a| < 1) is off by its O(h^2) term, 4e-7 relative
+    # here (a step of 2e-6 would be 1.6e-6)
+    a, n = -0.999, 3000
+    u = np.random.default_rng(0).uniform(-1, 1, n)
+    model = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [a]}}, b={"y": {"u": [1.0]}})
+    y, dy = _output_sensitivities(model, u, [0.0], [])
+    assert y.shape == (n, 1) and dy.shape == (n, 1, 2)
+    s_a, s_b = np.zeros(n), np.zeros(n)
+    for t in range(1, n):
+        s_a[t] = -y[t - 1, 0] - a * s_a[t - 1]
+        s_b[t] = u[t - 1] - a * s_b[t - 1]
+    assert np.max(np.abs(dy[:, 0, 0] - s_a)) < 8e-7 * np.max(np.abs(s_a))
+    np.testing.assert_allclose(dy[:, 0, 1], s_b, rtol=1e-6, atol=1e-9)
+
+
+def test_free_positions_keep_close_knees_apart():
+    from blockid.blocks import Saturation
+    from blockid.evaluation.uncertainty import _free_positions, named_standard_errors
+
+    # knees 1e-13 apart: the moves must be small enough to keep lower < upper
+    model = Hammerstein("u", "y", input_block=Saturation(0.0, 1e-13), na=1, nb=1, nk=1, a=[-0.5])
+    assert _free_positions(model) == [0, 1, 2, 3]
+    se = named_standard_errors(model, np.diag([1.0, 4.0, 9.0, 16.0]))
+    assert se == {"lower": 1.0, "upper": 2.0, "slope": 3.0, "a": [4.0], "b": [0.0]}
