@@ -303,3 +303,75 @@ def test_real_strips_text_as_str_strip_does():
     # str.strip() also removes the ASCII separators \x1c-\x1f, which float() refuses
     assert _convert("real", "\x1f2.5\x1c") == 2.5
     assert _convert("real", "\t 0.5\n", low=0.0) == 0.5
+
+
+def _option_info(option):
+    import typing
+
+    from blockid.cli._options import _parameter
+
+    parameter = _parameter(option)
+    return parameter, typing.get_args(parameter.annotation)
+
+
+def test_generated_flags_carry_their_names_and_metavars():
+    parameter, (kind, info) = _option_info(OPTIONS["normalize"])
+    assert parameter.name == "normalize"
+    assert kind == bool | None
+    assert info.default == "--normalize/--no-normalize"
+    parameter, (kind, info) = _option_info(OPTIONS["max_nfev"])
+    assert kind == str | None
+    assert info.default == "--max-nfev"
+    assert info.metavar == "N"
+    # a kind without a metavar of its own falls back to VALUE
+    _, (_, info) = _option_info(Option("some_list", "numbers", "help"))
+    assert info.default == "--some-list"
+    assert info.metavar == "VALUE"
+
+
+def test_a_boolean_flag_and_its_negation_reach_the_command():
+    import typer
+    from typer.testing import CliRunner
+
+    app = typer.Typer()
+
+    @app.command()
+    @with_fit_options
+    def fit(method: str = "x", **options) -> None:
+        print(repr(options["normalize"]), repr(options["max_nfev"]))
+
+    runner = CliRunner()
+    assert runner.invoke(app, ["--no-normalize"]).output == "False None\n"
+    assert runner.invoke(app, ["--normalize", "--max-nfev", "7"]).output == "True '7'\n"
+    assert runner.invoke(app, []).output == "None None\n"
+
+
+def test_count_refuses_text_that_is_not_a_whole_number_with_its_message():
+    with pytest.raises(ParameterError, match=r"^x must be a whole number >= 1, got 'abc'$"):
+        _convert("count", "abc", low=1)
+
+
+def test_integrator_fit_passes_refine_options_and_times_the_start():
+    from blockid.blocks import Integrator, LinearBlock
+    from blockid.data import Dataset
+    from blockid.fitting import fit_model
+    from blockid.models import ChainModel
+
+    rng = np.random.default_rng(0)
+    u = 0.2 + rng.uniform(-1, 1, 200)
+    plant = [LinearBlock(2, 2, 1, [-1.2, 0.35], [1.0, 0.4]), Integrator(1)]
+    y = ChainModel("u", "y", plant).simulate(u)[:, 0] + 0.01 * rng.standard_normal(200)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"], sampling_time=0.01)
+    fit = fit_model(data, "output-error", na=2, nb=2, nk=1, integrator=1, max_nfev=1)
+    assert fit.settings["max_nfev"] == 1
+    assert fit.settings["stop_reason"] == "max_nfev reached"
+    assert fit.settings["integrator"] == 1
+    assert fit.model.sampling_time == 0.01
+    assert set(fit.history) == {"fit_mse", "tail_mse", "seconds", "initial_seconds"}
+    assert isinstance(fit.history["initial_seconds"], float)
+    assert 0.0 < fit.history["initial_seconds"] < 60.0
+
+
+def test_an_undeclared_option_kind_is_an_internal_error_naming_it():
+    with pytest.raises(AssertionError, match=r"^unknown option kind 'nope'$"):
+        _convert("nope", 1)
