@@ -447,3 +447,285 @@ def test_wiener_hammerstein_passes_gtol_to_the_refinement():
     assert loose.settings["iterations"] == 0
     tight = fit_wiener_hammerstein(data, **kwargs)
     assert tight.settings["iterations"] > 0  # the default gtol lets it iterate
+
+
+# ----------------------------------------------------------------------------- third round
+def test_arx_with_nb_zero_for_every_input_names_the_inputs():
+    from blockid.errors import OrderError
+
+    with pytest.raises(OrderError) as info:
+        fit_arx(_dataset(), na=1, nb=0, nk=1)
+    assert str(info.value) == (
+        "nb is 0 for every input of output 'y' ('u'): the model would not use any input "
+        "(a pure autoregression that free-run simulation cannot drive); give nb >= 1, the "
+        "number of coefficients of an input"
+    )
+
+
+def test_rank_deficiency_from_a_constant_input_names_it_an_input():
+    from blockid.errors import EstimationError
+
+    rng = np.random.default_rng(0)
+    data = Dataset.from_arrays(np.full(50, 2.0), rng.standard_normal(50), ["u"], ["y"])
+    with pytest.raises(EstimationError) as info:
+        fit_arx(data, na=1, nb=2, nk=1)  # u(t-1) and u(t-2) are the same column
+    assert "input 'u' is constant over the estimation data (2 at every sample)" in str(info.value)
+
+
+def test_aw_rls_estimator_gets_both_weights():
+    from blockid.fitting.arx import make_estimator
+
+    est = make_estimator("aw-rls", eps1=2.0, eps2=0.5)
+    assert (est.eps1, est.eps2, est.initial_covariance) == (2.0, 0.5, 1e5)
+    # and fit_arx hands eps2 on: another floor gives other estimates on noisy data
+    u, y = _arx_data()
+    noisy = Dataset.from_arrays(
+        u, y + 0.3 * np.random.default_rng(1).standard_normal(y.size), ["u"], ["y"]
+    )
+    low = fit_arx(noisy, method="aw-rls", eps2=0.1).model.parameter_vector(0)
+    high = fit_arx(noisy, method="aw-rls", eps2=5.0).model.parameter_vector(0)
+    assert np.max(np.abs(low - high)) > 1e-6
+
+
+def test_backlash_aw_rls_divergence_limit_grows_with_the_largest_output():
+    # |x_hat| beyond 1e6 (1 + max|y|) counts as divergence (the kernel's third parameter)
+    from blockid.fitting.backlash import BacklashAWRLS
+    from blockid.fitting.recursive import normalised_signals
+
+    _, data = _backlash_data(scale=1e4)
+    signals = normalised_signals(data, False)
+    y_max = float(np.max(np.abs(data.experiments[0].y)))
+    assert signals.y_max == y_max > 1e3
+    algorithm = BacklashAWRLS((1, 1, 1), (10.0, 0.1), signals)
+    np.testing.assert_allclose(algorithm.params, [10.0, 0.1, 1e6 * (1.0 + y_max)], rtol=1e-15)
+
+
+def test_estimator_without_outputs_says_what_to_give():
+    u, _ = _arx_data()
+    with pytest.raises(DataError) as info:
+        ESTIMATORS["arx"](na=1, nb=1, nk=1).fit(u)
+    assert str(info.value) == "give a Dataset, or the input array and the output array"
+
+
+def test_estimator_simulate_passes_the_initial_outputs():
+    u, y = _arx_data()
+    est = ESTIMATORS["arx"](na=1, nb=1, nk=1).fit(u, y)
+    sim = est.simulate(np.ones(4), [2.0])
+    np.testing.assert_allclose(sim[:, 0], [2.0, 2.0, 2.0, 2.0], atol=1e-10)  # 0.5*2 + 1
+
+
+def test_feedback_fit_records_the_time_of_the_initial_estimate():
+    from blockid.fitting.feedback import fit_feedback
+
+    _, data = _duffing_data(300)
+    fit = fit_feedback(data, na=2, nb=2, nk=1, r=3, max_nfev=2)
+    assert fit.history["initial_seconds"] >= 0.0
+
+
+def test_grow_reports_the_richer_nonlinearity():
+    from blockid.blocks import Polynomial
+    from blockid.fitting.identify import Candidate, _grow, _Search, _split
+    from blockid.models import Hammerstein
+
+    plant = Hammerstein(
+        "u", "y", input_block=Polynomial([0.0, 1.0, 0.0, 0.5]), na=1, nb=1, nk=1, a=[-0.5]
+    )
+    u = np.random.default_rng(0).uniform(-1.0, 1.0, 300)
+    data = Dataset.from_arrays(u, plant.simulate(u)[:, 0], ["u"], ["y"])
+    calls = []
+    search = _Search(_split(data, 0.25), 60.0, lambda *a: calls.append(a))
+    opts = {"na": 1, "nb": 1, "nk": 1, "r1": 3, "max_nfev": 5}
+    winner = search.run(Candidate("hammerstein", opts), _split(data, 0.25).fit, "screen")
+    assert winner.ok
+    _grow(winner, search, _split(data, 0.25).fit, 0.02)
+    assert calls[0][:3] == ("nonlinearity", 1, 1)
+    assert "r1=5" in calls[0][3]
+
+
+def test_screen_keeps_the_first_samples_of_every_experiment():
+    from blockid.fitting.identify import _screen
+
+    data = _dataset()
+    short = _screen(data, 30)
+    (e,) = short.experiments
+    np.testing.assert_array_equal(e.u, data.experiments[0].u[:30])
+    np.testing.assert_array_equal(e.y, data.experiments[0].y[:30])
+    assert _screen(data, 500) is data
+
+
+def test_identify_reports_finalists_and_scores_one_step(monkeypatch):
+    import blockid.fitting.identify as identify_module
+    from blockid.blocks import DeadZone
+    from blockid.models import Hammerstein
+
+    plant = Hammerstein("u", "y", input_block=DeadZone(-0.3, 0.3, 1.0, 1.0),
+                        na=2, nb=2, nk=1, a=[-1.2, 0.5], b=[1.0, 0.4])  # fmt: skip
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.uniform(-1, 1, 100), 4)
+    y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(u.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    monkeypatch.setattr(identify_module._Search, "left", lambda self: 0.5 * self.budget)
+    calls = []
+    result = identify_module.identify(
+        data, structures=["hammerstein"], budget=60.0, max_order=2, max_delay=1,
+        screen_nfev=10, finalists=1, use_orders_test=False, screen_samples=200,
+        progress=lambda *a: calls.append(a),
+    )  # fmt: skip
+    stages = [c[0] for c in calls]
+    assert "finalists" in stages
+    assert calls[stages.index("finalists")][1:3] == (1, 1)
+    assert result.one_step is not None and result.one_step_error is None
+    expected = evaluate(result.model, data, "one-step").metrics["rmse"]["y"]
+    assert result.one_step.metrics["rmse"]["y"] == pytest.approx(expected, rel=1e-12)
+    for score, doc in zip(result.ranked, result.to_dict()["models"], strict=False):
+        assert doc["seconds"] == round(score.seconds, 3)
+
+
+def test_search_names_the_exception_type_of_a_failed_candidate(monkeypatch):
+    import blockid.fitting.dispatch as dispatch
+    from blockid.fitting.identify import Candidate, _Search
+
+    def boom(*args, **kwargs):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(dispatch, "fit_model", boom)
+    score = _Search(None, 60.0, None).run(Candidate("arx", {"na": 1}), _dataset(), "screen")
+    assert score.reason == "RuntimeError: boom"
+
+
+def test_hammerstein_wiener_first_candidate_is_the_linear_fit():
+    from blockid.fitting.initial import (
+        _linear_start,
+        _signals,
+        _template,
+        _with_output_block,
+    )
+    from blockid.models import HammersteinWiener
+
+    u, y = _arx_data()
+    data = Dataset.from_arrays(u, y + 0.1 * y**3, ["u"], ["y"])
+    template = _template(HammersteinWiener, data, 1, 2, 1, 3, 3, None, None)
+    start = _linear_start(*_signals(data), template)
+    first = _with_output_block(data, template)[0]
+    np.testing.assert_array_equal(first.linear.a, start[1])
+    np.testing.assert_array_equal(first.linear.b, start[2])
+
+
+def test_key_term_rls_settings_record_r1():
+    from blockid.fitting.key_term import fit_key_term_rls
+
+    u, y = _arx_data()
+    data = Dataset.from_arrays(u, y + 0.2 * y**2, ["u"], ["y"])
+    fit = fit_key_term_rls(data, "hammerstein", na=1, nb=1, nk=1, r1=2)
+    assert fit.settings["r1"] == 2 and "r2" not in fit.settings
+
+
+def test_online_update_refuses_a_missing_output_sample():
+    from blockid.fitting.online import online_estimator
+
+    est = online_estimator("arx", "rls", {}, ["u"], ["y"])
+    with pytest.raises(DataError, match="^the chunk contains NaN or inf"):
+        est.update(1.0, np.nan)
+    assert est.n_samples == 0
+
+
+def test_online_arx_takes_its_orders_from_the_initial_model():
+    from blockid.fitting.online import online_estimator
+    from blockid.models import ARX
+
+    initial = ARX(["u"], ["y"], 2, 1, 1, a={"y": {"y": [-0.5, 0.1]}}, b={"y": {"u": [1.0]}})
+    est = online_estimator("arx", "rls", {"initial": initial}, ["u"], ["y"])
+    assert est.template.na.tolist() == [[2]] and est.template.nb.tolist() == [[1]]
+    np.testing.assert_allclose(est.model().parameter_vector(0), [-0.5, 0.1, 1.0])
+
+
+def test_online_key_term_names_a_bad_initial_covariance():
+    from blockid.fitting.online import online_estimator
+
+    with pytest.raises(ParameterError, match="^initial_covariance must be > 0, got -1"):
+        online_estimator("hammerstein", "key-term-rls", {"initial_covariance": -1}, "u", "y")
+
+
+def test_online_backlash_step_that_diverges_names_the_method():
+    from blockid.errors import EstimationError
+    from blockid.fitting.online import online_estimator
+
+    est = online_estimator("backlash", "aw-rls", {}, ["u"], ["y"])
+    est.update(0.1, 0.1)
+    est.update(1.0, 0.5)
+    with pytest.raises(EstimationError) as info:
+        est.update(1e12, 0.0)
+    assert str(info.value).startswith(
+        "AW-RLS diverged at sample 2 (counted from the first sample learned online): the "
+        "estimated backlash output x exceeded 1e6 (1 + max|v|)."
+    )
+
+
+def test_order_test_names_the_bad_option():
+    from blockid.fitting.orders import false_nearest_neighbours
+
+    with pytest.raises(ParameterError, match=r"^max_na must be an integer >= 0, got -1") as info:
+        false_nearest_neighbours(_dataset(), max_na=-1)
+    assert info.value.parameter == "max_na"
+
+
+def test_empty_trajectory_has_one_column_per_parameter():
+    from blockid.fitting.recursive import _Trajectory
+
+    theta, update = _Trajectory(5, 1).arrays()
+    assert theta.shape == (0, 5) and update.shape == (0,)
+
+
+def test_tail_is_kept_when_the_head_holds_one_sample_for_one_parameter():
+    from blockid.fitting.simulation_error import _segments
+
+    u = np.arange(10.0)
+    data = Dataset.from_arrays(u, u, ["u"], ["y"])
+    # N = 10, tail 5, n0 = 4: a head of 1 sample holds 1 parameter
+    assert [s.n_fit for s in _segments(data, 4, 0.5, 1)] == [5]
+    assert [s.n_fit for s in _segments(data, 4, 0.5, 2)] == [10]
+
+
+def test_wiener_hammerstein_records_the_bla():
+    from blockid.blocks import LinearBlock, Polynomial
+    from blockid.fitting.wiener_hammerstein import fit_wiener_hammerstein
+    from blockid.models import WienerHammerstein
+
+    truth = WienerHammerstein(
+        "u",
+        "y",
+        first=LinearBlock(1, 1, 1, a=[-0.5], b=[0.4]),
+        static=Polynomial([0.0, 1.0, 0.2]),
+        second=LinearBlock(1, 1, 0, a=[-0.3], b=[1.0]),
+    )
+    u = np.random.default_rng(0).standard_normal(300)
+    data = Dataset.from_arrays(u, truth.simulate(u)[:, 0], ["u"], ["y"])
+    fit = fit_wiener_hammerstein(data, na=2, nb=1, nk=1, r2=2, starts=1, max_nfev=3)
+    bla = fit.settings["bla"]
+    assert (bla["na"], bla["nb"], bla["nk"]) == (2, 1, 1)
+    assert 0.0 < bla["simulation_mse"] < np.var(data.experiments[0].y)
+
+
+def test_online_arx_names_the_sample_where_the_estimate_overflows():
+    from blockid.errors import EstimationError
+    from blockid.fitting.online import online_estimator
+
+    est = online_estimator("arx", "rls", {}, ["u"], ["y"])
+    with pytest.raises(EstimationError) as info:
+        est.partial_fit(np.array([1.0, 2.0, 1e200, 1.0]), np.array([0.5, 1.0, 2.0, 1e200]))
+    assert str(info.value).startswith(
+        "RLS of output 'y' diverged at sample 3 (counted from the first sample learned online)"
+    )
+    assert info.value.sample == 3 and est.n_samples == 0
+
+
+def test_bla_arx_with_a_zero_regressor_column_reports_rank_deficiency():
+    # u is 0 up to its last sample: the column u(t-1) is all zero (its scale is set to 1)
+    from blockid.errors import EstimationError
+    from blockid.fitting.wiener_hammerstein import _arx
+
+    u = np.zeros(20)
+    u[-1] = 1.0
+    y = np.random.default_rng(0).standard_normal(20)
+    with pytest.raises(EstimationError, match=r"^least squares is rank deficient: regressor col"):
+        _arx([u], [y], 1, 1, 1)
