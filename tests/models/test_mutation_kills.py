@@ -441,3 +441,66 @@ def test_python_module_of_a_dead_zone_input_block_has_no_tangents():
     ns = _module(model)
     assert ns["SPEC"]["tangents"] == [None, None]
     np.testing.assert_allclose(ns["simulate"](U), model.simulate(U), rtol=1e-12)
+
+
+# ------------------------------------------------- survivors of the run at fdcd170
+def test_a_block_model_of_two_outputs_is_refused_with_the_advice():
+    from blockid.blocks import Polynomial
+    from blockid.errors import OrderError
+    from blockid.models.block import Hammerstein
+
+    with pytest.raises(OrderError) as info:
+        Hammerstein("u", ["y1", "y2"], input_block=Polynomial([0.0, 1.0]), na=1, nb=1, nk=1)
+    assert str(info.value) == (
+        "block-oriented models have one output; got 2 (['y1', 'y2']). "
+        "Use an ARX model or a network of blocks for several signals"
+    )
+
+
+def test_export_messages_are_exact():
+    from blockid.errors import ParameterError
+    from blockid.models import ARX
+    from blockid.models.export import FORMATS, export_text, transfer_functions
+
+    model = ARX(["u1", "u2"], ["y1"], [[1]], [[1, 1]], [[1, 1]])
+    with pytest.raises(ParameterError) as info:
+        export_text(model, "fortran")
+    assert str(info.value) == f"unknown export format 'fortran'; choose one of {', '.join(FORMATS)}"
+    with pytest.raises(ParameterError) as info:
+        transfer_functions(model)
+    assert str(info.value) == (
+        "a transfer function here is single-input single-output; the ARX model has "
+        "2 input(s) and 1 output(s): export it as a Python module instead"
+    )
+
+
+def test_model_files_are_indented_by_two_and_name_the_non_finite_entry(tmp_path):
+    import json
+    import math
+
+    from blockid.errors import ModelFileError
+    from blockid.models import ARX, save_model
+    from blockid.models.serialization import check_finite
+
+    model = ARX("u", "y", 1, 1, 1, a={"y": {"y": [-0.5]}}, b={"y": {"u": [1.0]}})
+    path = tmp_path / "m.json"
+    save_model(model, path)
+    text = path.read_text()
+    assert text.startswith('{\n  "') and text == json.dumps(json.loads(text), indent=2) + "\n"
+    document = {"parameters": {"y": {"a": [0.1, math.nan]}}}
+    with pytest.raises(ModelFileError) as info:
+        check_finite(document)
+    assert "parameters.y.a[1] is nan" in str(info.value)
+
+
+def test_a_model_with_a_nan_parameter_is_not_written(tmp_path):
+    """json's allow_nan=False is the guard: a NaN would make a file no reader accepts."""
+    import math
+
+    from blockid.models import ARX, save_model
+
+    model = ARX("u", "y", 1, 1, 1, a={"y": {"y": [math.nan]}}, b={"y": {"u": [1.0]}})
+    path = tmp_path / "m.json"
+    with pytest.raises(ValueError, match="Out of range float values"):
+        save_model(model, path)
+    assert not path.exists()
