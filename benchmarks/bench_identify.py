@@ -94,10 +94,11 @@ def main() -> None:
             doc = json.loads(stdout) if code == 0 else {}
             info = doc.get("search", {})
             selected = doc.get("selected", {})
-            rows.append(
-                (n, fit_s, fit_gb, seconds, info.get("seconds"), info.get("candidates"),
-                 len(info.get("rejected") or []), gb, selected.get("structure", f"exit {code}"), load)
-            )  # fmt: skip
+            structure = selected.get("structure", f"exit {code}")
+            rejected = len(info.get("rejected") or [])
+            searched = info.get("seconds")
+            row = (n, fit_s, fit_gb, seconds, searched, info.get("candidates"), rejected, gb)
+            rows.append((*row, structure, load))
             print(rows[-1], flush=True)
     lines = [
         "## Structure search (issue 10: blockid identify)",
