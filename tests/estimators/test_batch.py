@@ -36,3 +36,34 @@ def test_rank_deficiency_is_reported(rng):
         errors.EstimationError, match=r"rank deficient: regressor column\(s\) \[2\]"
     ):
         BatchLeastSquares().fit(Phi, Phi[:, 0])
+
+
+def test_fit_chunks_with_normalised_columns_matches_least_squares_and_scales_the_rank_test():
+    """normalise solves on unit-RMS columns in one pass (the scales are read off R): the
+    estimate and its covariance are those of least squares on the data as given, a
+    column of tiny but real scale is not mistaken for an unexcited one, and a truly
+    dependent column still is."""
+    import numpy as np
+    import pytest
+
+    from blockid.errors import EstimationError
+    from blockid.estimators import BatchLeastSquares
+
+    rng = np.random.default_rng(7)
+    u = rng.uniform(-1, 1, 600)
+    Phi = np.column_stack([np.ones(600), 1e-9 * u, u**2, 1e6 * u**3])
+    theta = np.array([0.5, 2e9, -1.0, 3e-7])
+    y = Phi @ theta + 1e-3 * rng.standard_normal(600)
+    chunks = [(Phi[i : i + 97], y[i : i + 97]) for i in range(0, 600, 97)]
+    est = BatchLeastSquares().fit_chunks(chunks, normalise=True)
+    d = 1.0 / np.sqrt(np.mean(Phi**2, axis=0))  # least squares on scaled columns
+    exact = np.linalg.lstsq(Phi * d, y, rcond=None)[0] * d
+    np.testing.assert_allclose(est.coef_, exact, rtol=1e-8)
+    np.testing.assert_allclose(est.coef_, theta, rtol=1e-2)
+    scaled_cov = np.linalg.inv((Phi * d).T @ (Phi * d))
+    np.testing.assert_allclose(est.covariance_, scaled_cov * np.outer(d, d), rtol=1e-6)
+    with pytest.raises(EstimationError, match="rank deficient"):
+        BatchLeastSquares().fit_chunks(chunks)  # unscaled: the 1e-9 column looks dead
+    dependent = np.column_stack([Phi, 2.0 * Phi[:, 2]])
+    with pytest.raises(EstimationError, match=r"column\(s\) \[4\]"):
+        BatchLeastSquares().fit_chunks([(dependent, y)], normalise=True)

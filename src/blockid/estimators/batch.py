@@ -60,12 +60,21 @@ class BatchLeastSquares(RegressionEstimator):
             self.__dict__.pop(attr, None)
         return self.partial_fit(Phi, y, sample_weight)
 
-    def fit_chunks(self, chunks: Iterable[tuple[Any, Any]]) -> BatchLeastSquares:
+    def fit_chunks(
+        self, chunks: Iterable[tuple[Any, Any]], *, normalise: bool = False
+    ) -> BatchLeastSquares:
         """Solve the least-squares problem over ``(Phi, y)`` chunks of one record.
 
         The same answer as :meth:`fit` on the stacked chunks, holding one chunk at a
         time: the factor is folded chunk by chunk and solved once, at the end (so a
         chunk that alone does not excite every column is no error).
+
+        With ``normalise`` the problem is solved on columns scaled to unit RMS (what
+        the ``rcond`` test of unexcited directions then compares; powers of a signal
+        differ wildly in scale) and the estimate scaled back: ``Q R D = Phi D``, so the
+        scaled factor is the data's factor times the scales, and the column RMS are the
+        norms of ``R``'s columns over the square root of the rows: one pass over the
+        data.
         """
         for attr in ("_theta", "_R", "_state_shape"):
             self.__dict__.pop(attr, None)
@@ -80,7 +89,19 @@ class BatchLeastSquares(RegressionEstimator):
                 f"least squares needs at least {n} rows for {n} parameters, got "
                 f"{self.n_samples_seen_}"
             )
-        self._solve(n, Phi)
+        if not normalise:
+            self._solve(n, Phi)
+            return self
+        scale = np.linalg.norm(self._R[:, :n], axis=0) / np.sqrt(self.n_samples_seen_)
+        scale[scale == 0] = 1.0
+        self._R[:, :n] /= scale
+        try:
+            self._solve(n, Phi)
+        finally:
+            self._R[:, :n] *= scale  # the factor of the data as given (for partial_fit)
+        self._theta = self._theta / scale[:, None]
+        self.covariance_ = self.covariance_ / np.outer(scale, scale)
+        self._set_coef(self._theta, self._one_d)
         return self
 
     def partial_fit(self, Phi: Any, y: Any, sample_weight: Any = None) -> BatchLeastSquares:

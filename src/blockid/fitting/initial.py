@@ -180,18 +180,11 @@ def _row_chunks(
 
 def _chunked_least_squares(chunks: Chunks, what: str) -> np.ndarray:
     """QR least squares on RMS-scaled columns (powers of ``u`` differ wildly in scale),
-    over chunks of rows: one pass for the scales, one folding the scaled rows."""
-    squares, rows = 0.0, 0
-    for Phi, _ in chunks():
-        squares = squares + np.sum(Phi**2, axis=0)
-        rows += Phi.shape[0]
-    scale = np.sqrt(np.asarray(squares, dtype=float) / max(rows, 1))
-    scale[scale == 0] = 1.0
+    over chunks of rows, in one pass (:meth:`BatchLeastSquares.fit_chunks`)."""
     try:
-        theta = BatchLeastSquares().fit_chunks((P / scale, t) for P, t in chunks()).coef_
+        return BatchLeastSquares().fit_chunks(chunks(), normalise=True).coef_
     except EstimationError as exc:
         raise EstimationError(f"initial estimate ({what}): {exc}") from None
-    return theta / scale
 
 
 def _least_squares(Phi: np.ndarray, target: np.ndarray, what: str) -> np.ndarray:
