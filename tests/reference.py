@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blockid.blocks.base import StaticBlock
+
 
 def rls(Phi, Y, lam, mu, theta0=0.0, trace_max=np.inf):
     """Textbook RLS (A2) with the trace bound of blockid applied when lambda < 1."""
@@ -84,3 +86,19 @@ def tito_arx(inputs=("v1", "v2"), outputs=("y1", "y2"), **kwargs):
         b={o1: {i1: [0.5, 0.2], i2: [0.1, -0.05]}, o2: {i1: [0.0, 0.03], i2: [0.4, 0.1]}},
         **kwargs,
     )
+
+
+class TanhSpring(StaticBlock):
+    """A user's block that the compiled kernels do not know: ``N(y) = k tanh(y)``."""
+
+    kind = "test-tanh-spring"
+
+    def __init__(self, k: float) -> None:
+        self.k = float(k)
+
+    @property
+    def parameters(self):
+        return {"k": self.k}
+
+    def __call__(self, u):
+        return self.k * np.tanh(np.asarray(u, dtype=float))

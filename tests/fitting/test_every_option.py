@@ -329,6 +329,14 @@ def _check_output_block(case, default, changed, value):
     assert changed.settings["output_block"] == "polynomial"
 
 
+def _check_feedback_block(case, default, changed, value):
+    assert default.model.feedback.kind == "polynomial" and default.settings["center"] is True
+    assert changed.model.feedback.kind == "dead-zone"
+    assert changed.settings["feedback_block"] == "dead-zone"
+    assert changed.settings["center"] is False  # a dead zone sits at the signals' zero
+    assert "N.lower" in changed.model.free_parameter_names()
+
+
 def _integrating_record(case: Case) -> Any:
     """The case's plant with an integrator after its last linear block, without noise."""
     plant = case.plant()
@@ -445,6 +453,7 @@ EXPECT: dict[str, Expect] = {
     "r": Expect(_plus_one("r"), _check_r),
     "input_block": Expect("dead-zone", _check_input_block),
     "output_block": Expect("polynomial:degree=4", _check_output_block),
+    "feedback_block": Expect("dead-zone", _check_feedback_block),
     # not centred (the plants have no offsets): from centred data the Wiener-Hammerstein
     # split of the differenced record lands in another local minimum within max_nfev = 5
     "integrator": Expect(1, _check_integrator, {"center": False}, data=_integrating_record),

@@ -3,7 +3,14 @@
 import numpy as np
 import pytest
 
-from blockid._kernels.feedback import feedback_sensitivity, feedback_simulate, polynomial_value
+from blockid._kernels.feedback import (
+    feedback_sensitivity,
+    feedback_sensitivity_given,
+    feedback_simulate,
+    feedback_simulate_table,
+    polynomial_value,
+    table_value,
+)
 
 
 def _past(sig, t):
@@ -127,3 +134,69 @@ def test_polynomial_value_and_slope():
         value, slope = polynomial_value(c, y)
         assert value == pytest.approx(sum(ci * y ** (m + 1) for m, ci in enumerate(c)), abs=1e-14)
         assert slope == pytest.approx(sum((m + 1) * ci * y**m for m, ci in enumerate(c)), abs=1e-14)
+
+
+# ----------------------------------------------------------- other blocks in feedback
+def _table_reference(xs, ys, left, right, x):
+    """Piecewise-linear through (xs, ys), straight beyond the ends (NumPy's interp)."""
+    if x < xs[0]:
+        return ys[0] + left * (x - xs[0])
+    if x > xs[-1]:
+        return ys[-1] + right * (x - xs[-1])
+    return float(np.interp(x, xs, ys))
+
+
+TABLES = [  # xs, ys, left slope, right slope
+    ([-0.3, 0.4], [0.0, 0.0], 0.8, 0.6),  # dead zone
+    ([-0.5, 0.4], [-0.35, 0.28], 0.0, 0.0),  # saturation
+    ([-1.0, 0.0, 0.5, 1.0], [-0.6, 0.0, 0.1, 0.6], 0.6, 1.0),
+    ([0.2, 0.2], [0.0, 0.0], 1.5, 0.5),  # a dead zone of zero width
+]
+
+
+@pytest.mark.parametrize("xs, ys, left, right", TABLES)
+def test_table_value_is_the_piecewise_linear_map(xs, ys, left, right):
+    xs, ys = np.array(xs), np.array(ys)
+    for x in np.concatenate((np.linspace(-3, 3, 601), xs, xs + 1e-12, xs - 1e-12)):
+        assert table_value(xs, ys, left, right, x) == pytest.approx(
+            _table_reference(xs, ys, left, right, x), abs=1e-12
+        )
+
+
+@pytest.mark.parametrize("xs, ys, left, right", TABLES)
+@pytest.mark.parametrize("n0", [0, 2])
+def test_table_loop_matches_the_textbook_recursion(xs, ys, left, right, n0):
+    xs, ys = np.array(xs), np.array(ys)
+    a, b, nk = np.array([-1.5, 0.7]), np.array([0.5, 0.2]), 1
+    u = np.random.default_rng(3).normal(0.0, 1.0, 300)
+    y0 = np.array([0.3, -0.2])
+    y = np.zeros(300)
+    y[:n0] = y0[:n0]
+    v = feedback_simulate_table(a, b, xs, ys, left, right, nk, u, y, n0)
+    ref = np.zeros(300)
+    ref[:n0] = y0[:n0]
+    vr = np.zeros(300)
+    for t in range(300):
+        if t >= n0:
+            ref[t] = -sum(a[j - 1] * _past(ref, t - j) for j in (1, 2)) + sum(
+                b[i] * _past(vr, t - nk - i) for i in (0, 1)
+            )
+        vr[t] = u[t] - _table_reference(xs, ys, left, right, ref[t])
+    np.testing.assert_allclose(y, ref, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(v, vr, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("a, b, c, nk", CASES[:3])
+@pytest.mark.parametrize("n0", [0, 3])
+def test_given_sensitivities_of_a_polynomial_equal_the_polynomial_kernel(a, b, c, nk, n0):
+    """The block-agnostic recursion, fed N'(y) and dN/dc = y^m, is the polynomial one."""
+    a, b, c = np.array(a, float), np.array(b, float), np.array(c, float)
+    u = np.random.default_rng(5).normal(0.0, 0.4, 250)
+    y = np.zeros(250)
+    y[:n0] = 0.1 * np.arange(1, n0 + 1)
+    y_poly = y.copy()
+    v, dy_poly = feedback_sensitivity(a, b, c, nk, u, y_poly, n0)
+    slope = np.array([polynomial_value(c, x)[1] for x in y_poly])
+    forcing = np.ascontiguousarray(np.vstack([y_poly**m for m in range(1, c.size + 1)]))
+    dy = feedback_sensitivity_given(a, b, nk, y_poly, v, slope, forcing, n0)
+    np.testing.assert_allclose(dy, dy_poly, rtol=1e-12, atol=1e-12)

@@ -6,11 +6,14 @@ import pytest
 
 import blockid.fitting.simulation_error as simulation_error
 from blockid import errors
-from blockid.blocks import DeadZone, Polynomial
+from blockid.blocks import Backlash, DeadZone, PiecewiseLinear, Polynomial, Saturation
+from blockid.blocks.free_pwl import FreePiecewiseLinear
 from blockid.blocks.linear import LinearBlock
 from blockid.data import Dataset
 from blockid.models import ChainModel, load_model, model_from_dict, save_model
 from blockid.models.feedback import LinearFeedback
+
+from reference import TanhSpring
 
 
 @pytest.fixture
@@ -184,8 +187,10 @@ def test_models_that_make_no_sense_are_refused():
     lin = LinearBlock(2, 1, 1, a=[-1.5, 0.7], b=[0.5])
     with pytest.raises(errors.OrderError, match="nk >= 1"):
         LinearFeedback("u", "y", linear=LinearBlock(2, 1, 0, a=[-1.5, 0.7], b=[0.5]))
-    with pytest.raises(errors.OrderError, match="must be a Polynomial"):
-        LinearFeedback("u", "y", linear=lin, feedback=DeadZone(-0.1, 0.1, 1.0, 1.0))
+    with pytest.raises(errors.OrderError, match="must be a static block.*backlash"):
+        LinearFeedback("u", "y", linear=lin, feedback=Backlash(1.0, 0.1, 1.0, 0.1))
+    with pytest.raises(errors.OrderError, match="must be a static block.*linear"):
+        LinearFeedback("u", "y", linear=lin, feedback=LinearBlock(1, 1, 1, a=[0.5], b=[1.0]))
     with pytest.raises(errors.OrderError, match="no constant and no linear term"):
         LinearFeedback("u", "y", linear=lin, feedback=Polynomial([0.3, 0.0, 1.0], constant=False))
     with pytest.raises(errors.OrderError, match="no constant and no linear term"):
@@ -212,3 +217,112 @@ def test_refine_recovers_the_plant_from_a_perturbed_start(own_jacobian):
     assert fit.model.output_offset == 0.4 and set(fit.model.ranges) == {"u", "y"}
     assert fit.settings["na"] == 2 and fit.settings["output_block"] is None
     assert fit.metrics_mode == "simulation"
+
+
+# ----------------------------------------------------- other static blocks in feedback
+def _fed_back(block, **kwargs):
+    return LinearFeedback(
+        "u", "y", linear=LinearBlock(2, 2, 1, a=[-1.5, 0.7], b=[0.5, 0.2]), feedback=block,
+        **kwargs,
+    )  # fmt: skip
+
+
+OTHER_BLOCKS = {
+    "dead-zone": DeadZone(-0.3, 0.4, 0.8, 0.6),
+    "saturation": Saturation(-0.5, 0.4, 0.7),
+    "piecewise-linear": PiecewiseLinear([-1.0, 0.0, 0.5, 1.0], [-0.6, 0.0, 0.1, 0.6]),
+    "piecewise-linear-free": FreePiecewiseLinear([-1.0, 0.0, 0.5, 1.0], [-0.6, 0.0, 0.1, 0.6]),
+    "user block (Python loop)": TanhSpring(0.4),
+}
+
+
+def block_reference(model, u, y_initial=None):
+    """``A y = z^-nk B (u - N(y))`` with the block itself called on every sample."""
+    a, b, nk, block = model.linear.a, model.linear.b, model.linear.nk, model.feedback
+    s = np.asarray(u, float) - model.input_offset
+    y, v = np.zeros(s.size), np.zeros(s.size)
+    n0 = 0
+    if y_initial is not None:
+        n0 = model.max_lag
+        y[:n0] = np.asarray(y_initial, float)[:n0] - model.output_offset
+    for t in range(s.size):
+        if t >= n0:
+            y[t] = -sum(a[j] * y[t - j - 1] for j in range(len(a)) if t - j - 1 >= 0)
+            y[t] += sum(b[i] * v[t - nk - i] for i in range(len(b)) if t - nk - i >= 0)
+        v[t] = s[t] - float(block(np.array([y[t]]))[0])
+    return y + model.output_offset
+
+
+@pytest.mark.parametrize("name", list(OTHER_BLOCKS))
+@pytest.mark.parametrize("start", [None, "measured"])
+def test_other_blocks_in_feedback_simulate_as_the_recursion(name, start):
+    model = _fed_back(OTHER_BLOCKS[name], input_offset=0.2, output_offset=-0.5)
+    u = 0.2 + 2.0 * _input(300, seed=4)
+    y0 = None if start is None else [-0.3, -0.6]
+    got = model.simulate(u, y0)[:, 0]
+    np.testing.assert_allclose(got, block_reference(model, u, y0), rtol=0, atol=1e-12)
+    assert np.ptp(got) > 0.5  # the input drives the loop through the block's kinks
+
+
+@pytest.mark.parametrize("name", list(OTHER_BLOCKS))
+def test_sensitivities_of_other_blocks_match_finite_differences(name):
+    model = _fed_back(OTHER_BLOCKS[name])
+    u = 2.0 * _input(300, seed=5)
+    y0 = [0.1, -0.2]
+    y, dy = model.simulate_with_sensitivities(u, y0)
+    np.testing.assert_array_equal(y, model.simulate(u, y0)[:, 0])
+    theta = model.free_parameters()
+    assert dy.shape == (u.size, theta.size)
+    for i in range(theta.size):
+        h = 1e-6 * max(1.0, abs(theta[i]))
+        up, down = theta.copy(), theta.copy()
+        up[i] += h
+        down[i] -= h
+        fd = (
+            model.with_free_parameters(up).simulate(u, y0)[:, 0]
+            - model.with_free_parameters(down).simulate(u, y0)[:, 0]
+        ) / (2 * h)
+        np.testing.assert_allclose(dy[:, i], fd, rtol=0, atol=1e-5 * np.max(np.abs(dy)))
+
+
+def test_free_entries_and_names_of_other_blocks():
+    dz = _fed_back(OTHER_BLOCKS["dead-zone"])
+    assert dz.free_parameter_names() == [
+        "a_1", "a_2", "b_0", "b_1", "N.lower", "N.upper", "N.slope_left", "N.slope_right"
+    ]  # fmt: skip
+    lo, hi = dz.parameter_bounds()
+    assert np.all(lo[:4] == -np.inf) and lo[6] > 0 and lo[7] > 0 and np.all(hi == np.inf)
+    free = _fed_back(OTHER_BLOCKS["piecewise-linear-free"])
+    names = free.free_parameter_names()
+    assert "N.breakpoints_0" not in names and "N.breakpoints_3" not in names  # ends fixed
+    assert "N.breakpoints_1" in names and "N.values_0" in names
+    moved = free.with_free_parameters(free.free_parameters() + 0.01)
+    assert moved.feedback.breakpoints[0] == -1.0 and moved.feedback.breakpoints[-1] == 1.0
+    assert dz.parameters["feedback"] == OTHER_BLOCKS["dead-zone"].parameters
+    assert duffing().parameters.keys() == {"a", "b", "c"}
+
+
+def test_poles_are_those_of_the_loop_linearised_at_rest():
+    """A saturation has slope m at rest: the small-signal loop is A + m z^-1 B."""
+    sat = _fed_back(Saturation(-0.5, 0.4, 0.7))
+    expected = np.roots([1.0, -1.5 + 0.7 * 0.5, 0.7 + 0.7 * 0.2])
+    np.testing.assert_allclose(np.sort_complex(sat.poles()), np.sort_complex(expected))
+    # a dead zone around 0 has no slope there: the poles of A
+    dz = _fed_back(DeadZone(-0.3, 0.4))
+    np.testing.assert_allclose(np.sort_complex(dz.poles()), np.sort_complex(dz.linear.poles()))
+    # A stable, but a negative feedback slope of -1.2 makes the loop at rest unstable
+    unstable = _fed_back(PiecewiseLinear([-1.0, 1.0], [1.2, -1.2]))
+    assert unstable.linear.is_stable() and not unstable.is_stable()
+    assert np.max(np.abs(unstable.poles())) > 1.0
+
+
+@pytest.mark.parametrize("name", ["dead-zone", "saturation", "piecewise-linear-free"])
+def test_other_blocks_in_feedback_save_and_load(name, tmp_path):
+    model = _fed_back(OTHER_BLOCKS[name], input_offset=0.1, output_offset=0.2)
+    u = _input(200, seed=6)
+    model = model.with_ranges([(u, model.simulate(u))])
+    save_model(model, tmp_path / "m.json")
+    loaded = load_model(tmp_path / "m.json")
+    assert loaded.feedback.kind == model.feedback.kind
+    np.testing.assert_array_equal(loaded.simulate(u), model.simulate(u))
+    np.testing.assert_array_equal(loaded.free_parameters(), model.free_parameters())

@@ -25,6 +25,17 @@ for ``∂y/∂θ``, driven through the feedback by ``∂v/∂θ = -N'(y)\\, ∂y
 Rows before ``n0`` hold given outputs (measured, relative to the offset): their ``v`` is
 computed from them and their sensitivities are zero, except ``∂v/∂c_m = -y^m``. Signals
 before ``t = 0`` count as zero.
+
+Other static blocks in feedback (:class:`~blockid.models.feedback.LinearFeedback`):
+
+* **Piecewise-linear blocks** (dead zone, saturation, piecewise-linear maps, with fixed
+  or free breakpoints) are simulated by :func:`feedback_simulate_table`, which evaluates
+  ``N`` from breakpoints, values and the two end slopes (:func:`table_value`).
+* **Sensitivities of any block** come from :func:`feedback_sensitivity_given`: once the
+  simulation has fixed ``y``, ``N'(y(t))`` and ``∂N(y(t))/∂θ_N`` are known arrays (the
+  block evaluates them on the whole record at once), and the sensitivity recursion
+  above is linear in ``∂y/∂θ`` with those arrays as coefficients and forcing. For a
+  polynomial it gives what :func:`feedback_sensitivity` gives (a test checks this).
 """
 
 from __future__ import annotations
@@ -32,7 +43,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["feedback_sensitivity", "feedback_simulate", "lagged_sum", "polynomial_value"]
+__all__ = [
+    "feedback_sensitivity",
+    "feedback_sensitivity_given",
+    "feedback_simulate",
+    "feedback_simulate_table",
+    "lagged_sum",
+    "polynomial_value",
+    "table_value",
+]
 
 
 @njit(cache=True)
@@ -128,3 +147,78 @@ def feedback_sensitivity(a, b, c, nk, u, y, n0):
             dv[na + nb + m, t] -= power
             power *= y[t]
     return v, dy
+
+
+@njit(cache=True)
+def table_value(xs, ys, slope_left, slope_right, x):
+    """The piecewise-linear map through ``(xs, ys)`` at ``x`` (``xs`` non-decreasing),
+    continued beyond the end breakpoints with the given end slopes."""
+    n = xs.shape[0]
+    if x <= xs[0]:
+        return ys[0] + slope_left * (x - xs[0])
+    if x >= xs[n - 1]:
+        return ys[n - 1] + slope_right * (x - xs[n - 1])
+    lo, hi = 0, n - 1  # bisection: xs[lo] < x < xs[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if xs[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return ys[lo] + (x - xs[lo]) * (ys[hi] - ys[lo]) / (xs[hi] - xs[lo])
+
+
+@njit(cache=True)
+def feedback_simulate_table(a, b, xs, ys, slope_left, slope_right, nk, u, y, n0):
+    """:func:`feedback_simulate` with a piecewise-linear ``N`` (:func:`table_value`)."""
+    N = y.shape[0]
+    v = np.empty(N)
+    for t in range(N):
+        if t >= n0:
+            y[t] = lagged_sum(a, b, nk, y, v, t)
+        v[t] = u[t] - table_value(xs, ys, slope_left, slope_right, y[t])
+    return v
+
+
+@njit(cache=True)
+def feedback_sensitivity_given(a, b, nk, y, v, slope, forcing, n0):
+    """Sensitivities of a simulated loop with any static block ``N`` in feedback.
+
+    Parameters
+    ----------
+    a, b : ndarray of float64
+    nk : int
+    y, v : ndarray of float64, shape (N,)
+        The simulated output and ``u - N(y)`` (from a simulation kernel).
+    slope : ndarray of float64, shape (N,)
+        ``N'(y(t))``.
+    forcing : ndarray of float64, shape (p, N)
+        ``∂N(y(t))/∂θ_m`` for the block's ``p`` parameters (one row each).
+    n0 : int
+        Rows before ``n0`` hold given outputs (zero sensitivity).
+
+    Returns
+    -------
+    dy : ndarray, shape (na + nb + p, N)
+        ``∂y(t)/∂θ`` for ``θ = [a_1..a_na, b_0..b_{nb-1}, θ_N]``.
+    """
+    N = y.shape[0]
+    na, nb, p = a.shape[0], b.shape[0], forcing.shape[0]
+    n = na + nb + p
+    dy = np.zeros((n, N))
+    dv = np.zeros((n, N))
+    for t in range(N):
+        if t >= n0:
+            for q in range(n):
+                dy[q, t] = lagged_sum(a, b, nk, dy[q], dv[q], t)
+            for j in range(1, min(na, t) + 1):
+                dy[j - 1, t] -= y[t - j]
+            for i in range(nb):
+                if t - nk - i < 0:
+                    break
+                dy[na + i, t] += v[t - nk - i]
+        for q in range(n):
+            dv[q, t] = -slope[t] * dy[q, t]
+        for m in range(p):
+            dv[na + nb + m, t] -= forcing[m, t]
+    return dy

@@ -271,6 +271,22 @@ class StaticBlock(Block):
             2.0 * h
         )
 
+    def piecewise_linear(self) -> tuple[np.ndarray, np.ndarray, float, float] | None:
+        """The block as breakpoints, values and the two end slopes, when it *is* a
+        piecewise-linear map continued by straight lines (dead zone, saturation,
+        piecewise-linear maps): the compiled feedback loop
+        (:class:`~blockid.models.feedback.LinearFeedback`) then evaluates it. None (the
+        default) for any other block, which the loop evaluates in Python."""
+        return None
+
+    def feedback_mask(self) -> np.ndarray:
+        """Which entries of :meth:`to_vector` an estimator may move when the block feeds
+        the output back around a linear block
+        (:class:`~blockid.models.feedback.LinearFeedback`). Default
+        ``free_mask(after_linear=False)``: the loop has no gain to share with the linear
+        block (``u`` enters it with unit gain)."""
+        return self.free_mask(after_linear=False)
+
     def forward(
         self, u: np.ndarray, S_in: np.ndarray, own: np.ndarray, init: Any = None
     ) -> tuple[np.ndarray, np.ndarray]:

@@ -160,6 +160,11 @@ class Polynomial(_PlottableStaticBlock):
             mask[self._linear_index] = False
         return mask
 
+    def feedback_mask(self) -> np.ndarray:
+        """In feedback the coefficient of ``y`` is fixed (to 0): a linear feedback only
+        moves the poles, which ``A`` does (:mod:`blockid.models.feedback`)."""
+        return self.free_mask(after_linear=True)
+
     def check_normalised(self, after_linear: bool) -> None:
         if not after_linear:
             return

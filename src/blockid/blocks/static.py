@@ -193,6 +193,11 @@ class DeadZone(_PlottableStaticBlock):
         lower[[2, 3]] = 1e-6 * np.array([self.slope_left, self.slope_right])
         return lower, np.full(4, np.inf)
 
+    def piecewise_linear(self) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """Zero between the edges, the two slopes beyond them."""
+        edges = np.array([self.lower, self.upper])
+        return edges, np.zeros(2), self.slope_left, self.slope_right
+
     def scaled(self, gain: float) -> DeadZone:
         return DeadZone(self.lower, self.upper, gain * self.slope_left, gain * self.slope_right)
 
@@ -273,6 +278,12 @@ class Saturation(_PlottableStaticBlock):
         lower = np.full(3, -np.inf)
         lower[2] = 1e-6 * self.slope
         return lower, np.full(3, np.inf)
+
+    def piecewise_linear(self) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """The limits reached at the knees ``lower / slope`` and ``upper / slope``, flat
+        beyond them."""
+        knees = np.array([self.lower, self.upper]) / self.slope
+        return knees, np.array([self.lower, self.upper]), 0.0, 0.0
 
     def scaled(self, gain: float) -> Saturation:
         return Saturation(gain * self.lower, gain * self.upper, gain * self.slope)
@@ -356,6 +367,13 @@ class PiecewiseLinear(_PlottableStaticBlock):
         j, t = self._locate(u)
         v = self.values
         return v[j] + t * (v[j + 1] - v[j])
+
+    def piecewise_linear(self) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """Its breakpoints and values, the end segments' slopes beyond them."""
+        bp, v = self.breakpoints, self.values
+        left = (v[1] - v[0]) / (bp[1] - bp[0])
+        right = (v[-1] - v[-2]) / (bp[-1] - bp[-2])
+        return bp.copy(), v.copy(), float(left), float(right)
 
     def regressors(self, u: np.ndarray) -> np.ndarray:
         r"""Hat-function basis, shape ``(N, n)`` for ``N = u.size`` (``u`` is flattened).

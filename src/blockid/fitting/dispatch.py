@@ -102,7 +102,7 @@ def fit_model(
         result = _run(decl, method, data, options)
     else:
         center = options.pop("center", None)
-        if center if center is not None else decl.center_default:
+        if center if center is not None else decl.centers(options):
             result = _centered(data, decl, method, refine, options)
         else:
             result = _fit_block(data, decl, method, refine, options)

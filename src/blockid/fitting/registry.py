@@ -350,6 +350,13 @@ OPTIONS: dict[str, Option] = _options(
     Option(
         "r", "count", "Degree r of the feedback polynomial N(y) = c_2 y^2 + .. + c_r y^r.", low=1
     ),
+    Option(
+        "feedback_block",
+        "block",
+        "Feedback block instead of the polynomial: dead-zone, saturation, "
+        "piecewise-linear[:knots=N], piecewise-linear-free[:knots=N] or a user block's kind.",
+        metavar="KIND",
+    ),
     Option("max_nfev", "count", "Simulation-error fit: limit on simulations.", low=1),
     Option(
         "tail_fraction",
@@ -419,6 +426,9 @@ class Structure:
     common: tuple[str, ...] = ()
     #: Fit around the operating point unless told otherwise.
     center_default: bool = False
+    #: Options that, when given, turn ``center_default`` off (a fed-back dead zone or
+    #: saturation sits at the signals' own zero, and has no constant to carry a mean).
+    uncentered_with: tuple[str, ...] = ()
     block_oriented: bool = True
     #: What :func:`~blockid.fitting.identify.identify` tries of this structure: option
     #: sets added to the linear orders, most telling first.
@@ -451,6 +461,10 @@ class Structure:
             f"method={name!r} does not apply to {self.name}; choose one of "
             f"{', '.join(self.method_names)}"
         )
+
+    def centers(self, options: dict[str, Any]) -> bool:
+        """Whether a fit with ``options`` (no ``center`` among them) is centred."""
+        return self.center_default and all(options.get(k) is None for k in self.uncentered_with)
 
     def accepted(self, method: str | None) -> tuple[str, ...]:
         """Options of this structure fitted by ``method``, in declaration order."""
@@ -620,18 +634,20 @@ STRUCTURES: dict[str, Structure] = {
         Structure(
             "feedback",
             "blockid.models.feedback:LinearFeedback",
-            "linear block with a polynomial of the output fed back to its input (Lur'e "
-            "form: Duffing oscillator, Silverbox)",
+            "linear block with a static nonlinearity of the output (polynomial, dead zone, "
+            "saturation, piecewise-linear) fed back to its input (Lur'e form: Duffing "
+            "oscillator, Silverbox)",
             (
                 Method(
                     "simulation-error",
                     "blockid.fitting.feedback:fit_feedback",
-                    ("r",) + _SIMULATION_ERROR,
+                    ("r", "feedback_block") + _SIMULATION_ERROR,
                     "equation-error start, then minimise the free-run simulation error",
                 ),
             ),
             common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
+            uncentered_with=("feedback_block",),
             search=({"r": 3},),
             min_delay=1,
         ),

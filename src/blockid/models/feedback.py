@@ -27,8 +27,21 @@ Choices (and why):
 * **No constant in ``N``**: the operating point is the model's offsets (``u_0, y_0``,
   :meth:`replace`, or ``center`` when fitting): at ``u = u_0`` the model rests at
   ``y = y_0``.
-* Other static blocks in the feedback are refused: a polynomial keeps the loop in the
-  compiled kernels, and its ``c_1 = 0`` normalisation is exact.
+* **Other static blocks** may be fed back too (``feedback=DeadZone(..)``,
+  ``Saturation``, ``PiecewiseLinear``, ``FreePiecewiseLinear`` or a user's block): a
+  friction or a spring with a gap, a stiffness that saturates. Their entries are free as
+  :meth:`~blockid.blocks.base.StaticBlock.feedback_mask` says (all, but the end
+  breakpoints of a free piecewise-linear map). The piecewise-linear family runs in the
+  compiled kernels (:func:`~blockid._kernels.feedback.feedback_simulate_table`); any
+  other block is evaluated one sample at a time in Python (correct, some 50 times
+  slower). Their sensitivities use the block's own ``derivative`` and ``jacobian``
+  (:func:`~blockid._kernels.feedback.feedback_sensitivity_given`). Such a block may
+  have a slope at the operating point: :meth:`poles` are then those of
+  ``A + N'(0) z^{-n_k} B``, the loop linearised there. With a piecewise-linear map,
+  adding a line to ``N`` and taking it out of ``A`` gives the same model (when
+  ``n_k + n_b - 1 <= n_a``): the fit is not unique in that one direction, which the
+  trust-region steps tolerate, but the standard errors of those entries are then
+  meaningless.
 
 Initial state: like :meth:`blockid.models.ChainModel.simulate`, a simulation given
 measured outputs starts from the first ``max_lag`` of them (the loop's state is the past
@@ -42,9 +55,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from blockid._kernels.feedback import feedback_sensitivity, feedback_simulate
+from blockid._kernels.feedback import (
+    feedback_sensitivity,
+    feedback_sensitivity_given,
+    feedback_simulate,
+    feedback_simulate_table,
+    lagged_sum,
+)
 from blockid.blocks import Polynomial
-from blockid.blocks.base import Block, block_from_dict
+from blockid.blocks.base import Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import ModelFileError, OrderError
 from blockid.models.base import Model
@@ -71,14 +90,14 @@ def _checked_linear(linear: Any) -> LinearBlock:
     return linear
 
 
-def _checked_feedback(feedback: Any) -> Polynomial:
-    if getattr(feedback, "kind", None) != Polynomial.kind:  # the kernels evaluate polynomials
+def _checked_feedback(feedback: Any) -> StaticBlock:
+    if getattr(feedback, "role", None) != "static":
         kind = getattr(feedback, "kind", type(feedback).__name__)
         raise OrderError(
-            f"the feedback block must be a Polynomial without constant (c_1 = 0), got {kind}; "
-            "other static blocks are not supported in feedback"
+            f"the feedback block must be a static block (polynomial, dead-zone, saturation, "
+            f"piecewise-linear, ...), got {kind}; a dynamic or linear block cannot be fed back"
         )
-    if feedback.constant or feedback.coefficients[0] != 0.0:
+    if feedback.kind == Polynomial.kind and (feedback.constant or feedback.coefficients[0] != 0.0):
         raise OrderError(
             "the feedback polynomial has no constant and no linear term (the offsets and "
             "A hold them): use Polynomial([0.0, c_2, .., c_r], constant=False); got "
@@ -88,8 +107,8 @@ def _checked_feedback(feedback: Any) -> Polynomial:
 
 
 class LinearFeedback(OneLinearBlock, Model):
-    """Linear block with a polynomial of the output fed back to its input (module
-    docstring).
+    """Linear block with a static nonlinearity of the output fed back to its input
+    (module docstring).
 
     .. math::
 
@@ -101,8 +120,9 @@ class LinearFeedback(OneLinearBlock, Model):
         Signal names.
     linear : LinearBlock
         ``A`` and ``B`` (MATLAB convention, ``n_k >= 1``, ``b`` free).
-    feedback : Polynomial, optional
-        ``Polynomial([0, c_2, .., c_r], constant=False)``; default the zero cubic.
+    feedback : StaticBlock, optional
+        ``N``: ``Polynomial([0, c_2, .., c_r], constant=False)`` (default the zero cubic)
+        or any other static block (module docstring).
     sampling_time : float, optional
     input_offset, output_offset : float
         Operating point subtracted from ``u`` and ``y`` (default 0).
@@ -132,7 +152,7 @@ class LinearFeedback(OneLinearBlock, Model):
         output: Any,
         *,
         linear: LinearBlock,
-        feedback: Polynomial | None = None,
+        feedback: StaticBlock | None = None,
         sampling_time: float | None = None,
         input_offset: float = 0.0,
         output_offset: float = 0.0,
@@ -142,10 +162,12 @@ class LinearFeedback(OneLinearBlock, Model):
         self.outputs = _one_name(output, "output")
         #: ``A`` and ``B`` of the loop.
         self.linear = _checked_linear(linear)
-        #: ``N``: the polynomial fed back, ``c_1 = 0``.
+        #: ``N``: the static block fed back (a polynomial has ``c_1 = 0``).
         self.feedback = _checked_feedback(
             Polynomial([0.0, 0.0, 0.0], constant=False) if feedback is None else feedback
         )
+        self._mask = np.asarray(self.feedback.feedback_mask(), dtype=bool)
+        self._polynomial = self.feedback.kind == Polynomial.kind
         self.sampling_time = sampling_time
         self.input_offset = float(input_offset)
         self.output_offset = float(output_offset)
@@ -172,13 +194,13 @@ class LinearFeedback(OneLinearBlock, Model):
     # ------------------------------------------------------------------ structure
     @property
     def c(self) -> np.ndarray:
-        """``[c_2..c_r]``, the free coefficients of the feedback polynomial."""
-        return self.feedback.coefficients[1:]
+        """The free entries of the feedback block: ``[c_2..c_r]`` of a polynomial."""
+        return self.feedback.to_vector()[self._mask]
 
     @property
-    def degree(self) -> int:
-        """``r``, the degree of the feedback polynomial."""
-        return int(self.feedback.coefficients.size)
+    def degree(self) -> int | None:
+        """``r``, the degree of the feedback polynomial (None for another block)."""
+        return int(self.feedback.coefficients.size) if self._polynomial else None
 
     @property
     def blocks(self) -> tuple[Block, ...]:
@@ -208,49 +230,84 @@ class LinearFeedback(OneLinearBlock, Model):
         """``(na, nb, nk)`` of the linear block (the orders of a comparable ARX model)."""
         return self.na, self.nb, self.nk
 
+    def _slope_at_rest(self) -> float:
+        """``N'(0)``: zero for a polynomial, a saturation's slope, ..."""
+        if self._polynomial:
+            return 0.0
+        with np.errstate(all="ignore"):
+            slope = float(np.asarray(self.feedback.derivative(np.zeros(1)), dtype=float)[0])
+        return slope if np.isfinite(slope) else 0.0
+
     def poles(self) -> np.ndarray:
-        """Roots of ``A``: the poles of the model linearised at the operating point."""
-        return self.linear.poles()
+        """The poles of the model linearised at the operating point: roots of ``A``, or
+        of ``A + N'(0) z^{-n_k} B`` when the fed-back block has a slope there."""
+        slope = self._slope_at_rest()
+        if slope == 0.0:
+            return self.linear.poles()
+        na, nb, nk = self.na, self.nb, self.nk
+        char = np.zeros(max(na, nk + nb - 1) + 1)
+        char[0] = 1.0
+        char[1 : na + 1] += self.a
+        char[nk : nk + nb] += slope * self.b
+        return np.roots(np.trim_zeros(char, "b"))
 
     def is_stable(self, margin: float = 0.0) -> bool:
-        """True when the poles of ``A`` lie inside the circle of radius ``1 - margin``.
+        """True when the :meth:`poles` lie inside the circle of radius ``1 - margin``.
 
         This is stability of the small-signal model around the operating point; a
         softening feedback (``N(y) y < 0``) can still make large excursions diverge,
         which a simulation shows.
         """
-        return self.linear.is_stable(margin)
+        if self._slope_at_rest() == 0.0:
+            return self.linear.is_stable(margin)
+        poles = self.poles()
+        return bool(poles.size == 0 or np.max(np.abs(poles)) < 1.0 - margin)
 
     @property
     def parameters(self) -> dict[str, Any]:
-        """``a``, ``b`` and ``c = [c_2..c_r]``."""
-        return {"a": self.a.tolist(), "b": self.b.tolist(), "c": self.c.tolist()}
+        """``a``, ``b`` and ``c = [c_2..c_r]`` (another block: its own parameters under
+        ``feedback``)."""
+        out: dict[str, Any] = {"a": self.a.tolist(), "b": self.b.tolist()}
+        if self._polynomial:
+            out["c"] = self.c.tolist()
+        else:
+            out["feedback"] = self.feedback.parameters
+        return out
 
     # ------------------------------------------------------------------ vectors
     def free_parameters(self) -> np.ndarray:
-        """``[a_1..a_na, b_0..b_{nb-1}, c_2..c_r]``."""
+        """``[a_1..a_na, b_0..b_{nb-1}, c_2..c_r]`` (another block: its free entries)."""
         return np.concatenate((self.a, self.b, self.c))
 
     def free_parameter_names(self) -> list[str]:
         names = [f"a_{j}" for j in range(1, self.na + 1)]
         names += [f"b_{i}" for i in range(self.nb)]
-        return names + [f"c_{m}" for m in range(2, self.degree + 1)]
+        if self._polynomial:
+            return names + [f"c_{m}" for m in range(2, self.degree + 1)]  # type: ignore[operator]
+        own = self.feedback.vector_names()
+        return names + [f"N.{own[i]}" for i in np.flatnonzero(self._mask)]
 
     def parameter_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """No bounds: every parameter may take either sign."""
-        n = self.na + self.nb + self.degree - 1
-        return np.full(n, -np.inf), np.full(n, np.inf)
+        """None on ``a`` and ``b``; the fed-back block's own (positive slopes, ..)."""
+        n = self.na + self.nb
+        lo, hi = self.feedback.bounds()
+        return (
+            np.concatenate((np.full(n, -np.inf), np.asarray(lo, dtype=float)[self._mask])),
+            np.concatenate((np.full(n, np.inf), np.asarray(hi, dtype=float)[self._mask])),
+        )
 
     def with_free_parameters(self, theta: Any) -> LinearFeedback:
         """A copy with :meth:`free_parameters` replaced by ``theta`` (ranges kept)."""
         theta = np.asarray(theta, dtype=float).reshape(-1)
         na, nb = self.na, self.nb
-        n = na + nb + self.degree - 1
+        n = na + nb + int(self._mask.sum())
         if theta.size != n:
             raise OrderError(f"expected {n} free parameters, got {theta.size}")
+        vector = self.feedback.to_vector()
+        vector[self._mask] = theta[na + nb :]
         return self.replace(
             linear=LinearBlock(na, nb, self.nk, theta[:na], theta[na : na + nb]),
-            feedback=Polynomial(np.concatenate(([0.0], theta[na + nb :])), constant=False),
+            feedback=self.feedback.with_vector(vector),
         )
 
     def replace(self, **changes: Any) -> LinearFeedback:
@@ -273,11 +330,10 @@ class LinearFeedback(OneLinearBlock, Model):
         return type(self)(self.inputs[0], self.outputs[0], **kwargs)
 
     # ------------------------------------------------------------------ dynamics
-    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray]:
         return (
             np.ascontiguousarray(self.a, dtype=float),
             np.ascontiguousarray(self.b, dtype=float),
-            np.ascontiguousarray(self.feedback.coefficients, dtype=float),
         )
 
     def _start(self, u: Any, y_initial: Any) -> tuple[np.ndarray, np.ndarray, int]:
@@ -299,12 +355,45 @@ class LinearFeedback(OneLinearBlock, Model):
             y[:k] = y0[:k, 0] - self.output_offset
         return s, y, n0
 
+    def _loop(self, s: np.ndarray, y: np.ndarray, n0: int) -> np.ndarray:
+        """Run the loop in place on ``y`` (rows from ``n0``); returns ``v = u - N(y)``."""
+        a, b = self._arrays()
+        if self._polynomial:
+            c = np.ascontiguousarray(self.feedback.coefficients, dtype=float)
+            return feedback_simulate(a, b, c, self.nk, s, y, n0)
+        table = self.feedback.piecewise_linear()
+        if table is not None:
+            xs, ys, left, right = table
+            xs = np.ascontiguousarray(xs, dtype=float)
+            ys = np.ascontiguousarray(ys, dtype=float)
+            return feedback_simulate_table(
+                a, b, xs, ys, float(left), float(right), self.nk, s, y, n0
+            )
+        return self._loop_python(a, b, s, y, n0)
+
+    def _loop_python(
+        self, a: np.ndarray, b: np.ndarray, s: np.ndarray, y: np.ndarray, n0: int
+    ) -> np.ndarray:
+        """The loop for a block the kernels cannot evaluate: one call of it per sample."""
+        N, block = y.shape[0], self.feedback
+        v = np.full(N, np.nan)
+        one = np.zeros(1)
+        with np.errstate(all="ignore"):
+            for t in range(N):
+                if t >= n0:
+                    y[t] = lagged_sum(a, b, self.nk, y, v, t)
+                one[0] = y[t]
+                v[t] = s[t] - float(np.asarray(block(one), dtype=float).reshape(-1)[0])
+                if not np.isfinite(v[t]):  # diverged: the rest is not a simulation
+                    y[t + 1 :] = np.nan
+                    break
+        return v
+
     def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
         """Free-run simulation; with ``y_initial`` the first ``max_lag`` outputs are set
         from the measurement (module docstring). Returns shape (N, 1)."""
         s, y, n0 = self._start(u, y_initial)
-        a, b, c = self._arrays()
-        feedback_simulate(a, b, c, self.nk, s, y, n0)
+        self._loop(s, y, n0)
         return (y + self.output_offset)[:, None]
 
     def simulate_with_sensitivities(
@@ -313,15 +402,25 @@ class LinearFeedback(OneLinearBlock, Model):
         """Free-run simulation and its derivative with respect to :meth:`free_parameters`.
 
         Returns ``y`` (N,), equal to ``simulate(u, y_initial)[:, 0]``, and ``dy`` (N,
-        n_free) with ``dy[k, i] = ∂y(k)/∂θ_i`` (the recursion of
+        n_free) with ``dy[k, i] = ∂y(k)/∂θ_i`` (the recursions of
         :mod:`blockid._kernels.feedback`, through ``A``, ``B`` and ``N'(y)``).
         """
         s, y, n0 = self._start(u, y_initial)
-        a, b, c = self._arrays()
-        _, dy = feedback_sensitivity(a, b, c, self.nk, s, y, n0)
-        skip = self.na + self.nb  # the row of c_1, fixed to 0
-        free = np.concatenate((dy[:skip], dy[skip + 1 :]))
-        return y + self.output_offset, free.T
+        a, b = self._arrays()
+        if self._polynomial:
+            c = np.ascontiguousarray(self.feedback.coefficients, dtype=float)
+            _, dy = feedback_sensitivity(a, b, c, self.nk, s, y, n0)
+            skip = self.na + self.nb  # the row of c_1, fixed to 0
+            free = np.concatenate((dy[:skip], dy[skip + 1 :]))
+            return y + self.output_offset, free.T
+        v = self._loop(s, y, n0)
+        block = self.feedback
+        with np.errstate(all="ignore"):
+            slope = np.ascontiguousarray(np.asarray(block.derivative(y), dtype=float).reshape(-1))
+            jac = np.asarray(block.jacobian(y), dtype=float).reshape(y.shape[0], -1)
+        forcing = np.ascontiguousarray(jac[:, self._mask].T)
+        dy = feedback_sensitivity_given(a, b, self.nk, y, v, slope, forcing, n0)
+        return y + self.output_offset, dy.T
 
     def predict(self, u: Any, y: Any) -> np.ndarray:
         """One step ahead: exact, since the fed-back ``N(y)`` is of measured outputs."""
@@ -361,7 +460,8 @@ class LinearFeedback(OneLinearBlock, Model):
 
     def extrapolation(self, u: Any) -> list[str]:
         """Warnings when the simulated output (from rest) leaves the range of ``y`` seen
-        in estimation: the feedback polynomial extrapolates there."""
+        in estimation and the fed-back block is one that says nothing reliable there
+        (a polynomial: ``warn_extrapolation``)."""
         if "y" not in self.ranges:
             return []
         y = self.simulate(u)[:, 0] - self.output_offset
@@ -369,13 +469,14 @@ class LinearFeedback(OneLinearBlock, Model):
         span = max(hi - lo, 1e-300)
         out = (y < lo - 0.02 * span) | (y > hi + 0.02 * span)
         if not np.isfinite(y).all():
-            return ["the simulated output is not finite: the feedback polynomial diverges"]
-        if not out.any():
+            kind = self.feedback.kind
+            return [f"the simulated output is not finite: the feedback {kind} diverges"]
+        if not out.any() or not self.feedback.warn_extrapolation:
             return []
         worst = float(max(lo - y.min(), y.max() - hi)) / span
         return [
-            f"the output {self.outputs[0]!r} (input of the feedback polynomial) leaves the "
-            f"range seen in estimation [{lo + self.output_offset:.4g}, "
+            f"the output {self.outputs[0]!r} (input of the feedback {self.feedback.kind}) "
+            f"leaves the range seen in estimation [{lo + self.output_offset:.4g}, "
             f"{hi + self.output_offset:.4g}] in {int(out.sum())} of {y.size} samples (by up "
             f"to {100 * worst:.0f} % of that range): the model extrapolates there"
         ]
