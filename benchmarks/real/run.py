@@ -43,17 +43,24 @@ def test_rmse(model: Any, rec: TestRecord, n_init: int) -> tuple[float, str]:
     """Free-run RMSE on ``rec`` (data units) from sample ``n_init`` on, and how the
     simulation was started.
 
-    The model starts from the first ``max_lag`` measured test outputs when the benchmark
-    allows that many; otherwise, for a test record that continues the estimation record,
-    the simulation starts in the estimation data before it (no test output used); else
-    from the allowed ``n_init`` outputs (the remaining lags at the operating point).
+    When the benchmark allows at least ``max_lag`` initial test outputs, the model starts
+    from all ``n_init`` of them: given more than ``max_lag``, a block-oriented model
+    estimates its initial state (the first outputs of every linear block, fitted to the
+    ``n_init`` samples: :mod:`blockid.models.initial_state`), an ARX model uses the first
+    ``max_lag``. With fewer, for a test record that continues the estimation record, the
+    simulation starts in the estimation data before it (no test output used); else from
+    the allowed ``n_init`` outputs (the remaining lags at the operating point).
     """
+    from blockid.models import ChainModel
+
     lag = int(model.max_lag)
     u, y = rec.u.reshape(-1, 1), rec.y.reshape(-1, 1)
     with np.errstate(all="ignore"):
         if lag <= n_init:
-            sim = model.simulate(u, y[:lag]) if lag else model.simulate(u)
-            how = f"first {lag} test outputs"
+            sim = model.simulate(u, y[:n_init]) if n_init else model.simulate(u)
+            how = f"first {n_init} test outputs"
+            if n_init > lag and isinstance(model, ChainModel):
+                how += f" (initial state estimated; max_lag {lag})"
         elif rec.prefix is not None:
             pu, py = rec.prefix
             full_u = np.concatenate([pu, rec.u]).reshape(-1, 1)

@@ -616,8 +616,22 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
         doc99 = _json(_run(command, model, f.csv, "--band", "0.99", "--json"))
         assert doc99["band"]["mean_width"]["y"] > width90  # a wider band for a higher level
 
+    def initial_samples(f, calls):
+        if command == "predict":  # a start of the free run only
+            r = run(f, "--initial-samples", "5", code=2)
+            assert "free-run simulation only" in r.stderr and "--initial-samples" in r.stderr
+            return
+        doc = _json(run(f, "--initial-samples", "5", "--json"))
+        _, kwargs = calls.one("evaluate")
+        assert kwargs == {"initial_samples": 5}
+        assert doc["initial_samples"] == 5 and doc["initial_samples_per_experiment"] == 5
+        assert "started from 5 measured outputs" in run(f, "--initial-samples", "5").stdout
+        r = run(f, "--initial-samples", "0", code=2)
+        assert "whole number >= 1" in r.stderr and "(option --initial-samples)" in r.stderr
+
     return {
         "band": band,
+        "initial_samples": initial_samples,
         "rng": range_,
         "out": out,
         "plot": plot,

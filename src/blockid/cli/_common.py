@@ -68,6 +68,7 @@ FLAGS = {
     "structures": "--structures",
     "method": "--method",
     "validation_bandwidth": "--validation-bandwidth",
+    "initial_samples": "--initial-samples",
 }
 
 

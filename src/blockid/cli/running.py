@@ -48,6 +48,18 @@ PlotDir = Annotated[
     ),
 ]
 
+InitialSamples = Annotated[
+    int | None,
+    typer.Option(
+        "--initial-samples",
+        metavar="N",
+        help="simulate: start each experiment from its first N measured outputs (more "
+        "than the model's max_lag: a block model estimates its initial state from them) "
+        "and score from sample max(N, max_lag) on. Default: max_lag.",
+        show_default=False,
+    ),
+]
+
 _LABELS = {"simulation": "free-run simulation", "one-step": "one-step-ahead prediction"}
 
 
@@ -74,6 +86,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
                 show_default=False,
             ),
         ] = None,
+        initial_samples: InitialSamples = None,
         force: Force = False,
         json_out: Json = False,
     ) -> None:
@@ -100,7 +113,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             rng,
             "--range",
         )
-        result = evaluate(model, data, mode)
+        result = evaluate(model, data, mode, initial_samples=initial_samples)
         columns = {}
         if band is not None:
             from blockid.evaluation.uncertainty import band_columns, load_covariance
@@ -130,9 +143,10 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             return
         for note in result.warnings:
             stderr.print(f"warning: {note}", markup=False)
-        stdout.print(
-            metrics_table(f"{_LABELS[mode]} on {where}", [(model.structure, result.metrics)])
-        )
+        title = f"{_LABELS[mode]} on {where}"
+        if initial_samples is not None:
+            title += f", started from {initial_samples} measured outputs"
+        stdout.print(metrics_table(title, [(model.structure, result.metrics)]))
         if out is not None:
             stdout.print(f"model output written to {out}")
         if figure is not None:

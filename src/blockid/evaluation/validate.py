@@ -32,6 +32,9 @@ class ModelOutput:
         initial conditions copied from the measurement.
     skip : int
         Initial samples left out of the metrics in every experiment.
+    initial_samples : int, optional
+        The measured outputs each free run started from when given to
+        :func:`evaluate` (``initial_samples``); None: the first ``max_lag``.
     metrics : dict
         ``{"mse": {"y1": ...}, "rmse": ..., "mae": ..., "max_abs_error": ...,
         "fit_percent": ...}`` over all experiments, initial samples excluded.
@@ -47,6 +50,7 @@ class ModelOutput:
     skip: int
     metrics: dict[str, dict[str, float]]
     warnings: list[str] = field(default_factory=list)
+    initial_samples: int | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The data as a table, with a ``<output>_sim`` / ``<output>_pred`` column each."""
@@ -57,19 +61,25 @@ class ModelOutput:
         return frame
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (no sample arrays); an undefined metric is ``null``."""
-        return json_safe(
-            {
-                "mode": self.mode,
-                "n_samples": int(sum(len(y) for y in self.outputs)),
-                "initial_samples_per_experiment": self.skip,
-                "metrics": self.metrics,
-                "warnings": self.warnings,
-            }
-        )
+        """JSON-ready summary (no sample arrays); an undefined metric is ``null``.
+
+        ``initial_samples`` (the measured outputs each simulation started from) follows
+        ``initial_samples_per_experiment`` when they were given to :func:`evaluate`.
+        """
+        doc: dict[str, Any] = {
+            "mode": self.mode,
+            "n_samples": int(sum(len(y) for y in self.outputs)),
+            "initial_samples_per_experiment": self.skip,
+        }
+        if self.initial_samples is not None:
+            doc["initial_samples"] = self.initial_samples
+        doc.update(metrics=self.metrics, warnings=self.warnings)
+        return json_safe(doc)
 
 
-def evaluate(model: Any, data: Dataset, mode: str = "simulation") -> ModelOutput:
+def evaluate(
+    model: Any, data: Dataset, mode: str = "simulation", initial_samples: int | None = None
+) -> ModelOutput:
     """Run ``model`` on ``data`` and compute the metrics.
 
     Parameters
@@ -81,6 +91,21 @@ def evaluate(model: Any, data: Dataset, mode: str = "simulation") -> ModelOutput
         Free-run simulation from the inputs (initial conditions: the first
         ``model.max_lag`` measured outputs of each experiment) or one-step-ahead
         prediction from measured past outputs.
+    initial_samples : int, optional
+        Free run only: start every experiment from its first ``initial_samples``
+        measured outputs (``model.simulate(u, y[:n])``; more than ``max_lag`` of them
+        make a block-oriented model estimate its initial state, see
+        :meth:`~blockid.models.ChainModel.simulate`) and score it from sample
+        ``max(initial_samples, max_lag)`` on (**choice**: samples the start used are not
+        scored, nor the first ``max_lag`` ones, which a model given fewer outputs fills
+        from rest). Must leave at least one sample of every experiment. None (default):
+        the first ``max_lag``.
+
+    Raises
+    ------
+    ParameterError
+        For an unknown mode, or an ``initial_samples`` that is not a whole number >= 1,
+        is given with one-step prediction, or leaves no sample of an experiment.
     """
     if mode not in MODES:
         raise ParameterError(f"mode must be one of {', '.join(MODES)}; got {mode!r}")
@@ -89,12 +114,14 @@ def evaluate(model: Any, data: Dataset, mode: str = "simulation") -> ModelOutput
             f"the model expects inputs {list(model.inputs)} and outputs {list(model.outputs)}, "
             f"but the data have inputs {list(data.inputs)} and outputs {list(data.outputs)}"
         )
-    skip = model.max_lag
-    data.check_orders(skip, 1, what=f"the {model.structure} model")
+    data.check_orders(model.max_lag, 1, what=f"the {model.structure} model")
+    n_init = _initial_samples(initial_samples, mode, data)
+    skip = model.max_lag if n_init is None else max(n_init, model.max_lag)
+    start = model.max_lag if n_init is None else n_init
     outputs = []
     for exp in data.experiments:
         if mode == "simulation":
-            outputs.append(model.simulate(exp.u, exp.y[:skip]))
+            outputs.append(model.simulate(exp.u, exp.y[:start]))
         else:
             outputs.append(model.predict(exp.u, exp.y))
     y = np.vstack([exp.y[skip:] for exp in data.experiments])
@@ -113,4 +140,31 @@ def evaluate(model: Any, data: Dataset, mode: str = "simulation") -> ModelOutput
                 for note in sub.extrapolation(exp.u[:, cols]):
                     prefix = f"{model_part[0]}: " if model_part[0] else ""
                     warnings.append(f"{prefix}{note} (experiment {exp.name!r})")
-    return ModelOutput(mode, data, outputs, skip, metrics, warnings)
+    return ModelOutput(mode, data, outputs, skip, metrics, warnings, n_init)
+
+
+def _initial_samples(value: Any, mode: str, data: Dataset) -> int | None:
+    """``initial_samples`` checked against the mode and the data (see :func:`evaluate`)."""
+    if value is None:
+        return None
+    if mode != "simulation":
+        raise ParameterError(
+            "initial_samples applies to free-run simulation only (one-step prediction "
+            "reads every measured past output)",
+            parameter="initial_samples",
+        )
+    whole = isinstance(value, int | np.integer) and not isinstance(value, bool)
+    if not whole or value < 1:
+        raise ParameterError(
+            f"initial_samples must be a whole number >= 1 (measured outputs to start "
+            f"from), got {value!r}",
+            parameter="initial_samples",
+        )
+    shortest = min(data.experiments, key=lambda e: e.n_samples)
+    if value >= shortest.n_samples:
+        raise ParameterError(
+            f"initial_samples={value} leaves no sample to score in experiment "
+            f"{shortest.name!r}, which has {shortest.n_samples}; give fewer",
+            parameter="initial_samples",
+        )
+    return int(value)

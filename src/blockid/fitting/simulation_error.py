@@ -133,12 +133,13 @@ def simulate_with_sensitivities(
         Input.
     y_initial : array_like, optional
         Measured outputs whose first ``max_lag`` samples start the simulation, as in
-        :meth:`ChainModel.simulate`.
+        :meth:`ChainModel.simulate` given ``max_lag`` of them (later samples are not
+        used: the start a chain estimates from more is not differentiated here).
 
     Returns
     -------
     y : ndarray, shape (N,)
-        Equal to ``model.simulate(u, y_initial)[:, 0]`` (up to rounding).
+        Equal to ``model.simulate(u, y_initial[:max_lag])[:, 0]`` (up to rounding).
     dy : ndarray, shape (N, n_free)
         ``dy[k, i] = ∂y(k)/∂θ_i``.
 
@@ -324,16 +325,34 @@ class _Problem:
         self.penalty = np.full(self.size, 2.0 * np.sqrt(self.limit))  # MSE 4x the bound
         self.has_tail = any(s.n_fit < s.y.shape[0] for s in segments)
         self._last: tuple[np.ndarray, np.ndarray] = (np.zeros(0), np.zeros(0))
+        # A chain with static blocks after its last linear block starts a simulation
+        # from their inverse only where they are invertible over the ranges recorded on
+        # the estimation data (and bends polynomials onto tangents beyond them): every
+        # iterate records its own, as the delivered model will, so that the criterion
+        # minimised is the one the returned model is scored on.
+        last = getattr(template, "last_linear_index", None)
+        self.ranged = last is not None and last < len(template.blocks) - 1
+        self.experiments = [(s.u, s.y) for s in segments]
 
     def model(self, theta: np.ndarray) -> BlockModel | None:
-        """The model at ``theta``, or None if ``theta`` is invalid or unstable."""
+        """The model at ``theta`` (with its ranges on the estimation data where they
+        decide its start), or None if ``theta`` is invalid or unstable."""
         if not np.all(np.isfinite(theta)):
             return None
         try:
             model = self.template.with_free_parameters(theta)
         except BlockidError:
             return None
-        return model if model.is_stable(STABILITY_MARGIN) else None
+        if not model.is_stable(STABILITY_MARGIN):
+            return None
+        return self.with_ranges(model)
+
+    def with_ranges(self, model: BlockModel) -> BlockModel:
+        """``model`` as the optimiser simulates it (see ``ranged``)."""
+        if not self.ranged:
+            return model
+        with np.errstate(all="ignore"):
+            return model.with_ranges(self.experiments)
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         self.tracker.nfev += 1
@@ -356,7 +375,7 @@ class _Problem:
 
     def jacobian(self, theta: np.ndarray) -> np.ndarray:
         """Jacobian at an accepted iterate; also the early-stopping monitor."""
-        model = self.template.with_free_parameters(theta)
+        model = self.with_ranges(self.template.with_free_parameters(theta))
         n0 = self.n0
         blocks = []
         for s in self.segments:
@@ -370,7 +389,7 @@ class _Problem:
         """``(J^T J, J^T r)`` at an accepted iterate, summed piece by piece
         (:func:`sensitivity_chunks`) so that ``J`` is never formed; also the
         early-stopping monitor."""
-        model = self.template.with_free_parameters(theta)
+        model = self.with_ranges(self.template.with_free_parameters(theta))
         n0, n = self.n0, theta.size
         H, g = np.zeros((n, n)), np.zeros(n)
         for s in self.segments:
@@ -600,8 +619,8 @@ def refine(
             "finite or explodes on the estimation data. Start from the default initial "
             "estimate (method simulation-error) instead"
         )
-    initial_mse = simulation_mse(model, data)
-    initial_tail = problem.tail_mse(model) if problem.has_tail else None
+    initial_mse = simulation_mse(problem.with_ranges(model), data)
+    initial_tail = problem.tail_mse(problem.with_ranges(model)) if problem.has_tail else None
 
     lower, upper = model.parameter_bounds()
     stop_reason, theta = "", theta0

@@ -27,10 +27,12 @@ block fixes its own input gain (:meth:`~blockid.blocks.base.Block.free_mask`: th
 polynomial fixes ``q_1 = 1``). Paper A's S2 (``v2(t) = x(t-1) + ... - a_1 v2(t-1) - a_2
 v2(t-2)``) is ``na = 2, nb = 1, nk = 1`` with ``b_0 = 1``.
 
-Initial state: a simulation given measured outputs starts the *last* linear block from
-them, through the inverse of the static blocks after it where they are monotone over
-the range seen in estimation (otherwise from rest); every other block starts at rest (a
-backlash in the middle of its dead band). One-step-ahead prediction recovers the last
+Initial state: a simulation given at most ``max_lag`` measured outputs starts the
+*last* linear block from them, through the inverse of the static blocks after it where
+they are monotone over the range seen in estimation (otherwise from rest); every other
+block starts at rest (a backlash in the middle of its dead band). Given more, the first
+outputs of every linear block are estimated from them
+(:mod:`blockid.models.initial_state`). One-step-ahead prediction recovers the last
 linear block's past outputs the same way, so a model with an output block predicts one
 step ahead only where that block is invertible over the measured range.
 """
@@ -47,6 +49,7 @@ from blockid.blocks.base import BLOCK_TYPES, Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import BlockidError, ModelFileError, OrderError, ParameterError
 from blockid.models.base import Model
+from blockid.models.initial_state import estimated_starts
 
 __all__ = [
     "ChainModel",
@@ -236,18 +239,25 @@ class ChainModel(Model):
         u, _ = self._check_signals(u)
         return u[:, 0] - self.input_offset
 
+    def _edge(self, i: int, s: np.ndarray) -> np.ndarray | None:
+        """``s`` clipped to the input range block ``i`` saw in estimation, for a block
+        that extrapolates unreliably (``warn_extrapolation``: polynomials); None for any
+        other block or without a recorded range."""
+        block = self.blocks[i]
+        if not (block.warn_extrapolation and block.role == "static"):
+            return None
+        seen = self.ranges.get(self._range_key(i))
+        return None if seen is None else np.clip(s, seen[0], seen[1])
+
     def _apply_at(self, i: int, s: np.ndarray) -> np.ndarray:
         """Block ``i`` on signal ``s``, from rest; a block that extrapolates unreliably
         (``warn_extrapolation``: polynomials) continues along its tangent beyond the input
         range recorded in estimation, instead of running away (a cubic does)."""
         block = self.blocks[i]
         out = block.run(s)
-        if not (block.warn_extrapolation and block.role == "static"):
+        edge = self._edge(i, s)
+        if edge is None:
             return out
-        seen = self.ranges.get(self._range_key(i))
-        if seen is None:
-            return out
-        edge = np.clip(s, seen[0], seen[1])
         outside = edge != s
         if not outside.any():
             return out
@@ -257,6 +267,12 @@ class ChainModel(Model):
         out = np.array(out, dtype=float, copy=True)
         out[outside] = tangent
         return out
+
+    def _slope_at(self, i: int, s: np.ndarray) -> np.ndarray:
+        """``d/ds`` of :meth:`_apply_at` for a static block ``i``: the block's derivative,
+        held at its value at the range's end where it continues along its tangent."""
+        edge = self._edge(i, s)
+        return self.blocks[i].derivative(s if edge is None else edge)
 
     def _run(self, s: np.ndarray, stop: int) -> np.ndarray:
         """The signal entering block ``stop`` (blocks before it from rest)."""
@@ -289,29 +305,59 @@ class ChainModel(Model):
             x = self.blocks[i].invert(x, None if seen is None else tuple(seen))
         return x
 
-    def initial_state(self, y_initial: Any) -> np.ndarray | None:
-        """Initial outputs of the last linear block from measured outputs, or None."""
+    def _measured(self, y_initial: Any) -> np.ndarray | None:
+        """Measured outputs relative to the offset, shape (n,), or None."""
         if y_initial is None:
             return None
         _, y0 = self._check_signals(np.zeros((len(np.atleast_1d(y_initial)), 1)), y_initial)
-        y0 = y0[: self.max_lag, 0] - self.output_offset
+        return y0[:, 0] - self.output_offset
+
+    def initial_state(self, y_initial: Any) -> np.ndarray | None:
+        """Initial outputs of the last linear block from (the first ``max_lag``)
+        measured outputs, or None."""
+        y0 = self._measured(y_initial)
+        if y0 is None:
+            return None
         try:
-            return self.x_from_y(y0)
+            return self.x_from_y(y0[: self.max_lag])
         except BlockidError:
             return None
 
     def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
         """Free-run simulation from the input alone.
 
-        Without ``y_initial`` every block starts at rest; with it, the last linear
-        block's first ``max_lag`` outputs are set from the measurement (module
-        docstring).
+        Without ``y_initial`` every block starts at rest. With at most ``max_lag``
+        measured outputs, the last linear block's first ``max_lag`` outputs are set from
+        them (module docstring) and every other block starts at rest. With ``n >
+        max_lag`` of them, the first outputs of every linear block are *estimated* so
+        that the chain's first ``n`` outputs match them in least squares
+        (:func:`~blockid.models.initial_state.estimated_starts`), falling back to the
+        start from the first ``max_lag`` where that fails; a dynamic block (backlash)
+        still starts at rest.
         """
-        last = self.last_linear_index
-        w = self._run(self._u(u), last)
-        x = self.blocks[last].simulate(w, self.initial_state(y_initial))  # type: ignore[call-arg]
-        y = self._run_from(x, last + 1)
+        s = self._u(u)
+        x0 = self.initial_state(y_initial)
+        starts = {} if x0 is None else {self.last_linear_index: x0}
+        y0 = self._measured(y_initial)
+        if y0 is not None and min(y0.size, s.size) > self.max_lag:
+            estimated = estimated_starts(self, s, y0, starts)
+            if estimated is not None:
+                with np.errstate(all="ignore"):
+                    y = self._run_started(s, estimated)
+                if np.all(np.isfinite(y)):
+                    return (y + self.output_offset)[:, None]
+        y = self._run_started(s, starts)
         return (y + self.output_offset)[:, None]
+
+    def _run_started(self, s: np.ndarray, starts: dict[int, np.ndarray]) -> np.ndarray:
+        """The chain's output (relative to the offset) for input ``s``: linear block ``i``
+        started from its first outputs ``starts[i]``, every other block from rest."""
+        for i, block in enumerate(self.blocks):
+            if i in starts:
+                s = block.simulate(s, starts[i])  # type: ignore[call-arg]
+            else:
+                s = self._apply_at(i, s)
+        return s
 
     def _run_from(self, s: np.ndarray, start: int) -> np.ndarray:
         for i in range(start, len(self.blocks)):

@@ -163,7 +163,10 @@ class Network(Model):
         """Free-run simulation of every subsystem from the external inputs alone.
 
         ``y_initial`` (rows: first samples; columns: :attr:`outputs`) gives each
-        subsystem's initial outputs; without it every subsystem starts at rest.
+        subsystem's initial outputs; without it every subsystem starts at rest. Up to
+        :attr:`max_lag` rows, each subsystem gets its own ``max_lag`` first of them;
+        more rows go to every subsystem whole (a chain then estimates its start:
+        :meth:`ChainModel.simulate <blockid.models.ChainModel.simulate>`).
         """
         u, _ = self._check_signals(u)
         y0 = None
@@ -174,7 +177,8 @@ class Network(Model):
             init = None
             if y0 is not None:
                 cols = [self.outputs.index(n) for n in model.outputs]
-                init = y0[:, cols]
+                rows = y0.shape[0] if y0.shape[0] > self.max_lag else model.max_lag
+                init = y0[:rows, cols]
             out = model.simulate(self._columns(model, table, "inputs"), init)
             for j, name in enumerate(model.outputs):
                 table[name] = out[:, j]
