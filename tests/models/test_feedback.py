@@ -298,7 +298,10 @@ def test_free_entries_and_names_of_other_blocks():
     assert "N.breakpoints_1" in names and "N.values_0" in names
     moved = free.with_free_parameters(free.free_parameters() + 0.01)
     assert moved.feedback.breakpoints[0] == -1.0 and moved.feedback.breakpoints[-1] == 1.0
-    assert dz.parameters["feedback"] == OTHER_BLOCKS["dead-zone"].parameters
+    assert dz.parameters == {
+        "a": [-1.5, 0.7], "b": [0.5, 0.2], "N.lower": -0.3, "N.upper": 0.4,
+        "N.slope_left": 0.8, "N.slope_right": 0.6,
+    }  # fmt: skip
     assert duffing().parameters.keys() == {"a", "b", "c"}
 
 

@@ -88,3 +88,25 @@ def test_importing_blocks_and_plotting_does_not_import_matplotlib():
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported eagerly'"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_the_blocks_figure_of_a_feedback_model_draws_the_fed_back_block():
+    """Over the range the output takes in a free run; the report draws this figure."""
+    from blockid.blocks.linear import LinearBlock
+    from blockid.models.feedback import LinearFeedback
+    from blockid.plotting.figures import plot_blocks
+
+    model = LinearFeedback(
+        "u", "y", linear=LinearBlock(2, 1, 1, a=[-1.5, 0.7], b=[0.5]),
+        feedback=DeadZone(-0.3, 0.4, 0.8, 0.6),
+    )  # fmt: skip
+    u = np.random.default_rng(0).normal(0.0, 1.0, 500)
+    v, y = model.block_inputs(u)
+    np.testing.assert_allclose(y, model.simulate(u)[:, 0])
+    np.testing.assert_allclose(v, u - model.feedback(y))
+    fig = plot_blocks(model, u=u)
+    (ax,) = fig.axes
+    assert ax.get_title() == "feedback block: dead-zone"
+    grid = ax.lines[0].get_xdata()
+    assert grid.min() == pytest.approx(y.min()) and grid.max() == pytest.approx(y.max())
+    plt.close(fig)

@@ -8,7 +8,7 @@ self-contained Python module.
   not installed);
 * :func:`to_python_module` — the source of a module that needs NumPy only, with the
   model's parameters embedded and ``simulate(u, y0=None)`` reproducing
-  ``model.simulate(u, y_initial=y0)`` to rounding, for ARX (MIMO), every chain of
+  ``model.simulate(u, y_initial=y0[:max_lag])`` to rounding, for ARX (MIMO), every chain of
   blocks (Hammerstein, Wiener, Hammerstein-Wiener, backlash, Wiener-Hammerstein, output
   error) and the feedback model.
 
@@ -28,10 +28,12 @@ entry): it holds one evaluation rule per block kind, copied from the blocks, whi
 knowledge of the blocks outside them, the price of a file that needs nothing but NumPy.
 A block kind it does not know (a user-defined block) is refused at export, so a module
 is never written that would simulate something else. Starting from measured outputs
-follows :meth:`~blockid.models.ChainModel.simulate`: the last linear block starts from
-``N^{-1}`` of the first outputs where the blocks after it are invertible over their
-estimation range (decided here, at export, with the blocks' own ``invert``), solved in
-the module by bisection to machine precision on the same interval.
+follows :meth:`~blockid.models.ChainModel.simulate` given the first ``max_lag`` of them:
+the last linear block starts from ``N^{-1}`` of the first outputs where the blocks after
+it are invertible over their estimation range (decided here, at export, with the blocks'
+own ``invert``), solved in the module by bisection to machine precision on the same
+interval. A longer ``y0`` is cut to its first ``max_lag`` outputs: the start a chain
+estimates from more (:mod:`blockid.models.initial_state`) is not exported.
 """
 
 from __future__ import annotations
@@ -261,8 +263,9 @@ Exported by blockid {version} ({what}). Self-contained: needs NumPy only.
 
 is the free-run simulation of blockid's ``simulate``: ``u`` has shape (N,) or (N, {nu})
 (inputs {inputs}); without ``y0`` the model starts at rest at its operating point, with
-``y0`` (the first measured outputs, at least {max_lag} of them) it starts from them as
-blockid does. ``MODEL`` is the model file's description; ``SPEC`` what simulation needs.
+``y0`` (the first measured outputs, at least {max_lag} of them; later ones are not
+used) it starts from them as blockid does. ``MODEL`` is the model file's description;
+``SPEC`` what simulation needs.
 """
 
 import json
@@ -480,10 +483,10 @@ def _chain(u, y0):
 
 
 def _feedback(u, y0):
-    """y = z^-nk B/A [u - N(y)], N(y) = sum c_m y^m (Lur'e form)."""
-    lin = MODEL["linear"]
+    """y = z^-nk B/A [u - N(y)], N(y) = sum c_m y^m or another static block (Lur'e form)."""
+    lin, fb = MODEL["linear"], MODEL["feedback"]
     a, b = [float(v) for v in lin["a"]], [float(v) for v in lin["b"]]
-    c = [float(v) for v in MODEL["feedback"]["coefficients"]]
+    c = [float(v) for v in fb["coefficients"]] if fb["kind"] == "polynomial" else None
     nk = int(lin["nk"])
     s = (u[:, 0] - _offsets("inputs")[0]).tolist()
     N = len(s)
@@ -504,6 +507,9 @@ def _feedback(u, y0):
                     break
                 acc += b[i] * v[t - nk - i]
             y[t] = acc
+        if c is None:
+            v[t] = s[t] - float(_static(fb, np.array([y[t]]))[0])
+            continue
         p = 0.0
         for m in range(len(c) - 1, -1, -1):
             p = p * y[t] + c[m]
@@ -547,7 +553,8 @@ def to_python_module(model: Any) -> str:
     """Source of a self-contained NumPy-only module that simulates ``model``.
 
     The module's ``simulate(u, y0=None)`` equals ``model.simulate(u, y_initial=y0)`` to
-    rounding (module docstring). Raises :class:`~blockid.errors.ParameterError` for a
+    rounding for ``y0`` of at most ``max_lag`` outputs (a longer one is cut to them:
+    module docstring). Raises :class:`~blockid.errors.ParameterError` for a
     model it cannot copy (a network, a user-defined block).
 
     Examples

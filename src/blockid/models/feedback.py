@@ -265,13 +265,14 @@ class LinearFeedback(OneLinearBlock, Model):
 
     @property
     def parameters(self) -> dict[str, Any]:
-        """``a``, ``b`` and ``c = [c_2..c_r]`` (another block: its own parameters under
-        ``feedback``)."""
+        """``a``, ``b`` and ``c = [c_2..c_r]`` (another block: its own parameters as
+        ``N.lower``, ``N.values``, ...)."""
         out: dict[str, Any] = {"a": self.a.tolist(), "b": self.b.tolist()}
         if self._polynomial:
             out["c"] = self.c.tolist()
-        else:
-            out["feedback"] = self.feedback.parameters
+        else:  # flat, as every model's parameters: numbers or lists of numbers
+            own = self.feedback.parameters.items()
+            out.update({f"N.{k}": v for k, v in own if not isinstance(v, bool)})
         return out
 
     # ------------------------------------------------------------------ vectors
@@ -388,6 +389,14 @@ class LinearFeedback(OneLinearBlock, Model):
                     y[t + 1 :] = np.nan
                     break
         return v
+
+    def block_inputs(self, u: Any) -> list[np.ndarray]:
+        """The signal entering each of :attr:`blocks` in a free run from rest: ``v = u -
+        N(y)`` into the linear block, ``y`` into the feedback block (relative to the
+        offsets)."""
+        s, y, n0 = self._start(u, None)
+        v = self._loop(s, y, n0)
+        return [v, y]
 
     def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
         """Free-run simulation; with ``y_initial`` the first ``max_lag`` outputs are set

@@ -105,6 +105,10 @@ def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> A
             ax.set_xlabel(f"u = {model.inputs[0]} (relative to the input offset)")
             ax.set_ylabel("w = N1(u)")
             which = "input block"
+        elif block is getattr(model, "feedback", None):
+            ax.set_xlabel(f"y = {model.outputs[0]} (relative to the output offset)")
+            ax.set_ylabel("N(y), fed back to the input")
+            which = "feedback block"
         elif block is model.output_block:
             ax.set_xlabel("x (output of the linear block)")
             ax.set_ylabel("y = N2(x) (relative to the output offset)")
