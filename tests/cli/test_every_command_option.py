@@ -615,6 +615,9 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
         width90 = doc["band"]["mean_width"]["y"]
         doc99 = _json(_run(command, model, f.csv, "--band", "0.99", "--json"))
         assert doc99["band"]["mean_width"]["y"] > width90  # a wider band for a higher level
+        # the band is that of the start from max_lag outputs, not of an estimated one
+        r = _run(command, model, f.csv, "--band", "0.9", "--initial-samples", "20", code=2)
+        assert "--initial-samples 20 starts from an estimated state" in r.stderr
 
     def initial_samples(f, calls):
         if command == "predict":  # a start of the free run only

@@ -19,6 +19,7 @@ from blockid.blocks import (
 )
 from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError, OrderError, ParameterError
+from blockid.fitting import fit_model
 from blockid.fitting.arx import fit_arx
 from blockid.fitting.checks import linear_baseline, simulation_mse
 from blockid.fitting.initial import (
@@ -211,3 +212,29 @@ def test_a_backlash_plant_with_negative_gain_is_reported():
     flipped = Dataset.from_arrays(u, -true.simulate(u)[:, 0])
     with pytest.raises(EstimationError, match="static gain from u is negative"):
         initial_estimate(flipped, "backlash", na=1, nb=1, nk=1)
+
+
+@pytest.mark.parametrize(
+    "block", [Saturation(-0.8, 0.6, 1.0), DeadZone(-0.2, 0.3, 1.0, 1.0)], ids=lambda b: b.kind
+)
+def test_a_hard_output_block_is_shaped_before_the_refinement(block):
+    """Output blocks not linear in their parameters start from the best shape of their
+    grid fitted to the linear start's x (a saturation left at its template (-1, 1)
+    refined into a local minimum 25 times the noise floor)."""
+    plant = Wiener("u", "y", output_block=block, na=2, nb=2, nk=1, a=[-1.2, 0.35], b=[1.0, 0.4])
+    rng = np.random.default_rng(0)
+    u = rng.normal(0.0, 0.08, 3000)
+    y = plant.simulate(u)[:, 0]
+    y = y + 0.01 * np.std(y) * rng.standard_normal(y.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    fit = fit_model(data, "wiener", na=2, nb=2, nk=1, output_block=block.kind)
+    gain = plant.b[0] / fit.model.b[0]  # the gain between the blocks is not identifiable
+    got = fit.model.output_block.parameters
+    assert simulation_mse(fit.model, data) < 1.05 * simulation_mse(plant, data)
+    if block.kind == "saturation":
+        assert got["lower"] == pytest.approx(-0.8, rel=0.02)
+        assert got["upper"] == pytest.approx(0.6, rel=0.02)
+        assert got["slope"] / gain == pytest.approx(1.0, rel=0.02)
+    else:
+        assert got["lower"] * gain == pytest.approx(-0.2, rel=0.03)
+        assert got["upper"] * gain == pytest.approx(0.3, rel=0.03)

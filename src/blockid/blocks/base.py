@@ -73,6 +73,10 @@ class Block(ABC):
     #: True when the block says nothing reliable outside the input range it was fitted
     #: on (polynomials); models then warn when data leave that range.
     warn_extrapolation: ClassVar[bool] = False
+    #: False for a block that sits at its signal's own zero and has no constant term
+    #: (dead zone, saturation): fits with it are then not centred by default, since the
+    #: mean that centring takes out would shift it off its place.
+    centred: ClassVar[bool] = True
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)

@@ -140,6 +140,7 @@ class DeadZone(_PlottableStaticBlock):
     """
 
     kind = "dead-zone"
+    centred = False  # the band sits at u = 0 of the signal as recorded
 
     def __init__(
         self, lower: float, upper: float, slope_left: float = 1.0, slope_right: float = 1.0
@@ -240,6 +241,7 @@ class Saturation(_PlottableStaticBlock):
     """
 
     kind = "saturation"
+    centred = False  # the linear part passes through the origin of the signal as recorded
 
     def __init__(self, lower: float, upper: float, slope: float = 1.0) -> None:
         self.lower = _float_scalar("lower", lower)
@@ -351,6 +353,13 @@ class PiecewiseLinear(_PlottableStaticBlock):
     @property
     def parameters(self) -> dict[str, Any]:
         return {"breakpoints": self.breakpoints.tolist(), "values": self.values.tolist()}
+
+    @property
+    def centred(self) -> bool:  # type: ignore[override]
+        """Breakpoints spread over the data (``knots``) move with the centring; given
+        breakpoints sit on the signal's own values, so a fit with them is not centred by
+        default (:attr:`Block.centred`)."""
+        return bool(getattr(self, "_spread", False))
 
     def _locate(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Segment index ``j`` (0..n-2) and position ``t`` of ``u`` in ``[β_j, β_j+1]``.

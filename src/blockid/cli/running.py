@@ -113,6 +113,13 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             rng,
             "--range",
         )
+        if band is not None and initial_samples is not None and initial_samples > model.max_lag:
+            raise ParameterError(
+                f"--band is the band of the simulation started from the first {model.max_lag} "
+                f"measured outputs (max_lag); --initial-samples {initial_samples} starts from an "
+                "estimated state instead. Drop one of them",
+                parameter="band",
+            )
         result = evaluate(model, data, mode, initial_samples=initial_samples)
         columns = {}
         if band is not None:

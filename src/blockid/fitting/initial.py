@@ -457,6 +457,37 @@ def _linear_start(
     return block.with_vector(b[0] * v), a, b / b[0]
 
 
+def _output_shape(start: Block, x: Sequence[np.ndarray], y: Sequence[np.ndarray]) -> Block | None:
+    """The output block not linear in its parameters (saturation, dead zone, free
+    breakpoints) fitted to ``y = N(x)`` over its :meth:`~Block.initial_grid` on the range
+    of ``x``: a family by least squares, a fixed shape ``s`` scaled by ``γ = s·y / s·s``
+    (kept where ``γ > 0``, which the blocks' positive slopes need); the best static fit,
+    or None without a grid. The linear block's gain is left alone: the gain between it
+    and the output block is the refinement's to share."""
+    xs, ys = np.concatenate(x), np.concatenate(y)
+    adapt = getattr(start, "adapted", None)
+    block = adapt(xs) if adapt is not None else start
+    best, best_sse = None, np.inf
+    for shape in block.initial_grid(xs):
+        try:
+            if isinstance(shape, LinearFamily):
+                G = np.asarray(shape.regressors(xs), dtype=float)
+                candidate = shape.build(np.linalg.lstsq(G, ys, rcond=None)[0])
+            else:
+                s = np.asarray(shape(xs), dtype=float)
+                gain = float(s @ ys) / float(s @ s) if s @ s > 0 else 0.0
+                if not gain > 0:
+                    continue
+                candidate = shape.scaled(gain)
+            with np.errstate(all="ignore"):
+                sse = float(np.sum((ys - np.asarray(candidate(xs), dtype=float)) ** 2))
+        except (BlockidError, np.linalg.LinAlgError):
+            continue
+        if sse < best_sse:
+            best, best_sse = candidate, sse
+    return best
+
+
 def _with_output_fit(
     model: BlockModel, u: Sequence[np.ndarray], y: Sequence[np.ndarray]
 ) -> tuple[BlockModel | None, np.ndarray]:
@@ -470,8 +501,11 @@ def _with_output_fit(
     n0 = model.max_lag
     x = [model.linear.simulate(model.internal(ui)) for ui in u]
     start = model.output_block
-    if not start.linear_in_parameters:  # no least-squares fit: the template stays
-        return None, np.concatenate(x)
+    if not start.linear_in_parameters:  # a shape search where the block has a grid
+        shaped = _output_shape(start, [xi[n0:] for xi in x], [yi[n0:] for yi in y])
+        if shaped is None:
+            return None, np.concatenate(x)
+        return _build(model, model.input_block, shaped, model.a, model.b), np.concatenate(x)
 
     def rows(xi: np.ndarray, yi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return start.regressors(xi[n0:]), yi[n0:]  # type: ignore[union-attr]

@@ -267,8 +267,8 @@ OPTIONS: dict[str, Option] = _options(
     Option(
         "output_block",
         "block",
-        "Output block: polynomial[:degree=N], piecewise-linear-free[:knots=N] or a user "
-        "block's kind.",
+        "Output block: polynomial[:degree=N], piecewise-linear-free[:knots=N], dead-zone, "
+        "saturation or a user block's kind.",
         metavar="KIND",
     ),
     Option(
@@ -426,9 +426,6 @@ class Structure:
     common: tuple[str, ...] = ()
     #: Fit around the operating point unless told otherwise.
     center_default: bool = False
-    #: Options that, when given, turn ``center_default`` off (a fed-back dead zone or
-    #: saturation sits at the signals' own zero, and has no constant to carry a mean).
-    uncentered_with: tuple[str, ...] = ()
     block_oriented: bool = True
     #: What :func:`~blockid.fitting.identify.identify` tries of this structure: option
     #: sets added to the linear orders, most telling first.
@@ -463,8 +460,11 @@ class Structure:
         )
 
     def centers(self, options: dict[str, Any]) -> bool:
-        """Whether a fit with ``options`` (no ``center`` among them) is centred."""
-        return self.center_default and all(options.get(k) is None for k in self.uncentered_with)
+        """Whether a fit with ``options`` (no ``center`` among them) is centred: by
+        default, unless a block given among the options sits at the signals' own zero
+        (``Block.centred = False``: a dead zone or a saturation has no constant to carry
+        the mean the centring takes out)."""
+        return self.center_default and all(getattr(v, "centred", True) for v in options.values())
 
     def accepted(self, method: str | None) -> tuple[str, ...]:
         """Options of this structure fitted by ``method``, in declaration order."""
@@ -647,7 +647,6 @@ STRUCTURES: dict[str, Structure] = {
             ),
             common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
-            uncentered_with=("feedback_block",),
             search=({"r": 3},),
             min_delay=1,
         ),
