@@ -206,8 +206,8 @@ def test_feedback_block_without_kind_is_refused_by_name():
     with pytest.raises(OrderError) as info:
         LinearFeedback("u", "y", linear=LinearBlock(1, 1, 1, a=[-0.5], b=[1.0]), feedback=object())
     assert str(info.value) == (
-        "the feedback block must be a Polynomial without constant (c_1 = 0), got object; "
-        "other static blocks are not supported in feedback"
+        "the feedback block must be a static block (polynomial, dead-zone, saturation, "
+        "piecewise-linear, ...), got object; a dynamic or linear block cannot be fed back"
     )
 
 
