@@ -61,15 +61,11 @@ def _regression(
     data: Dataset, na: int, nb: int, nk: int, r: int, n0: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """Equation-error regressors ``[-y(k-j), u(k-nk-i), -y(k-nk-i)^m]`` and ``y(k)``."""
-    rows, targets = [], []
-    for e in data.experiments:
-        u, y = e.u[:, 0], e.y[:, 0]
-        cols = [-_lagged(y, j, n0) for j in range(1, na + 1)]
-        cols += [_lagged(u, nk + i, n0) for i in range(nb)]
-        cols += [-(_lagged(y, nk + i, n0) ** m) for i in range(nb) for m in range(2, r + 1)]
-        rows.append(np.column_stack(cols))
-        targets.append(y[n0:])
-    return np.vstack(rows), np.concatenate(targets)
+
+    def powers(y: np.ndarray) -> np.ndarray:
+        return np.column_stack([y**m for m in range(2, r + 1)]) if r >= 2 else y[:, None][:, :0]
+
+    return _shape_regression(data, na, nb, nk, n0, powers)
 
 
 def _candidates(
@@ -130,11 +126,13 @@ def initial_feedback(
 def _shape_regression(
     data: Dataset, na: int, nb: int, nk: int, n0: int, basis: Any
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Regressors ``[-y(k-j), u(k-nk-i), -g_l(y(k-nk-i))]`` for a basis ``g(y)`` (N, p)."""
+    """Regressors ``[-y(k-j), u(k-nk-i), -g_l(y(k-nk-i))]`` for a basis ``g(y)`` (N, p)
+    (``p = 0``: the linear ARX), and the targets ``y(k)``."""
     rows, targets = [], []
     for e in data.experiments:
         u, y = e.u[:, 0], e.y[:, 0]
-        g = np.asarray(basis(y), dtype=float).reshape(y.size, -1)
+        g = np.asarray(basis(y), dtype=float)
+        g = g[:, None] if g.ndim == 1 else g
         cols = [-_lagged(y, j, n0) for j in range(1, na + 1)]
         cols += [_lagged(u, nk + i, n0) for i in range(nb)]
         cols += [-_lagged(g[:, m], nk + i, n0) for i in range(nb) for m in range(g.shape[1])]

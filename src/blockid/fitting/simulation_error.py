@@ -333,6 +333,7 @@ class _Problem:
         last = getattr(template, "last_linear_index", None)
         self.ranged = last is not None and last < len(template.blocks) - 1
         self.experiments = [(s.u, s.y) for s in segments]
+        self._ranged: tuple[np.ndarray, BlockModel] | None = None
 
     def model(self, theta: np.ndarray) -> BlockModel | None:
         """The model at ``theta`` (with its ranges on the estimation data where they
@@ -345,14 +346,22 @@ class _Problem:
             return None
         if not model.is_stable(STABILITY_MARGIN):
             return None
-        return self.with_ranges(model)
+        return self.with_ranges(model, theta)
 
-    def with_ranges(self, model: BlockModel) -> BlockModel:
-        """``model`` as the optimiser simulates it (see ``ranged``)."""
+    def with_ranges(self, model: BlockModel, theta: np.ndarray | None = None) -> BlockModel:
+        """``model`` as the optimiser simulates it (see ``ranged``); the model of the
+        last ``theta`` is kept, so the Jacobian at an accepted iterate does not record
+        the ranges its residuals just recorded."""
         if not self.ranged:
             return model
+        cached = self._ranged
+        if theta is not None and cached is not None and np.array_equal(cached[0], theta):
+            return cached[1]
         with np.errstate(all="ignore"):
-            return model.with_ranges(self.experiments)
+            model = model.with_ranges(self.experiments)
+        if theta is not None:
+            self._ranged = (theta.copy(), model)
+        return model
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
         self.tracker.nfev += 1
@@ -375,7 +384,7 @@ class _Problem:
 
     def jacobian(self, theta: np.ndarray) -> np.ndarray:
         """Jacobian at an accepted iterate; also the early-stopping monitor."""
-        model = self.with_ranges(self.template.with_free_parameters(theta))
+        model = self.with_ranges(self.template.with_free_parameters(theta), theta)
         n0 = self.n0
         blocks = []
         for s in self.segments:
@@ -389,7 +398,7 @@ class _Problem:
         """``(J^T J, J^T r)`` at an accepted iterate, summed piece by piece
         (:func:`sensitivity_chunks`) so that ``J`` is never formed; also the
         early-stopping monitor."""
-        model = self.with_ranges(self.template.with_free_parameters(theta))
+        model = self.with_ranges(self.template.with_free_parameters(theta), theta)
         n0, n = self.n0, theta.size
         H, g = np.zeros((n, n)), np.zeros(n)
         for s in self.segments:
