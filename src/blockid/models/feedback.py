@@ -33,7 +33,7 @@ Choices (and why):
   :meth:`~blockid.blocks.base.StaticBlock.feedback_mask` says (all, but the end
   breakpoints of a free piecewise-linear map). The piecewise-linear family runs in the
   compiled kernels (:func:`~blockid._kernels.feedback.feedback_simulate_table`); any
-  other block is evaluated one sample at a time in Python (correct, some 50 times
+  other block is evaluated one sample at a time in Python (correct, some 160 times
   slower). Their sensitivities use the block's own ``derivative`` and ``jacobian``
   (:func:`~blockid._kernels.feedback.feedback_sensitivity_given`). Such a block may
   have a slope at the operating point: :meth:`poles` are then those of
