@@ -53,7 +53,7 @@ from blockid.models import ARX, load_model, save_model
 
 # by their module paths: the package attributes of these names may be the functions
 _common = importlib.import_module("blockid.cli._common")
-_identify_module = importlib.import_module("blockid.fitting.identify")
+_identify_module = importlib.import_module("blockid.workflows.identify")
 _export_module = importlib.import_module("blockid.models.export")
 _stream_module = importlib.import_module("blockid.workflows.stream")
 _fleet_module = importlib.import_module("blockid.workflows.fleet")
@@ -195,13 +195,14 @@ def calls(monkeypatch) -> Calls:
 
 @functools.cache
 def _identified() -> Any:
-    """A real (small) result of :func:`blockid.fitting.identify.identify`: ARX only, on
+    """A real (small) result of :func:`blockid.workflows.identify.identify`: ARX only, on
     a record of the test plant; what the faked search returns to ``identify``."""
     rng = np.random.default_rng(3)
     u = rng.uniform(-1, 1, (N, 1))
     y = _plant().simulate(u) + 0.01 * rng.standard_normal((N, 1))
     data = Dataset.from_arrays(u, y, ["u"], ["y"])
-    return _real_identify(data, structures=["arx"], budget=20, max_order=2, max_delay=1)
+    tiny = _identify_module.Effort("tiny", 3, 2, 2, 1, 1, 1, 5, 10_000, 1, 10, 1)
+    return _real_identify(data, structures=["arx"], effort=tiny, jobs=1)
 
 
 def _in_process(seen: Calls, fit_fleet: Callable[..., Any]) -> Callable[..., Any]:
@@ -753,9 +754,25 @@ def identify_structures(f, calls):
     assert _searched(calls)[2]["structures"] == ["arx", "wiener"]
 
 
+def identify_effort(f, calls):
+    _identify(f, "--effort", "quick", "--json")
+    assert _searched(calls)[2]["effort"] == "quick"
+
+
+def identify_jobs(f, calls):
+    _identify(f, "--jobs", "1", "--json")
+    assert _searched(calls)[2]["jobs"] == 1
+
+
+def identify_time_limit(f, calls):
+    _identify(f, "--time-limit", "7.5", "--json")
+    assert _searched(calls)[2]["time_limit"] == 7.5
+
+
 def identify_budget(f, calls):
-    _identify(f, "--budget", "7.5", "--json")
-    assert _searched(calls)[2]["budget"] == 7.5
+    r = _identify(f, "--budget", "7.5", code=2)
+    assert "--effort" in r.stderr and "--time-limit" in r.stderr
+    assert "identify" not in calls
 
 
 def identify_out(f, calls):
@@ -824,7 +841,7 @@ def identify_force(f, calls):
 
 def identify_json(f, calls):
     plain = _identify(f).stdout
-    assert "candidates ranked by free-run RMSE" in plain
+    assert "candidates ranked by cross-validated free-run RMSE" in plain
     with mock.patch.object(_common, "sys", _OnATerminal()):
         doc = _json(_identify(f, "--json"))  # no progress bar either
     assert doc == json.loads(json.dumps(_identified().to_dict()))
@@ -1403,6 +1420,9 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("identify", "validation"): identify_validation,
     ("identify", "validation_data"): identify_validation_data,
     ("identify", "structures"): identify_structures,
+    ("identify", "effort"): identify_effort,
+    ("identify", "jobs"): identify_jobs,
+    ("identify", "time_limit"): identify_time_limit,
     ("identify", "budget"): identify_budget,
     ("identify", "out"): identify_out,
     ("identify", "plot"): identify_plot,

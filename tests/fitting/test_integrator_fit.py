@@ -9,13 +9,6 @@ from blockid.data import Dataset
 from blockid.errors import ParameterError
 from blockid.fitting import fit_model
 from blockid.fitting.checks import STABILITY_MARGIN, margin_notes
-from blockid.fitting.identify import (
-    Candidate,
-    Score,
-    _integrating_candidates,
-    _integrations,
-    identify,
-)
 from blockid.models import ARX, ChainModel
 
 LINEAR = LinearBlock(2, 2, 1, [-1.2, 0.35], [1.0, 0.4])  # poles 0.7 and 0.5
@@ -102,47 +95,6 @@ def test_the_option_is_checked_and_offered_where_it_applies():
         fit_model(data, "wiener", na=2, nb=2, nk=1, integrator=1)
     zero = fit_model(data, "output-error", na=2, nb=2, nk=1, integrator="0", max_nfev=3)
     assert _integrators(zero.model) == [] and "integrator" not in zero.settings
-
-
-def _arx_score(na, nb, nk, a):
-    model = ARX(["u"], ["y"], na, nb, nk, a={"y": {"y": a}}, b={"y": {"u": [1.0] * nb}})
-    return Score(Candidate("arx", {"na": na, "nb": nb, "nk": nk}), rmse=1.0, model=model)
-
-
-def test_the_search_counts_poles_near_one_in_the_kept_orders_only():
-    integrating = _arx_score(2, 1, 3, list(np.poly([0.999, 0.995])[1:]))
-    stable = _arx_score(2, 1, 1, list(np.poly([0.9, 0.5])[1:]))
-    assert _integrations([integrating, stable], [(2, 1, 1)]) == 0
-    assert _integrations([integrating, stable], [(2, 1, 1), (2, 1, 3)]) == 2
-    one = _arx_score(3, 2, 8, list(np.poly([0.9995, 0.96, -0.8])[1:]))
-    assert _integrations([one], [(3, 2, 8)]) == 1
-    out = _integrating_candidates(
-        ["arx", "output-error", "hammerstein", "wiener", "backlash"], [(3, 2, 8)], 30, 2
-    )
-    labels = [(c.structure, c.options["integrator"], c.options["na"], c.options["nk"]) for c in out]
-    assert labels == [
-        ("output-error", 1, 2, 7),
-        ("hammerstein", 1, 2, 7),
-        ("backlash", 1, 2, 7),
-        ("output-error", 2, 1, 7),
-        ("hammerstein", 2, 1, 7),
-        ("backlash", 2, 1, 7),
-    ]
-    assert _integrating_candidates(["output-error"], [(3, 2, 8)], 30, 0) == []
-
-
-def test_identify_tries_and_keeps_an_integrator_for_an_integrating_plant():
-    data = _record([LINEAR, Integrator(1)], n=1500, mean=0.0, noise=0.02, seed=1)
-    result = identify(data, structures=["arx", "output-error"], budget=60, max_order=3, max_delay=2)
-    assert any("integrates" in n for n in result.notes)
-    assert result.selected.candidate.options.get("integrator") == 1
-    assert _integrators(result.model) == [1]
-    # a plant that does not integrate gets no integrator candidates
-    plain = _record([LINEAR], n=1500, mean=0.0, noise=0.02, seed=1)
-    quiet = identify(plain, structures=["arx", "output-error"], budget=60, max_order=3,
-                     max_delay=2)  # fmt: skip
-    assert not any("integrates" in n for n in quiet.notes)
-    assert all("integrator" not in s.candidate.options for s in quiet.ranked + quiet.rejected)
 
 
 def test_polynomial_template_is_unaffected():

@@ -216,23 +216,3 @@ def test_default_fit_memory_stays_a_small_multiple_of_the_data(monkeypatch, rng)
         tracemalloc.stop()
     assert result.settings["solver"] == se.SOLVERS[True]
     assert peak < 8 * (u.nbytes + y.nbytes), f"peak {peak / 1e6:.1f} MB"
-
-
-def test_a_time_limit_stops_the_refinement_at_its_best_iterate_so_far(rng):
-    """Inside ``time_limit(0)`` a refinement stops at its first accepted iterate (the
-    start) and returns it, saying why; nested limits keep the earlier deadline, and
-    none applies outside."""
-    plant = chains()["hammerstein"]
-    u = rng.uniform(-1, 1, 3000)
-    y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(3000)
-    data = Dataset.from_arrays(u, y, ["u"], ["y"])
-    start = se.initial_estimate(data, Hammerstein, na=2, nb=2, nk=1, r1=2, r2=3)
-    free = se.refine(start, data, tail_fraction=0.0)
-    with se.time_limit(0.0), se.time_limit(3600.0):
-        stopped = se.refine(start, data, tail_fraction=0.0)
-    assert "time limit" in stopped.settings["stop_reason"]
-    assert "time limit" not in free.settings["stop_reason"]
-    assert stopped.settings["iterations"] == 0
-    assert stopped.settings["final_simulation_mse"] <= stopped.settings["initial_simulation_mse"]
-    assert free.settings["iterations"] > stopped.settings["iterations"]
-    assert se._DEADLINE.get() is None

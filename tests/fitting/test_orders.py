@@ -67,8 +67,8 @@ def test_recommends_the_true_orders_and_delay(name, snr_db):
 
 @pytest.mark.parametrize("name", list(PLANTS))
 def test_share_falls_as_orders_grow(name):
-    data, truth = plant_data(name)
-    ev = false_nearest_neighbours(data, max_na=4, max_nb=4, max_nk=3)
+    data, truth = plant_data(name)  # the classic test (no noise allowance) on clean data
+    ev = false_nearest_neighbours(data, max_na=4, max_nb=4, max_nk=3, noise=0.0)
     best = ev.best_over_delay()
     assert best[0, 0] > 90.0  # no output lag, one input lag: almost every neighbour false
     assert np.all(np.diff(best, axis=0) <= 0.5)  # more output lags: fewer false
@@ -197,3 +197,24 @@ def test_bad_data_are_refused_clearly():
     with pytest.raises(DataError, match="2 outputs .* name it"):
         false_nearest_neighbours(two)
     assert false_nearest_neighbours(two, output="y2", max_na=1, max_nb=1).recommended == (0, 1, 0)
+
+
+def test_the_noise_allowance_is_estimated_where_the_classic_test_asks_for_a_lag_too_many():
+    """A second-order Hammerstein plant at 40 dB (noise at 1 % of the output's spread),
+    driven by steps held for 4 samples: the classic test (noise 0) recommends na = 3,
+    the one-lag-less share just above the pass mark; the default estimates the noise
+    level (about 0.01) and recommends the plant's na = 2."""
+    from blockid.blocks import Polynomial
+    from blockid.models import Hammerstein
+
+    rng = np.random.default_rng(0)
+    plant = Hammerstein("u", "y", input_block=Polynomial([0.0, 1.0, 0.5, 0.3]), na=2, nb=2,
+                        nk=1, a=[-1.5, 0.7], b=[1.0, 0.4])  # fmt: skip
+    u = np.repeat(rng.uniform(-1, 1, 750), 4)
+    y = with_noise(plant.simulate(u)[:, 0], 40, rng)
+    data = Dataset.from_arrays(u, y)
+    classic = false_nearest_neighbours(data, noise=0.0)
+    auto = false_nearest_neighbours(data)
+    assert classic.recommended[0] == 3 and classic.settings["noise_estimated"] is False
+    assert auto.recommended[0] == 2 and auto.settings["noise_estimated"] is True
+    assert 0.005 < auto.settings["noise"] < 0.02

@@ -163,19 +163,20 @@ def test_standard_errors_in_the_shape_of_the_parameters_are_matched(hammerstein)
 
 def test_report_of_an_identify_result(hammerstein):
     from blockid.evaluation import evaluate
-    from blockid.fitting.identify import Candidate, IdentifyResult, Score
     from blockid.reporting import build_report
+    from blockid.workflows.identify import Candidate, IdentifyResult, Score
 
     data, est, val, result = hammerstein
     fit = result.models[0].fit
     chosen = Score(Candidate("hammerstein", {"na": 3, "nb": 3, "nk": 8}), rmse=0.02,
-                   fit_percent=75.0, n_parameters=13, stage="final", model=fit.model)  # fmt: skip
+                   fit_percent=75.0, n_parameters=13, stage="final")  # fmt: skip
     rejected = Score(Candidate("wiener", {"r2": 3}), stage="screen", reason="unstable")
     identified = IdentifyResult(
         selected=chosen, fit=fit, ranked=[chosen], rejected=[rejected],
         simulation=evaluate(fit.model, val, "simulation"),
         one_step=evaluate(fit.model, val, "one-step"), one_step_error=None,
-        on="validation", seconds=1.5, holdout="last 25 % of the record held out (825:)",
+        on="validation", seconds=1.5, holdout="4 contiguous folds (blocked cross-validation)",
+        search={"effort": "quick", "cut_by_time_limit": True},
     )  # fmt: skip
     html = build_report(
         identify=identified, data=data, estimation=est, validation=val,
@@ -184,6 +185,7 @@ def test_report_of_an_identify_result(hammerstein):
     assert "<h2>Search of identify()</h2>" in html
     assert "identify: hammerstein(na=3, nb=3, nk=8)" in html
     assert "<td>unstable</td>" in html
+    assert "effort quick" in html and "The time limit cut the search" in html
     assert "free-run simulation on the validation range 1100:2200" in html
     assert len(IMG.findall(html)) == 3  # data, output, blocks (one model: no bar chart)
     apart = build_report(identify=identified, estimation=est, validation=val)  # no record

@@ -73,10 +73,27 @@ class Block(ABC):
     #: True when the block says nothing reliable outside the input range it was fitted
     #: on (polynomials); models then warn when data leave that range.
     warn_extrapolation: ClassVar[bool] = False
-    #: False for a block that sits at its signal's own zero and has no constant term
-    #: (dead zone, saturation): fits with it are then not centred by default, since the
-    #: mean that centring takes out would shift it off its place.
+    #: False for a block whose form sits at given values of its signal (a piecewise-linear
+    #: map with given breakpoints): fits with it are then never centred by default, since
+    #: centring would move the signal off those values.
     centred: ClassVar[bool] = True
+    #: How ``identify`` searches the block: ``{role: spec}`` for each role it takes in a
+    #: structure's slots (``"input"``, ``"output"``, ``"feedback"``), the spec as
+    #: :func:`block_template` reads it. Empty: not searched. A user's block that declares
+    #: it is searched like the built-in ones.
+    search_specs: ClassVar[dict[str, str]] = {}
+    #: The spec option that sets the block's richness (``"degree"``, ``"knots"``), grown by
+    #: ``identify`` while the held-out error falls; None: fixed form.
+    size_option: ClassVar[str | None] = None
+    #: Order among the families of a slot in the search (smaller first; the smallest is
+    #: the slot's default when another slot is varied).
+    search_priority: ClassVar[int] = 100
+    #: True for a block whose form sits at its input's zero (a dead zone's band, a
+    #: saturation's centre, a two-segment polynomial's break): a fit with it is on the
+    #: signal as recorded when that takes both signs (the zero is then where the plant
+    #: has it), around the operating point when not (a 2-10 V signal has no use for a
+    #: break at 0 V) (:func:`blockid.fitting.dispatch.default_centring`).
+    anchored: ClassVar[bool] = False
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)

@@ -12,7 +12,7 @@ the simulation-error refinement then moves the breakpoints with the analytic Jac
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -75,6 +75,13 @@ class FreePiecewiseLinear(PiecewiseLinear):
     """
 
     kind = "piecewise-linear-free"
+    search_specs: ClassVar[dict[str, str]] = {
+        "input": "piecewise-linear-free:knots=5",
+        "output": "piecewise-linear-free:knots=5",
+        "feedback": "piecewise-linear-free:knots=5",
+    }
+    size_option: ClassVar[str | None] = "knots"
+    search_priority: ClassVar[int] = 2
     linear_in_parameters = False
 
     # ------------------------------------------------------------------ parameters

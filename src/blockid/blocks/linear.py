@@ -159,6 +159,21 @@ class LinearBlock(Block):
         den = 1.0 + float(np.sum(self.a))
         return float(np.sum(self.b)) / den if den != 0 else float("inf")
 
+    @property
+    def integrates(self) -> int:
+        """How many integrations the block holds by construction: 0 for a fitted linear
+        block (:class:`~blockid.blocks.integrator.Integrator` overrides it)."""
+        return 0
+
+    def zeros(self) -> np.ndarray:
+        """Roots of ``z^{nb-1} B(z^{-1})`` (the finite zeros besides those of the delay).
+
+        >>> LinearBlock(1, 2, 1, a=[-0.5], b=[1.0, -0.25]).zeros().tolist()
+        [0.25]
+        """
+        b = np.trim_zeros(self.b, "f")
+        return np.roots(b) if b.size > 1 else np.zeros(0)
+
     def simulate(self, w: np.ndarray, x_init: np.ndarray | None = None) -> np.ndarray:
         """Output for input ``w``; the first ``len(x_init)`` (at most ``max_lag``) outputs
         are set to ``x_init``, else the block starts at rest (zero before ``k = 0``)."""

@@ -11,7 +11,7 @@ Both are linear in their parameters: ``regressors(u) @ to_vector() == block(u)``
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.polynomial import polynomial as npoly
@@ -107,6 +107,13 @@ class Polynomial(_PlottableStaticBlock):
     """
 
     kind = "polynomial"
+    search_specs: ClassVar[dict[str, str]] = {
+        "input": "polynomial:degree=3",
+        "output": "polynomial:degree=3",
+        "feedback": "polynomial:degree=3",
+    }
+    size_option: ClassVar[str | None] = "degree"
+    search_priority: ClassVar[int] = 0
     linear_in_parameters = True
     warn_extrapolation = True
 
@@ -455,6 +462,10 @@ class TwoSegmentPolynomial(_PlottableStaticBlock):
     """
 
     kind = "two-segment-polynomial"
+    anchored: ClassVar[bool] = True
+    search_specs: ClassVar[dict[str, str]] = {"input": "two-segment-polynomial:degree=3"}
+    size_option: ClassVar[str | None] = "degree"
+    search_priority: ClassVar[int] = 1
     linear_in_parameters = True
     warn_extrapolation = True
 

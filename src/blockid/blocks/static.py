@@ -12,7 +12,7 @@ conversion, and the :meth:`plot` hand-off to :func:`blockid.plotting.blocks.plot
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -140,7 +140,13 @@ class DeadZone(_PlottableStaticBlock):
     """
 
     kind = "dead-zone"
-    centred = False  # the band sits at u = 0 of the signal as recorded
+    anchored: ClassVar[bool] = True
+    search_specs: ClassVar[dict[str, str]] = {
+        "input": "dead-zone",
+        "output": "dead-zone",
+        "feedback": "dead-zone",
+    }
+    search_priority: ClassVar[int] = 4
 
     def __init__(
         self, lower: float, upper: float, slope_left: float = 1.0, slope_right: float = 1.0
@@ -241,7 +247,13 @@ class Saturation(_PlottableStaticBlock):
     """
 
     kind = "saturation"
-    centred = False  # the linear part passes through the origin of the signal as recorded
+    anchored: ClassVar[bool] = True
+    search_specs: ClassVar[dict[str, str]] = {
+        "input": "saturation",
+        "output": "saturation",
+        "feedback": "saturation",
+    }
+    search_priority: ClassVar[int] = 3
 
     def __init__(self, lower: float, upper: float, slope: float = 1.0) -> None:
         self.lower = _float_scalar("lower", lower)
@@ -334,6 +346,9 @@ class PiecewiseLinear(_PlottableStaticBlock):
     """
 
     kind = "piecewise-linear"
+    search_specs: ClassVar[dict[str, str]] = {"input": "piecewise-linear:knots=7"}
+    size_option: ClassVar[str | None] = "knots"
+    search_priority: ClassVar[int] = 5
     linear_in_parameters = True
 
     def __init__(self, breakpoints: Sequence[float], values: Sequence[float]) -> None:

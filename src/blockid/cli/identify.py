@@ -1,6 +1,6 @@
 """``blockid identify``: choose structure, orders and nonlinearity from the data alone.
 
-The search runs in :func:`blockid.fitting.identify.identify`; this command reads the
+The search runs in :func:`blockid.workflows.identify.identify`; this command reads the
 data, shows progress on a terminal, prints the ranked table (or one JSON document) and
 saves the chosen model.
 """
@@ -85,9 +85,28 @@ def identify(
         str | None,
         typer.Option(metavar="S,S", help="Structures to search (default: all registered)."),
     ] = None,
+    effort: Annotated[
+        str,
+        typer.Option(
+            metavar="quick|standard|thorough",
+            help="Size of the search (docs/identify.md); the same effort on the same data "
+            "gives the same model on any machine.",
+        ),
+    ] = "standard",
+    jobs: Annotated[
+        int | None,
+        typer.Option(metavar="N", help="Worker processes (default: every core)."),
+    ] = None,
+    time_limit: Annotated[
+        float | None,
+        typer.Option(
+            metavar="SECONDS",
+            help="Safety cap: no new fit starts after it (the result then says it was cut).",
+        ),
+    ] = None,
     budget: Annotated[
-        float, typer.Option(metavar="SECONDS", help="Time for the search (the refit is extra).")
-    ] = 600.0,
+        float | None, typer.Option(hidden=True, help="Replaced by --effort and --time-limit.")
+    ] = None,
     out: Annotated[
         Path | None, typer.Option("--out", "-o", metavar="FILE", help="Model file to write.")
     ] = None,
@@ -103,13 +122,21 @@ def identify(
     json_out: Json = False,
 ) -> None:
     """Search structures, orders, delays and nonlinearities; keep the best by free-run
-    simulation on a held-back part of the ESTIMATION data; refit it on all of them.
+    simulation on held-back folds of the ESTIMATION data; refit it on all of them.
 
     Validation data (--validation or --validation-data) are only reported on.
     """
     from blockid.errors import ParameterError
-    from blockid.fitting.identify import identify as run_identify
+
+    if budget is not None:
+        raise ParameterError(
+            "--budget is gone: the search is a fixed amount of work (--effort quick, "
+            "standard or thorough) so that it gives the same model on any machine; "
+            "--time-limit SECONDS caps it",
+            parameter="budget",
+        )
     from blockid.models import save_model
+    from blockid.workflows.identify import identify as run_identify
 
     if validation and validation_data:
         raise ParameterError("give --validation or --validation-data, not both")
@@ -129,11 +156,12 @@ def identify(
         val = load_data(validation_data, inputs, outputs, ts, time_column, experiment_column)
     names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
     bar, update = _progress(quiet or json_out)
+    options = dict(structures=names, effort=effort, jobs=jobs, time_limit=time_limit)
     if bar is not None:
         with bar:
-            result = run_identify(est, val, structures=names, budget=budget, progress=update)
+            result = run_identify(est, val, progress=update, **options)
     else:
-        result = run_identify(est, val, structures=names, budget=budget)
+        result = run_identify(est, val, **options)
     record = result.fit.estimation_record()
     record["identify"] = {k: v for k, v in result.to_dict().items() if k != "models"}
     if out is not None:
@@ -165,14 +193,14 @@ def _print(result: Any) -> None:
     from rich.table import Table
 
     table = Table(
-        title=f"candidates ranked by free-run RMSE on the hold-out ({result.holdout})",
+        title=f"candidates ranked by cross-validated free-run RMSE ({result.holdout})",
         title_justify="left",
     )
-    for col in ("", "structure and options", "stage", "RMSE", "fit %", "params", "s"):
+    for col in ("", "structure and options", "stage", "CV RMSE", "fit %", "params", "s"):
         table.add_column(col, justify="left" if col in ("", "structure and options") else "right")
     for i, s in enumerate(result.ranked[:15]):
         table.add_row(
-            "*" if i == 0 else "",
+            "*" if i == 0 else ("!" if s.flags else ""),
             escape(s.candidate.label),
             s.stage,
             f"{s.rmse:.4g}",
@@ -181,7 +209,12 @@ def _print(result: Any) -> None:
             f"{s.seconds:.1f}",
         )
     stdout.print(table)
-    stdout.print("* the selected model, refitted on all estimation data")
+    stdout.print(
+        "* the selected model, refitted on all estimation data; ! flagged (see the JSON "
+        "or the report)"
+    )
+    for flag in result.selected.flags:
+        stdout.print(f"flag on the selected model: {flag}", markup=False, soft_wrap=True)
     if result.rejected:
         stdout.print(f"{len(result.rejected)} candidate(s) rejected, e.g.:")
         for s in result.rejected[:5]:
@@ -195,4 +228,9 @@ def _print(result: Any) -> None:
         stdout.print(metrics_table(f"one-step prediction on {where}", rows))
     for note in result.notes:
         stdout.print(f"note: {note}", markup=False, soft_wrap=True)
-    stdout.print(f"search took {result.seconds:.1f} s")
+    search = result.search
+    cut = " (cut by the time limit)" if search.get("cut_by_time_limit") else ""
+    stdout.print(
+        f"search: effort {search.get('effort')}, {search.get('jobs')} job(s), "
+        f"{result.seconds:.1f} s{cut}"
+    )

@@ -22,7 +22,7 @@ from blockid.cli._common import (
     print_json,
     stdout,
 )
-from blockid.errors import BlockidError
+from blockid.errors import BlockidError, ParameterError
 from blockid.fitting.order_defaults import DEFAULTS
 
 __all__ = ["orders"]
@@ -60,8 +60,11 @@ def orders(
         typer.Option(metavar="PERCENT", help="Pass mark: share of false neighbours."),
     ] = DEFAULTS["threshold"],
     noise: Annotated[
-        float,
-        typer.Option(metavar="FRACTION", help="Noise bound, fraction of each signal's spread."),
+        str,
+        typer.Option(
+            metavar="FRACTION|auto",
+            help="Noise bound, fraction of each signal's spread; auto: estimated from the data.",
+        ),
     ] = DEFAULTS["noise"],
     json_out: Json = False,
 ) -> None:
@@ -74,10 +77,21 @@ def orders(
     """
     from blockid.fitting.orders import false_nearest_neighbours
 
+    level: float | str = noise
+    if noise.strip().lower() != "auto":
+        try:
+            level = float(noise)
+        except ValueError:
+            raise ParameterError(
+                f"--noise must be a fraction of each signal's spread (e.g. 0.01) or auto, "
+                f"got {noise!r}",
+                parameter="noise",
+            ) from None
+
     data = load_data(data_paths, inputs, [output], ts, time_column, experiment_column, estimation)
     try:
         evidence = false_nearest_neighbours(
-            data, max_na=max_na, max_nb=max_nb, max_nk=max_nk, threshold=threshold, noise=noise
+            data, max_na=max_na, max_nb=max_nb, max_nk=max_nk, threshold=threshold, noise=level
         )
     except BlockidError as exc:
         name = _FLAGS.get(exc.parameter or "")

@@ -12,7 +12,7 @@ from blockid.data.dataset import Dataset
 from blockid.errors import DataError, ParameterError
 from blockid.evaluation.metrics import json_safe, metrics_by_output, undefined_notes
 
-__all__ = ["MODES", "ModelOutput", "evaluate"]
+__all__ = ["MODES", "ModelOutput", "evaluate", "score_model"]
 
 #: ``mode -> column suffix``: free-run simulation and one-step-ahead prediction.
 MODES = {"simulation": "sim", "one-step": "pred"}
@@ -141,6 +141,19 @@ def evaluate(
                     prefix = f"{model_part[0]}: " if model_part[0] else ""
                     warnings.append(f"{prefix}{note} (experiment {exp.name!r})")
     return ModelOutput(mode, data, outputs, skip, metrics, warnings, n_init)
+
+
+def score_model(model: Any, data: Dataset) -> tuple[ModelOutput, ModelOutput | None, str | None]:
+    """The scores ``compare`` and ``identify`` report: free-run simulation and one-step
+    prediction on ``data`` (a model that cannot predict one step ahead, such as a
+    network fed by simulated signals, gives None and the reason)."""
+    from blockid.errors import BlockidError
+
+    simulation = evaluate(model, data, "simulation")
+    try:
+        return simulation, evaluate(model, data, "one-step"), None
+    except BlockidError as exc:
+        return simulation, None, str(exc)
 
 
 def _initial_samples(value: Any, mode: str, data: Dataset) -> int | None:

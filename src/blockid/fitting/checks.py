@@ -8,13 +8,20 @@ data; blockid reports that instead of handing out a bad model. A model is accept
   ``1 - STABILITY_MARGIN`` (0.999). A pole on the unit circle (e.g. at -1, an
   undamped oscillation at the Nyquist frequency) can look harmless on estimation data
   and ring on any other record,
-* its free-run simulation on the estimation data is finite and does not explode, and
+* its free-run simulation on the estimation data is finite and does not explode,
+and
 * that simulation is not worse than a plain linear ARX of the same orders fitted by
   least squares (at most ``max_mse_ratio`` = 1.1 times its MSE). A block-oriented model
   contains the linear one; if it simulates worse, the estimator failed (e.g. AW-RLS
   stalled on a wrong backlash that still beat a linear model by a margin).
 
-One more look does not reject the model but warns (:func:`linear_block_notes`): a
+Two more looks do not reject the model but warn. :func:`rest_notes`: its free run from
+rest (its zero state) on the estimation input strays from the measured output by more
+than ``MAX_REST_RATIO`` (5) times their difference at the first sample plus the
+output's range (:func:`blockid.evaluation.trust.rest_ratio`): a fit can match the data
+from measured initial outputs and still run away from rest (a Wiener fit of paper B's
+arm with an output cubic of 9704 x^3 does), so it should be started from measured
+outputs; ``identify`` rejects such candidates. And (:func:`linear_block_notes`): a
 static block that is affine to within ``LINEARITY_TOLERANCE`` of its output spread over
 the estimation data makes the block-oriented model a linear one in disguise (a
 Hammerstein fit that stayed at its ARX start, input-block coefficients ~1e-19; a block
@@ -46,6 +53,7 @@ __all__ = [
     "check_model",
     "linear_block_notes",
     "margin_notes",
+    "rest_notes",
 ]
 
 #: Poles must lie inside the circle of radius ``1 - STABILITY_MARGIN``.
@@ -139,6 +147,24 @@ def check_model(
         [model.simulate(e.u, e.y[: model.max_lag])[model.max_lag :] for e in data.experiments]
     )
     return metrics_by_output(y, y_sim, data.outputs)
+
+
+def rest_notes(model: Any, data: Dataset) -> list[str]:
+    """A warning when the model's free run from rest runs away (module notes)."""
+    from blockid.evaluation.trust import MAX_REST_RATIO, rest_ratio
+
+    with np.errstate(all="ignore"):
+        ratio = max(rest_ratio(model, e.u, e.y) for e in data.experiments)
+    if ratio <= MAX_REST_RATIO:
+        return []
+    how = "is not finite" if not np.isfinite(ratio) else f"strays {ratio:.3g} times"
+    return [
+        f"the model's free run from rest on the estimation input {how} further from the "
+        f"measured output than its start and the output's range explain (limit "
+        f"{MAX_REST_RATIO:g}): it fits from measured initial outputs but runs away from "
+        "rest; start its simulations from measured outputs (blockid simulate "
+        "--initial-samples N), or try lower orders or another block"
+    ]
 
 
 def margin_notes(model: Any) -> list[str]:

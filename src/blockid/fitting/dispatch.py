@@ -12,7 +12,8 @@ free-run simulation error, started from that method's estimate.
 estimation data: the means of input and output are subtracted before estimation and
 kept in the model as its offsets. It is the default for Wiener models, which have no
 constant term anywhere and could not otherwise fit an output that does not vanish with
-the input. (ARX handles ``center`` itself.)
+the input, and for blocks anchored at their signal's zero whose signal does not take
+both signs (:func:`default_centring`). (ARX handles ``center`` itself.)
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset, Experiment
-from blockid.errors import ParameterError
+from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.registry import OPTIONS, STRUCTURES, Structure, get_structure
 from blockid.fitting.result import FitResult
 
@@ -34,6 +35,9 @@ __all__ = [
     "accepted_options",
     "fit_model",
     "resolve_options",
+    "default_centring",
+    "run_method",
+    "takes_both_signs",
 ]
 
 #: ``structure -> method names`` (default first), generated from the registry.
@@ -102,16 +106,24 @@ def fit_model(
         result = _run(decl, method, data, options)
     else:
         center = options.pop("center", None)
-        if center if center is not None else decl.centers(options):
+        if center if center is not None else default_centring(decl, options, data):
             result = _centered(data, decl, method, refine, options)
         else:
-            result = _fit_block(data, decl, method, refine, options)
+            try:
+                result = _fit_block(data, decl, method, refine, options)
+            except EstimationError as exc:
+                hint = _centring_hint(options)
+                if not hint:
+                    raise
+                hinted = EstimationError(f"{exc}{hint}")
+                hinted.__dict__.update(exc.__dict__)  # e.g. the trajectories up to a failure
+                raise hinted from None
         if not result.model.ranges:  # the one place ranges are recorded for every method
             model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
             result = replace(result, model=model)
-    from blockid.fitting.checks import linear_block_notes
+    from blockid.fitting.checks import linear_block_notes, rest_notes
 
-    notes = linear_block_notes(result.model, data)
+    notes = linear_block_notes(result.model, data) + rest_notes(result.model, data)
     if notes:
         warnings = [*result.settings.get("warnings", []), *notes]
         result = replace(result, settings={**result.settings, "warnings": warnings})
@@ -122,10 +134,78 @@ def fit_model(
     return result
 
 
+def run_method(decl: Structure, method: str, data: Dataset, options: dict[str, Any]) -> FitResult:
+    """Run ``method`` of structure ``decl`` on ``data`` with converted ``options``: the
+    registry's ``target`` function, given ``structure``/``method`` where it takes them,
+    or the integrator fit (:mod:`blockid.fitting.integrator`) when ``integrator > 0``."""
+    options = dict(options)
+    integrations = options.pop("integrator", 0)
+    if integrations:
+        from blockid.fitting.integrator import fit_with_integrator
+
+        return fit_with_integrator(decl, method, data, integrations, options, run_method)
+    chosen = decl.method(method)
+    extra = {"structure": decl.name, "method": chosen.name}
+    extra = {k: v for k, v in extra.items() if k in chosen.passes}
+    return chosen.function()(data, **extra, **options)
+
+
+def takes_both_signs(values: np.ndarray) -> bool:
+    """At least 5 % of the samples on each side of zero."""
+    values = np.asarray(values, dtype=float)
+    return bool(np.mean(values < 0) >= 0.05 and np.mean(values > 0) >= 0.05)
+
+
+def default_centring(decl: Structure, options: dict[str, Any], data: Dataset) -> bool:
+    """Whether a fit of ``decl`` with converted ``options`` and no ``center`` is centred.
+
+    * never, with a block placed at given values of its signal (``Block.centred`` False:
+      a piecewise-linear map with given breakpoints);
+    * with anchored blocks (``Block.anchored``: a dead zone, a saturation, a two-segment
+      polynomial, whose form sits at its signal's zero), centred exactly when none of
+      their signals (the input for an input block, the output for an output or a
+      feedback block) takes both signs: a 2-10 V output has no use for a saturation
+      centred at 0 V, a valve current of both signs has its break at 0 A;
+    * otherwise the structure's default (``center_default``).
+    """
+    from blockid.blocks.base import Block
+
+    roles = {option: role for role, option in decl.slots}
+    blocks = [(k, v) for k, v in options.items() if isinstance(v, Block)]
+    if any(not v.centred for _, v in blocks):
+        return False
+    anchored = [roles.get(k, "input") for k, v in blocks if v.anchored]
+    if not anchored:
+        return decl.center_default
+    column = {"input": lambda e: e.u[:, 0], "output": lambda e: e.y[:, 0]}
+    for role in anchored:
+        signal = np.concatenate([column["input" if role == "input" else "output"](e)
+                                 for e in data.experiments])  # fmt: skip
+        if takes_both_signs(signal):
+            return False
+    return True
+
+
+def _centring_hint(options: dict[str, Any]) -> str:
+    """What to try when an uncentred fit with a block anchored at its signal's zero (or
+    at given values) failed: centring, which the default left off."""
+    from blockid.blocks.base import Block
+
+    blocks = [v for v in options.values() if isinstance(v, Block) and (v.anchored or not v.centred)]
+    if not blocks:
+        return ""
+    kinds = ", ".join(sorted({b.kind for b in blocks}))
+    return (
+        f". The fit was not centred (the {kinds} block sits at its signal's own zero or "
+        "values): if the plant's nonlinearity sits at the operating point instead, try "
+        "center=True (--center true)"
+    )
+
+
 def _run(decl: Structure, method: str, data: Dataset, options: dict[str, Any]) -> FitResult:
     if options.pop("convergence_check", True) is False:
         options["max_mse_ratio"] = None  # the check switched off
-    return decl.method(method).run(data, decl.name, options)
+    return run_method(decl, method, data, options)
 
 
 def _fit_block(

@@ -10,7 +10,7 @@ DEFAULTS = {
     "max_nk": 3,
     "r_tol": 2.0,
     "a_tol": 2.0,
-    "noise": 0.0,
+    "noise": "auto",
     "threshold": 1.0,
     "max_points": 2000,
     "exclude": 0,

@@ -27,8 +27,13 @@ feedback               simulation-error                            simulation-er
 
 ``integrator`` (output-error, hammerstein, backlash, wiener-hammerstein with method
 simulation-error) puts an :class:`~blockid.blocks.integrator.Integrator` after the last
-linear block, for plants that integrate; :meth:`Method.run` wires it for any such method
-(:func:`_fit_with_integrator`).
+linear block, for plants that integrate; :func:`blockid.fitting.dispatch.run_method`
+wires it for any such method (:mod:`blockid.fitting.integrator`).
+
+``identify``'s search space is declared here too: a structure's ``search_rank`` puts it
+in the default search, its ``slots`` name the block options every block family fills
+(:attr:`blockid.blocks.base.Block.search_specs`), and ``search`` adds fixed option sets.
+A new structure or block is searched without editing the search.
 
 Modules are named as text and imported only when a fit runs, so that importing the
 registry (and starting the command line) stays cheap.
@@ -54,6 +59,7 @@ __all__ = [
     "get_structure",
     "option_flag",
     "parse_orders",
+    "searched_structures",
 ]
 
 
@@ -387,9 +393,10 @@ def option_flag(name: str) -> str:
 class Method:
     """An estimator of a structure: the function that runs it and the options it takes.
 
-    ``target`` is ``"module:function"``; the function is called as
-    ``function(data, structure=..., method=..., **options)`` through :meth:`run`, the
-    keywords ``structure``/``method`` only where ``passes`` names them.
+    ``target`` is ``"module:function"``; :func:`blockid.fitting.dispatch.run_method`
+    calls it as ``function(data, structure=..., method=..., **options)``, the keywords
+    ``structure``/``method`` only where ``passes`` names them. The registry only
+    declares: nothing here runs a fit.
     """
 
     name: str
@@ -403,15 +410,6 @@ class Method:
     def function(self) -> Callable[..., Any]:
         module, name = self.target.split(":")
         return getattr(importlib.import_module(module), name)
-
-    def run(self, data: Any, structure: str, options: dict[str, Any]) -> Any:
-        options = dict(options)
-        integrations = options.pop("integrator", 0)
-        if integrations:
-            return _fit_with_integrator(self, data, structure, integrations, options)
-        extra = {"structure": structure, "method": self.name}
-        extra = {k: v for k, v in extra.items() if k in self.passes}
-        return self.function()(data, **extra, **options)
 
 
 @dataclass(frozen=True)
@@ -427,8 +425,15 @@ class Structure:
     #: Fit around the operating point unless told otherwise.
     center_default: bool = False
     block_oriented: bool = True
-    #: What :func:`~blockid.fitting.identify.identify` tries of this structure: option
-    #: sets added to the linear orders, most telling first.
+    #: Place in ``identify``'s default search (smaller first); None: searched only when
+    #: asked for by name. The search list is this field, never a list of names.
+    search_rank: int | None = None
+    #: The block slots ``identify`` fills with every block family that declares the
+    #: role (:attr:`blockid.blocks.base.Block.search_specs`): ``(role, option)`` pairs,
+    #: e.g. ``("input", "input_block")``.
+    slots: tuple[tuple[str, str], ...] = ()
+    #: Option sets ``identify`` adds to the linear orders (and to the slots' blocks),
+    #: most telling first.
     search: tuple[dict[str, Any], ...] = ({},)
     #: Smallest input delay the structure's fit takes (a loop needs one sample).
     min_delay: int = 0
@@ -458,13 +463,6 @@ class Structure:
             f"method={name!r} does not apply to {self.name}; choose one of "
             f"{', '.join(self.method_names)}"
         )
-
-    def centers(self, options: dict[str, Any]) -> bool:
-        """Whether a fit with ``options`` (no ``center`` among them) is centred: by
-        default, unless a block given among the options sits at the signals' own zero
-        (``Block.centred = False``: a dead zone or a saturation has no constant to carry
-        the mean the centring takes out)."""
-        return self.center_default and all(getattr(v, "centred", True) for v in options.values())
 
     def accepted(self, method: str | None) -> tuple[str, ...]:
         """Options of this structure fitted by ``method``, in declaration order."""
@@ -546,6 +544,7 @@ STRUCTURES: dict[str, Structure] = {
                 ),
             ),
             block_oriented=False,
+            search_rank=0,
         ),
         Structure(
             "hammerstein",
@@ -553,12 +552,8 @@ STRUCTURES: dict[str, Structure] = {
             "static input block, then a linear block (N1-L)",
             _block_methods(("r1", "input_block", "integrator"), _key_term(("r1",))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
-            search=(
-                {"input_block": "polynomial:degree=3", "center": True},
-                {"input_block": "piecewise-linear:knots=7", "center": True},
-                {"r1": 3, "center": False},
-                {"r1": 3, "center": True},
-            ),
+            search_rank=3,
+            slots=(("input", "input_block"),),
         ),
         Structure(
             "wiener",
@@ -567,7 +562,8 @@ STRUCTURES: dict[str, Structure] = {
             _block_methods(("r2", "output_block"), _key_term(("r2",))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
             center_default=True,
-            search=({"r2": 3},),
+            search_rank=4,
+            slots=(("output", "output_block"),),
         ),
         Structure(
             "hammerstein-wiener",
@@ -575,7 +571,8 @@ STRUCTURES: dict[str, Structure] = {
             "input block, linear block, output block (N1-L-N2, paper B)",
             _block_methods(("r1", "r2", "input_block", "output_block"), _key_term(("r1", "r2"))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
-            search=({"r1": 3, "r2": 3, "center": False},),
+            search_rank=5,
+            slots=(("input", "input_block"), ("output", "output_block")),
         ),
         Structure(
             "backlash",
@@ -593,6 +590,7 @@ STRUCTURES: dict[str, Structure] = {
             ),
             common=_ORDERS + ("center", "refine", "standard_errors"),
             min_delay=1,
+            search_rank=7,
         ),
         Structure(
             "output-error",
@@ -612,6 +610,7 @@ STRUCTURES: dict[str, Structure] = {
             # an input offset: the velocity of an integrating plant need not vanish at
             # the mean input, so the start carries an affine input block
             integrator_start=("hammerstein", {"input_block": "polynomial:degree=1"}),
+            search_rank=1,
         ),
         Structure(
             "wiener-hammerstein",
@@ -630,6 +629,7 @@ STRUCTURES: dict[str, Structure] = {
             center_default=True,
             search=({"r2": 5},),
             proper=True,
+            search_rank=6,
         ),
         Structure(
             "feedback",
@@ -647,69 +647,23 @@ STRUCTURES: dict[str, Structure] = {
             ),
             common=_ORDERS + ("center", "standard_errors"),
             center_default=True,
-            search=({"r": 3},),
             min_delay=1,
+            search_rank=2,
+            slots=(("feedback", "feedback_block"),),
         ),
     )
 }
 
 
+def searched_structures() -> tuple[str, ...]:
+    """The structures ``identify`` searches by default: those with a ``search_rank``,
+    in its order."""
+    ranked = [s for s in STRUCTURES.values() if s.search_rank is not None]
+    return tuple(s.name for s in sorted(ranked, key=lambda s: s.search_rank))
+
+
 #: The structures ``compare`` identifies unless told otherwise (paper B's four).
 COMPARED_BY_DEFAULT = ("arx", "hammerstein", "wiener", "hammerstein-wiener")
-
-
-def _fit_with_integrator(
-    method: Method, data: Any, structure: str, order: int, options: dict[str, Any]
-) -> Any:
-    """Fit ``structure`` with ``order`` integrators after its last linear block.
-
-    The integrator, ``(1 - z^-1)^n x(k) = w(k - 1)``
-    (:class:`~blockid.blocks.integrator.Integrator`), has no parameters, so the blocks
-    before it map ``u`` to ``w(k) = Δ^n y(k + 1)``: they start as the method fitted to
-    the ``n`` times differenced output (of the structure's ``integrator_start``, where
-    its own blocks cannot carry the operating point). The chain of those blocks and the
-    integrator is then refined on the free-run simulation error of ``y`` itself (the
-    integrator starts from the measured output). The result is a
-    :class:`~blockid.models.block.ChainModel`: the named cascades hold one linear block.
-    """
-    import time
-    from dataclasses import replace
-
-    from blockid.blocks.integrator import Integrator
-    from blockid.data.dataset import Dataset, Experiment
-    from blockid.fitting.simulation_error import refine
-    from blockid.models.block import ChainModel
-
-    t0 = time.perf_counter()
-    name, extra = STRUCTURES[structure].integrator_start or (structure, {})
-    base = STRUCTURES[name]
-    integrator = Integrator(order)
-    differenced = Dataset(
-        data.inputs,
-        data.outputs,
-        data.sampling_time,
-        [Experiment(e.name, *integrator.differenced(e.u, e.y)) for e in data.experiments],
-        data.source,
-    )
-    accepted = base.accepted(method.name)
-    given = {k: v for k, v in options.items() if k in accepted}
-    given.update({k: OPTIONS[k].convert(v) for k, v in extra.items()})
-    start = base.method(method.name).run(differenced, name, given).model
-    chain = ChainModel(
-        data.inputs,
-        data.outputs,
-        [*start.blocks, integrator],
-        sampling_time=data.sampling_time,
-        input_offset=start.input_offset,
-    )
-    t_start = time.perf_counter() - t0
-    result = refine(chain, data, **{k: v for k, v in options.items() if k in _SIMULATION_ERROR})
-    origin = f"{name} fit to the output differenced {order} time(s), then the integrator"
-    return replace(
-        result,
-        settings={**result.settings, "integrator": order, "initial": origin},
-        history={**result.history, "initial_seconds": t_start},
-    )
 
 
 def get_structure(name: Any) -> Structure:

@@ -69,8 +69,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
-from contextvars import ContextVar
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -93,7 +91,6 @@ __all__ = [
     "refine",
     "sensitivity_chunks",
     "simulate_with_sensitivities",
-    "time_limit",
 ]
 
 METHOD = "simulation-error"
@@ -277,38 +274,10 @@ class _Tracker:
     cost: list[float] = field(default_factory=list)
     tail: list[float] = field(default_factory=list)
     accepted: np.ndarray | None = None  # the last accepted iterate
-    deadline: float | None = None  # time.perf_counter() after which the solver stops
 
 
 class _EarlyStop(Exception):
     """Raised inside the Jacobian callback to end the solver (caught in :func:`refine`)."""
-
-
-class _TimeUp(_EarlyStop):
-    """The time limit of :func:`time_limit` passed: the solver stops at an accepted
-    iterate."""
-
-
-_DEADLINE: ContextVar[float | None] = ContextVar("blockid_refine_deadline", default=None)
-
-
-@contextmanager
-def time_limit(seconds: float | None) -> Iterator[None]:
-    """Refinements started inside stop at their first accepted iterate after ``seconds``
-    (from now) and return their best iterate so far (the held-out tail's best, or the
-    last accepted one); ``settings["stop_reason"]`` says so. ``None``: no limit. A
-    search with a time budget (:func:`~blockid.fitting.identify.identify`) uses it so
-    that one long fit cannot overrun the budget many times over. Nested limits keep the
-    earlier deadline."""
-    outer = _DEADLINE.get()
-    deadline = None if seconds is None else time.perf_counter() + max(float(seconds), 0.0)
-    if outer is not None and (deadline is None or outer < deadline):
-        deadline = outer
-    token = _DEADLINE.set(deadline)
-    try:
-        yield
-    finally:
-        _DEADLINE.reset(token)
 
 
 class _Problem:
@@ -432,8 +401,6 @@ class _Problem:
                 if tracker.since_best >= tracker.patience:
                     tracker.triggered = True
                     raise _EarlyStop
-        if tracker.deadline is not None and time.perf_counter() > tracker.deadline:
-            raise _TimeUp
 
     def tail_mse(self, model: BlockModel) -> float:
         """Free-run MSE on the held-out tails (each experiment simulated from its start)."""
@@ -618,7 +585,7 @@ def refine(
             "Start from the default initial estimate (method simulation-error) instead"
         )
     t_start = time.perf_counter()
-    tracker = _Tracker(patience=int(patience), deadline=_DEADLINE.get())
+    tracker = _Tracker(patience=int(patience))
     segments = _segments(data, model.max_lag, float(tail_fraction), n_par)
     problem = _Problem(model, segments, tracker)
     r0 = problem.residuals(theta0)
@@ -655,9 +622,6 @@ def refine(
                 )
                 theta = sol.x
                 stop_reason = "max_nfev reached" if sol.status == 0 else sol.message
-    except _TimeUp:
-        stop_reason = "time limit reached (the search's budget): best iterate so far"
-        theta = tracker.accepted if tracker.accepted is not None else theta0
     except _EarlyStop:
         stop_reason = f"early stopping: no better tail error in {patience} accepted iteration(s)"
     if problem.has_tail and tracker.best_theta is not None:
@@ -684,6 +648,14 @@ def refine(
         "stop_reason": stop_reason,
         "solver": SOLVERS[large],
     }
+    if problem.has_tail and tracker.best_theta is not None and np.array_equal(theta, theta0):
+        settings["warnings"] = [
+            "early stopping kept the start: no iterate lowered the error on the held-out "
+            f"tail ({tail_fraction:g} of each experiment) below the initial estimate's, so "
+            "the model is that initial estimate (for output-error: the least-squares ARX "
+            "start), not a refined one; with more data, or tail_fraction=0 "
+            "(--tail-fraction 0), the refinement runs to convergence"
+        ]
     return FitResult(
         model=fitted,
         method=METHOD,

@@ -137,6 +137,11 @@ class ARX(Model):
         lag_b = int((self.nk + self.nb - 1)[active].max(initial=0)) if active.any() else 0
         return max(lag_a, lag_b, 1)
 
+    @property
+    def n_free_parameters(self) -> int:
+        """Estimated coefficients over every output (offsets are not estimated: means)."""
+        return int(sum(self.n_parameters(i) for i in range(len(self.outputs))))
+
     def n_parameters(self, i: int) -> int:
         """Number of parameters of output ``i``."""
         return int(self.na[i].sum() + self.nb[i].sum())

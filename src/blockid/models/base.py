@@ -9,7 +9,7 @@ import numpy as np
 
 from blockid.errors import DataError, ModelFileError
 
-__all__ = ["Model", "MODEL_TYPES", "model_from_dict"]
+__all__ = ["Model", "MODEL_TYPES", "excursion", "model_from_dict"]
 
 #: ``structure -> class``, filled by :meth:`Model.__init_subclass__`.
 MODEL_TYPES: dict[str, type[Model]] = {}
@@ -59,6 +59,30 @@ class Model(ABC):
     def from_dict(cls, data: dict[str, Any]) -> Model:
         """Inverse of :meth:`to_dict`."""
 
+    @property
+    def n_free_parameters(self) -> int:
+        """How many parameters a fit of this model estimates (``free_parameters()``'s
+        size; models without that vector say it themselves)."""
+        return int(np.asarray(self.free_parameters()).size)  # type: ignore[attr-defined]
+
+    @property
+    def linear_blocks(self) -> tuple[Any, ...]:
+        """The model's :class:`~blockid.blocks.linear.LinearBlock` s, input side first
+        (none for a model not built of blocks, such as ARX)."""
+        return ()
+
+    def linear_signals(self, u: Any) -> list[tuple[Any, np.ndarray, np.ndarray]]:
+        """``(block, w, x)`` for every linear block: its input ``w`` and output ``x`` in a
+        free run from rest on input ``u`` (empty for a model not built of blocks)."""
+        return []
+
+    def range_excursion(self, u: Any) -> dict[str, float]:
+        """How far input ``u`` drives the signals whose ranges were recorded in
+        estimation beyond them (free run from rest): per signal, the largest distance
+        outside its range as a fraction of the range's width (0 inside). Empty when no
+        ranges are recorded (linear models)."""
+        return {}
+
     def _check_signals(self, u: Any, y: Any = None) -> tuple[np.ndarray, np.ndarray | None]:
         """Coerce ``u`` (N, nu) and ``y`` (N, ny) and check their shapes."""
         u = np.asarray(u, dtype=float)
@@ -79,6 +103,18 @@ class Model(ABC):
                     f"an output array of shape {y.shape}"
                 )
         return u, y
+
+
+def excursion(seen: Any, values: np.ndarray) -> float:
+    """The largest distance of ``values`` outside ``[lo, hi]`` over ``hi - lo`` (0 inside;
+    infinite for non-finite values)."""
+    if values.size == 0:
+        return 0.0
+    if not np.all(np.isfinite(values)):
+        return float("inf")
+    lo, hi = seen
+    span = max(hi - lo, 1e-300)
+    return max(float(lo - values.min()), float(values.max() - hi), 0.0) / span
 
 
 def model_from_dict(data: dict[str, Any]) -> Model:

@@ -48,7 +48,7 @@ from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
 from blockid.blocks.base import BLOCK_TYPES, Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import BlockidError, ModelFileError, OrderError, ParameterError
-from blockid.models.base import Model
+from blockid.models.base import Model, excursion
 from blockid.models.initial_state import estimated_starts
 
 __all__ = [
@@ -507,6 +507,28 @@ class ChainModel(Model):
                 notes += self._leaves(key, s, i)
             s = self._apply_at(i, s)
         return notes
+
+    def range_excursion(self, u: Any) -> dict[str, float]:
+        """See :meth:`Model.range_excursion`: every recorded signal (``u``, the inputs
+        of the nonlinear blocks), whether or not its block extrapolates reliably."""
+        out: dict[str, float] = {}
+        s = self._u(u)
+        for i in range(len(self.blocks)):
+            key = self._range_key(i)
+            if key in self.ranges:
+                out[key] = excursion(self.ranges[key], s)
+            s = self._apply_at(i, s)
+        return out
+
+    def linear_signals(self, u: Any) -> list[tuple[LinearBlock, np.ndarray, np.ndarray]]:
+        """See :meth:`Model.linear_signals`."""
+        signals = self.block_inputs(u)
+        signals.append(self._apply_at(len(self.blocks) - 1, signals[-1]))
+        return [
+            (block, signals[i], signals[i + 1])
+            for i, block in enumerate(self.blocks)
+            if block.role == "linear"
+        ]
 
     def _leaves(self, key: str, values: np.ndarray, i: int) -> list[str]:
         lo, hi = self.ranges[key]

@@ -66,7 +66,7 @@ from blockid.blocks import Polynomial
 from blockid.blocks.base import Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import ModelFileError, OrderError
-from blockid.models.base import Model
+from blockid.models.base import Model, excursion
 from blockid.models.block import OneLinearBlock
 
 __all__ = ["LinearFeedback"]
@@ -462,6 +462,20 @@ class LinearFeedback(OneLinearBlock, Model):
                 measured = np.concatenate(parts[::2])
                 out[key] = [float(measured.min()), float(measured.max())]
         return out
+
+    def range_excursion(self, u: Any) -> dict[str, float]:
+        """See :meth:`Model.range_excursion`: ``u`` and the simulated output ``y`` (the
+        fed-back block's input), from rest."""
+        v, y = self.block_inputs(u)
+        u_arr, _ = self._check_signals(u)
+        signals = {"u": u_arr[:, 0] - self.input_offset, "y": y}
+        return {k: excursion(self.ranges[k], x) for k, x in signals.items() if k in self.ranges}
+
+    def linear_signals(self, u: Any) -> list[tuple[LinearBlock, np.ndarray, np.ndarray]]:
+        """See :meth:`Model.linear_signals`: ``v = u - N(y)`` into the linear block, ``y``
+        out of it."""
+        v, y = self.block_inputs(u)
+        return [(self.linear, v, y)]
 
     def with_ranges(self, experiments: Any) -> LinearFeedback:
         """A copy that remembers the ranges seen in ``experiments``."""

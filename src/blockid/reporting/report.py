@@ -263,16 +263,26 @@ def _comparison(entries: list[_Entry], outputs: tuple[str, ...], where: str) -> 
 
 def _identify_search(identify: Any) -> str:
     sel = identify.selected
+    search = getattr(identify, "search", {}) or {}
+    cut = (
+        " The time limit cut the search: candidates not fitted by then were left out, "
+        "and another run may choose differently."
+        if search.get("cut_by_time_limit")
+        else ""
+    )
     parts = [
         paragraph(
-            f"identify() chose {sel.candidate.label} by the free-run RMSE on a hold-out "
-            f"of the estimation data ({identify.holdout}); among near-ties the model with "
-            f"the fewest parameters wins. {len(identify.ranked)} candidates scored, "
-            f"{len(identify.rejected)} rejected, in {identify.seconds:.1f} s. The chosen "
+            f"identify() chose {sel.candidate.label} by its cross-validated free-run RMSE "
+            f"on the estimation data ({identify.holdout}; the median over the folds); "
+            f"among near-ties the model with the fewest parameters wins. "
+            f"{len(identify.ranked)} candidates scored, {len(identify.rejected)} rejected, "
+            f"in {identify.seconds:.1f} s (effort {search.get('effort', '?')}). The chosen "
             "model was refitted on all estimation data; validation data were not used to "
-            "choose."
+            f"choose.{cut}"
         )
     ]
+    for flag in sel.flags:
+        parts.append(paragraph(f"Flag on the chosen model: {flag}", "note"))
     rows = [
         [s.candidate.label, s.stage, s.n_parameters, s.rmse, s.fit_percent, s.seconds]
         for s in identify.ranked[:20]
@@ -283,8 +293,8 @@ def _identify_search(identify: Any) -> str:
                 "candidate (best first)",
                 "stage",
                 "parameters",
-                "hold-out RMSE",
-                "hold-out fit %",
+                "CV RMSE (median over folds)",
+                "CV fit %",
                 "seconds",
             ],
             rows,

@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from blockid.data.dataset import Dataset
-from blockid.errors import BlockidError, EstimationError
-from blockid.evaluation.validate import ModelOutput, evaluate
+from blockid.errors import EstimationError
+from blockid.evaluation.validate import ModelOutput, score_model
 from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, accepted_options, fit_model
 from blockid.fitting.registry import COMPARED_BY_DEFAULT
 from blockid.fitting.result import FitResult
@@ -92,12 +92,7 @@ def compare_structures(
         except EstimationError as exc:
             result.models.append(ModelScore(structure, m, None, None, None, error=str(exc)))
             continue
-        sim = evaluate(fit.model, validation, "simulation")
-        one, one_err = None, None
-        try:
-            one = evaluate(fit.model, validation, "one-step")
-        except BlockidError as exc:
-            one_err = str(exc)
+        sim, one, one_err = score_model(fit.model, validation)
         result.models.append(ModelScore(structure, fit.method, fit, sim, one, None, one_err))
     return result
 

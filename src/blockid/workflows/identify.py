@@ -1,0 +1,755 @@
+"""One-command identification: choose delay, orders, structure and nonlinearity.
+
+``identify(data)`` chooses a model for a record using **only the estimation data**,
+scored the way the model will be used: by free-run simulation. It runs as named stages,
+every candidate of every stage judged by one criterion:
+
+**The criterion: blocked cross-validation.** The estimation data are cut into
+contiguous folds (:func:`~blockid.data.folds.fold_plan`: 4 blocks for a single record
+under :data:`LONG_RECORD` samples, 3 above; with three or more experiments, leave a
+group of experiments out). For each fold a candidate is fitted on the other folds and
+simulated free-run on the held-back one from the fold's start, its initial state
+estimated from the fold's first ``n_init`` measured outputs
+(:func:`~blockid.evaluation.validate.evaluate` with ``initial_samples``, the function
+``compare`` scores with), and scored on the rest of the fold. A fold's RMSE is divided
+by the spread of its output; the candidate's score is the **median** over the folds
+(``rule``), in units of the output's spread over all estimation data (so it reads as an
+RMSE). A single held-back tail of 100-250 samples was too noisy a judge on short
+records; the plain mean lets one unusual fold decide (``docs/identify.md`` has the
+study). A candidate that fails, is unstable, does not simulate finitely or is not
+trusted (:mod:`blockid.evaluation.trust`) on any fold is **rejected with its reason**.
+
+**The stages** (``effort`` sets their sizes, :data:`EFFORTS`):
+
+1. ``delay`` -- ARX models with ``na = nb = 4`` over the delays ``0 .. max_delay``; the
+   two best delays and the false-nearest-neighbours test's
+   (:mod:`blockid.fitting.orders`, noise allowance estimated) carry on.
+2. ``linear orders`` -- ARX ``na = 1 .. max_order``, ``nb <= na + 1`` at those delays;
+   the best order sets carry on, and output-error models around the best one (the
+   best linear approximation's orders) replace the last.
+3. ``structures`` -- every searched structure (the registry's ``search_rank``) with
+   every block family in its slots (:mod:`blockid.workflows.search_space`), centring
+   decided from the data, fitted by simulation error with ``screen_nfev`` iterations
+   (long records on the first ``screen_samples`` of each fold's training data); with
+   an integrating plant (ARX poles within :data:`INTEGRATING_POLE` of 1) also with
+   integrators.
+4. ``finalists`` -- the best ``finalists`` candidates again with ``final_nfev``
+   iterations on the whole training folds: new candidates, scored like the rest (a
+   longer fit never replaces a shorter one that scored better).
+5. ``nonlinearity`` -- the best block-oriented candidate with each polynomial degree or
+   block size raised by 2, while the score falls by more than ``tie``.
+6. ``refit`` -- the chosen candidate (ranked by score; among near-ties, within ``tie``,
+   the fewest parameters) fitted with its own options on **all** estimation data,
+   and checked once more (free run from rest). If that fails, the next one.
+
+**Deterministic.** The search is a fixed amount of work: no stage depends on the
+clock, so the same data, options and version give the same model, bit for bit, on a
+busy or an idle machine and with any number of ``jobs``
+(:mod:`blockid.workflows.parallel`: results merged in a fixed order, every fit with a
+single BLAS thread). ``time_limit`` is a safety cap only: when it cuts a stage the
+result says so (``cut_by_time_limit``) and is no longer reproducible.
+
+Validation data, when given, are used only after the choice, to report.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from blockid.data.dataset import Dataset
+from blockid.data.folds import Fold, FoldPlan, fold_plan, materialise
+from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
+from blockid.evaluation.trust import Trust, assess
+from blockid.fitting.registry import STRUCTURES, searched_structures
+from blockid.workflows.parallel import TaskRunner, available_cores
+from blockid.workflows.search_space import (
+    LINEAR,
+    Candidate,
+    delay_candidates,
+    grown,
+    integrating_candidates,
+    order_grid,
+    output_error_orders,
+    structure_candidates,
+    unique,
+)
+
+__all__ = [
+    "EFFORTS",
+    "INTEGRATING_POLE",
+    "LONG_RECORD",
+    "RULES",
+    "Candidate",
+    "Effort",
+    "FoldScore",
+    "IdentifyResult",
+    "Score",
+    "identify",
+]
+
+Progress = Callable[[str, int, int, str], None]
+
+#: A least-squares ARX pole this close to +1 suggests that the plant integrates.
+INTEGRATING_POLE = 1e-2
+#: Records of at least this many samples get fewer folds and screening on a part.
+LONG_RECORD = 20_000
+#: How fold scores are combined into a candidate's score.
+RULES = ("median", "mean")
+
+
+@dataclass(frozen=True)
+class Effort:
+    """The sizes of the search's stages (module docstring)."""
+
+    name: str
+    folds: int  # folds of a record shorter than LONG_RECORD samples
+    folds_long: int  # folds of a longer one
+    max_order: int  # largest na of the ARX order grid
+    max_delay: int  # largest delay scanned
+    linear_keep: int  # ARX order sets carried to the structures
+    families: int | None  # block families per slot (None: all)
+    screen_nfev: int  # simulation-error iterations of a screening fit
+    screen_samples: int  # training samples of a screening fit (long records)
+    finalists: int  # candidates fitted again with final_nfev
+    final_nfev: int  # iterations of a finalist's fit
+    grow_steps: int  # richer-nonlinearity steps
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+#: The efforts ``identify`` offers: the same data and effort give the same model.
+EFFORTS: dict[str, Effort] = {
+    e.name: e
+    for e in (
+        Effort("quick", 3, 2, 5, 10, 1, 3, 15, 10_000, 2, 60, 1),
+        Effort("standard", 4, 3, 8, 20, 2, None, 30, 20_000, 3, 150, 3),
+        Effort("thorough", 5, 3, 10, 30, 3, None, 60, 50_000, 5, 300, 4),
+    )
+}
+
+
+# ----------------------------------------------------------------------------- scores
+@dataclass(frozen=True)
+class FoldScore:
+    """One candidate on one fold: its free-run RMSE there, or why it failed."""
+
+    rmse: float = math.inf  # data units, pooled over the outputs
+    relative: float = math.inf  # rmse / the fold's output spread
+    n_parameters: int = 0
+    reason: str = ""
+    trust: Trust | None = None
+    seconds: float = 0.0
+
+
+@dataclass
+class Score:
+    """A candidate's result over the folds (or why it was rejected)."""
+
+    candidate: Candidate
+    stage: str
+    folds: list[FoldScore] = field(default_factory=list)
+    rmse: float = math.inf
+    fit_percent: float = -math.inf
+    n_parameters: int = 0
+    reason: str = ""
+    flags: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return not self.reason
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "structure": self.candidate.structure,
+            "options": _jsonable(self.candidate.options),
+            "stage": self.stage,
+            "seconds": round(self.seconds, 3),
+        }
+        if self.reason:
+            out["rejected"] = self.reason
+        else:
+            out.update(
+                cv_rmse=self.rmse,
+                cv_fit_percent=self.fit_percent,
+                fold_rmse=[f.rmse for f in self.folds],
+                n_parameters=self.n_parameters,
+            )
+        if self.flags:
+            out["flags"] = list(self.flags)
+        return out
+
+
+def _jsonable(options: dict[str, Any]) -> dict[str, Any]:
+    return {k: v if isinstance(v, int | float | str | bool) else str(v) for k, v in options.items()}
+
+
+@dataclass(frozen=True)
+class IdentifyResult:
+    """What :func:`identify` chose and everything it tried.
+
+    Attributes
+    ----------
+    selected : Score
+        The chosen candidate (its cross-validation score).
+    fit : FitResult
+        The chosen candidate fitted on all estimation data; ``fit.model`` is the model.
+    ranked : list of Score
+        Candidates that were scored, best first (the selected one first).
+    rejected : list of Score
+        Candidates that failed, with their reasons.
+    simulation, one_step : ModelOutput or None
+        Scores of the model on the validation data (or on the estimation data when no
+        validation data were given: see ``on``).
+    on : str
+        ``"validation"`` or ``"estimation"``.
+    seconds : float
+    holdout : str
+        How the estimation data were cut into folds.
+    search : dict
+        Effort, jobs, rule, folds, stages, whether the time limit cut the search.
+    """
+
+    selected: Score
+    fit: Any
+    ranked: list[Score]
+    rejected: list[Score]
+    simulation: Any
+    one_step: Any
+    one_step_error: str | None
+    on: str
+    seconds: float
+    holdout: str
+    orders_evidence: Any = None
+    notes: list[str] = field(default_factory=list)
+    search: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def model(self) -> Any:
+        return self.fit.model
+
+    @property
+    def cut_by_time_limit(self) -> bool:
+        return bool(self.search.get("cut_by_time_limit", False))
+
+    def to_dict(self) -> dict[str, Any]:
+        sel = self.selected.candidate
+        orders = sel.orders()
+        selected: dict[str, Any] = {
+            "structure": sel.structure,
+            "orders": orders,
+            "options": _jsonable({k: v for k, v in sel.options.items() if k not in orders}),
+            "method": self.fit.method,
+            "cv_rmse": self.selected.rmse,
+            "fold_rmse": [f.rmse for f in self.selected.folds],
+            "scored_on": self.on,
+            "simulation": _flat(self.simulation.metrics) if self.simulation else None,
+            "one_step": _flat(self.one_step.metrics) if self.one_step else None,
+        }
+        if self.selected.flags:
+            selected["flags"] = list(self.selected.flags)
+        if self.one_step_error:
+            selected["one_step_error"] = self.one_step_error
+        return {
+            "selected": selected,
+            "models": [s.to_dict() for s in self.ranked],
+            "search": {
+                **self.search,
+                "candidates": len(self.ranked) + len(self.rejected),
+                "rejected": [s.to_dict() for s in self.rejected],
+                "holdout": self.holdout,
+                "seconds": round(self.seconds, 3),
+                "notes": self.notes,
+            },
+        }
+
+
+def _flat(metrics: dict[str, dict[str, float]]) -> dict[str, Any]:
+    """``{"rmse": {"y": v}}`` -> ``{"rmse": v}`` for one output, unchanged for several."""
+    if all(len(v) == 1 for v in metrics.values()):
+        return {k: next(iter(v.values())) for k, v in metrics.items()}
+    return metrics
+
+
+# ----------------------------------------------------------------------------- one fit
+@dataclass(frozen=True)
+class _Task:
+    """Fit ``candidate`` on ``fold``'s training data (the first ``limit`` samples when
+    given) and score it on the held-back data from ``n_init`` measured outputs."""
+
+    candidate: Candidate
+    fold: Fold
+    limit: int | None
+    n_init: int
+
+
+def _reason(exc: BaseException) -> str:
+    if isinstance(exc, BlockidError):
+        text = str(exc).split(". ")[0]
+        return text[:300] or type(exc).__name__
+    return f"{type(exc).__name__}: {exc}"[:300]
+
+
+def _fit_and_score(data: Dataset, task: _Task) -> FoldScore:
+    """One candidate on one fold (runs in a worker process or here)."""
+    from blockid.evaluation.validate import evaluate
+    from blockid.fitting.dispatch import fit_model
+
+    t0 = time.perf_counter()
+    train = materialise(data, task.fold.train, task.limit)
+    test = materialise(data, task.fold.test)
+    try:
+        with np.errstate(all="ignore"):
+            fit = fit_model(train, task.candidate.structure, **task.candidate.options)
+            model = fit.model
+            if not model.is_stable():
+                raise EstimationError("unstable")
+            scored = evaluate(model, test, "simulation", initial_samples=task.n_init)
+            rmse, relative = _pooled(scored, test)
+            if not math.isfinite(rmse):
+                raise EstimationError("its free-run simulation of the held-back fold is not finite")
+            trust = assess(model, train, test)
+        reasons = trust.reasons
+        if reasons:
+            raise EstimationError(reasons[0])
+        n_par = model.n_free_parameters
+    except Exception as exc:  # noqa: BLE001 - one candidate must not end the search
+        return FoldScore(reason=_reason(exc), seconds=time.perf_counter() - t0)
+    return FoldScore(rmse, relative, n_par, "", trust, time.perf_counter() - t0)
+
+
+def _pooled(scored: Any, test: Dataset) -> tuple[float, float]:
+    """RMSE over all outputs (data units) and the mean over outputs of RMSE / spread."""
+    rmse = scored.metrics["rmse"]
+    values = np.array([rmse[name] for name in test.outputs], dtype=float)
+    if not np.all(np.isfinite(values)):
+        return math.inf, math.inf
+    y = np.vstack([e.y[scored.skip :] for e in test.experiments])
+    spread = y.std(axis=0)
+    spread[spread == 0] = 1.0
+    return float(np.sqrt(np.mean(values**2))), float(np.mean(values / spread))
+
+
+# ----------------------------------------------------------------------------- the search
+class _Search:
+    """The fold plan, the runner, every score so far, and the rules that rank them."""
+
+    def __init__(
+        self,
+        data: Dataset,
+        plan: FoldPlan,
+        runner: TaskRunner,
+        effort: Effort,
+        rule: str,
+        tie: float,
+        deadline: float | None,
+        progress: Progress | None,
+    ) -> None:
+        self.data = data
+        self.plan = plan
+        self.runner = runner
+        self.effort = effort
+        self.rule = rule
+        self.tie = tie
+        self.deadline = deadline
+        self.progress = progress
+        self.scores: dict[tuple[Any, ...], Score] = {}
+        self.order: list[Score] = []
+        self.cut = False
+        self.stages: list[dict[str, Any]] = []
+        shortest = min(s.n_samples for f in plan.folds for s in f.test)
+        self.n_init = int(min(50, max(10, shortest // 10)))
+        y = np.vstack([e.y for e in data.experiments])
+        self.spread = float(np.mean(np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)))
+        self.long = sum(e.n_samples for e in data.experiments) >= LONG_RECORD
+
+    def expired(self) -> bool:
+        return self.deadline is not None and time.monotonic() > self.deadline
+
+    def run(
+        self, stage: str, candidates: Sequence[Candidate], screen: bool, capped: bool = True
+    ) -> list[Score]:
+        """Score ``candidates`` (each fit once: a candidate scored before is not fitted
+        again) on every fold; returns their scores in order (the new and the old).
+        ``capped=False``: the time limit does not apply (the delay scan, so that a cut
+        search still has a model)."""
+        candidates = unique(candidates)
+        new = [c for c in candidates if c.key not in self.scores]
+        limit = self.effort.screen_samples if screen and self.long else None
+        tasks = [_Task(c, fold, limit, self.n_init) for c in new for fold in self.plan.folds]
+        t0 = time.perf_counter()
+        self.stages.append({"stage": stage, "candidates": len(new), "fits": len(tasks)})
+        deadline = self.deadline if capped else None
+        if capped and self.expired():
+            self.cut = True
+            tasks = []
+        count = [0]
+        k = len(self.plan)
+
+        def done(i: int, result: FoldScore) -> None:
+            count[0] += 1
+            if self.progress is not None:
+                self.progress(stage, count[0], len(tasks), new[i // k].label)
+
+        results = self.runner.map(_fit_and_score, tasks, done=done, deadline=deadline)
+        if any(r is None for r in results) or (new and not tasks):
+            self.cut = True
+        for j, cand in enumerate(new):
+            folds = results[j * k : (j + 1) * k]
+            if not tasks or any(f is None for f in folds):
+                continue  # cut by the time limit: not scored
+            score = self._combine(cand, stage, folds)
+            self.scores[cand.key] = score
+            self.order.append(score)
+        self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
+        return [self.scores[c.key] for c in candidates if c.key in self.scores]
+
+    def _combine(self, cand: Candidate, stage: str, folds: list[FoldScore]) -> Score:
+        score = Score(cand, stage, list(folds), seconds=sum(f.seconds for f in folds))
+        failed = [(i, f) for i, f in enumerate(folds) if f.reason]
+        if failed:
+            i, f = failed[0]
+            score.reason = f"{f.reason} ({self.plan.folds[i].name})"
+            return score
+        rel = np.array([f.relative for f in folds])
+        agg = float(np.median(rel)) if self.rule == "median" else float(np.mean(rel))
+        score.rmse = agg * self.spread
+        score.fit_percent = 100.0 * (1.0 - agg)
+        score.n_parameters = max(f.n_parameters for f in folds)
+        flags: list[str] = []
+        for f in folds:
+            for note in f.trust.flags if f.trust is not None else []:
+                if note not in flags:
+                    flags.append(note)
+        score.flags = flags
+        return score
+
+    def ranked(self, scores: Sequence[Score] | None = None) -> list[Score]:
+        """Best first; among near-ties of the best, the fewest parameters first; flagged
+        candidates after the unflagged ones of the same tie group."""
+        pool = [s for s in (self.order if scores is None else scores) if s.ok]
+        ordered = sorted(pool, key=lambda s: (s.rmse, s.n_parameters, s.candidate.label))
+        if not ordered:
+            return []
+        best = ordered[0].rmse
+        near = [s for s in ordered if s.rmse <= best * (1.0 + self.tie)]
+        # then the longer delay: a delay too short adds a coefficient the data set to 0
+        near.sort(
+            key=lambda s: (bool(s.flags), s.n_parameters, -_delay(s), s.rmse, s.candidate.label)
+        )
+        return near + [s for s in ordered if s not in near]
+
+
+def _delay(score: Score) -> int:
+    nk = score.candidate.options.get("nk", 0)
+    return int(nk) if isinstance(nk, int) else 0
+
+
+def _iterations(nfev: int) -> dict[str, Any]:
+    return {"max_nfev": nfev, "tail_fraction": 0.0}
+
+
+def _integrations(data: Dataset, orders: Sequence[tuple[int, int, int]]) -> int:
+    """Integrators the estimation data suggest (0, 1 or 2): the most poles within
+    :data:`INTEGRATING_POLE` of +1 of a least-squares ARX of the kept orders."""
+    from blockid.fitting.dispatch import fit_model
+
+    count = 0
+    for na, nb, nk in orders:
+        try:
+            with np.errstate(all="ignore"):
+                model = fit_model(data, LINEAR, na=na, nb=nb, nk=nk, allow_unstable=True).model
+        except BlockidError:
+            continue
+        poles = np.asarray(model.poles(), dtype=complex)
+        count = max(count, int(np.sum(np.abs(poles - 1.0) < INTEGRATING_POLE)))
+    return min(count, 2)
+
+
+def _orders_of(score: Score) -> tuple[int, int, int]:
+    o = score.candidate.orders()
+    return int(o["na"]), int(o["nb"]), int(o["nk"])
+
+
+def _refit(candidate: Candidate, data: Dataset) -> Any:
+    """The candidate fitted with its own options on all estimation data, and checked."""
+    from blockid.fitting.dispatch import fit_model
+    from blockid.workflows.parallel import _single_threaded
+
+    with _single_threaded(), np.errstate(all="ignore"):
+        fit = fit_model(data, candidate.structure, **candidate.options)
+        trust = assess(fit.model, data)
+    if trust.reasons:
+        raise EstimationError(trust.reasons[0])
+    return fit
+
+
+def identify(
+    data: Dataset,
+    validation: Dataset | None = None,
+    *,
+    structures: Sequence[str] | None = None,
+    effort: str | Effort = "standard",
+    jobs: int | None = None,
+    time_limit: float | None = None,
+    rule: str = "median",
+    tie: float = 0.02,
+    use_orders_test: bool = True,
+    progress: Progress | None = None,
+) -> IdentifyResult:
+    """Choose and fit a model for ``data`` by cross-validated free-run simulation (module
+    docstring).
+
+    Parameters
+    ----------
+    data : Dataset
+        Estimation data (the only data used to choose).
+    validation : Dataset, optional
+        Reported on after the choice; never used to choose.
+    structures : sequence of str, optional
+        Structures that may be chosen (default: the registry's searched ones). With
+        structures given, the result is one of them, or an error that says why none
+        could be fitted. ARX fits choose the delay and orders in any case. Block
+        structures need one input and one output; with several, ARX is searched.
+    effort : {"quick", "standard", "thorough"} or Effort
+        The search's size (:data:`EFFORTS`, or an :class:`Effort` of one's own): the
+        same effort on the same data gives the same model on any machine.
+    jobs : int, optional
+        Worker processes (default: every core this process may use).
+    time_limit : float, optional
+        Seconds after which no new fit starts (a safety cap; the result then says it was
+        cut and may differ from an uncut run). None: no cap.
+    rule : {"median", "mean"}
+        How a candidate's fold scores are combined.
+    tie : float
+        Relative score within which the candidate with fewer parameters wins.
+    use_orders_test : bool
+        Add the false-nearest-neighbours delay and centre the order grid on its orders.
+    progress : callable, optional
+        ``progress(stage, done, total, label)`` after every fit.
+
+    Returns
+    -------
+    IdentifyResult
+    """
+    t_start = time.perf_counter()
+    if not isinstance(data, Dataset):
+        raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
+    if not isinstance(effort, Effort) and effort not in EFFORTS:
+        raise ParameterError(
+            f"effort={effort!r} is unknown; choose one of {', '.join(EFFORTS)}", parameter="effort"
+        )
+    if rule not in RULES:
+        raise ParameterError(f"rule={rule!r}: choose one of {', '.join(RULES)}", parameter="rule")
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+        raise ParameterError(f"jobs must be a whole number >= 1, got {jobs!r}", parameter="jobs")
+    if time_limit is not None and not time_limit > 0:
+        raise ParameterError(
+            f"time_limit must be a positive number of seconds, got {time_limit!r}",
+            parameter="time_limit",
+        )
+    eff = effort if isinstance(effort, Effort) else EFFORTS[effort]
+    asked = list(structures) if structures else None
+    chosen = asked or list(searched_structures())
+    unknown = [s for s in chosen if s not in STRUCTURES]
+    if unknown:
+        raise ParameterError(
+            f"structures {unknown} are unknown; choose among {', '.join(STRUCTURES)}",
+            parameter="structures",
+        )
+    notes: list[str] = []
+    if data.n_inputs != 1 or data.n_outputs != 1:
+        block = [s for s in chosen if STRUCTURES[s].block_oriented]
+        if block and asked:
+            raise ParameterError(
+                f"{', '.join(block)} take one input and one output; the data have "
+                f"{data.n_inputs} input(s) and {data.n_outputs} output(s): search arx",
+                parameter="structures",
+            )
+        if block:
+            notes.append("several inputs or outputs: only ARX models are searched")
+        chosen = [s for s in chosen if not STRUCTURES[s].block_oriented] or [LINEAR]
+    n_samples = sum(e.n_samples for e in data.experiments)
+    plan = fold_plan(data, eff.folds if n_samples < LONG_RECORD else eff.folds_long)
+    jobs = available_cores() if jobs is None else jobs
+    deadline = None if time_limit is None else time.monotonic() + float(time_limit)
+
+    evidence, recommended = None, None
+    if use_orders_test and data.n_outputs == 1:
+        try:
+            from blockid.fitting.orders import false_nearest_neighbours
+
+            evidence = false_nearest_neighbours(data)
+            recommended = tuple(int(v) for v in evidence.recommended)
+        except (BlockidError, ImportError) as exc:
+            notes.append(f"orders test skipped: {exc}")
+
+    with TaskRunner(data, min(jobs, 64)) as runner:
+        search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
+        _stages(search, chosen, recommended, notes)
+        ranked_all = search.ranked()
+        eligible = [s for s in ranked_all if s.candidate.structure in chosen]
+    if not eligible:
+        raise EstimationError(_nothing_fitted(search, chosen))
+    fit, selected = None, None
+    for s in eligible:
+        if progress is not None:
+            progress("refit", 0, 1, s.candidate.label)
+        try:
+            fit = _refit(s.candidate, data)
+        except BlockidError as exc:
+            notes.append(f"{s.candidate.label} failed on all estimation data ({_reason(exc)}); "
+                         "the next candidate was fitted instead")  # fmt: skip
+            continue
+        selected = s
+        break
+    if fit is None or selected is None:
+        raise EstimationError(_nothing_fitted(search, chosen))
+    if progress is not None:
+        progress("refit", 1, 1, selected.candidate.label)
+
+    from blockid.evaluation.validate import score_model
+
+    target, on = (validation, "validation") if validation is not None else (data, "estimation")
+    simulation, one_step, one_step_error = score_model(fit.model, target)
+    if validation is None:
+        notes.append(
+            "no validation data: the scores are on the estimation data, which also chose "
+            "the model (optimistic)"
+        )
+    if search.cut:
+        notes.append(
+            f"the time limit ({time_limit:g} s) cut the search: candidates not fitted by then "
+            "were left out, and another run may choose differently"
+        )
+    ranked = [selected] + [s for s in ranked_all if s is not selected]
+    rejected = [s for s in search.order if not s.ok]
+    info = {
+        "effort": eff.name,
+        "effort_settings": eff.to_dict(),
+        "jobs": jobs,
+        "rule": rule,
+        "folds": plan.to_dict(data),
+        "initial_samples": search.n_init,
+        "stages": search.stages,
+        "cut_by_time_limit": search.cut,
+        "time_limit": time_limit,
+    }
+    return IdentifyResult(
+        selected=selected,
+        fit=fit,
+        ranked=ranked,
+        rejected=rejected,
+        simulation=simulation,
+        one_step=one_step,
+        one_step_error=one_step_error,
+        on=on,
+        seconds=time.perf_counter() - t_start,
+        holdout=f"{plan.text}, each scored by free run from its first {search.n_init} samples",
+        orders_evidence=evidence,
+        notes=notes,
+        search=info,
+    )
+
+
+def _nothing_fitted(search: _Search, chosen: Sequence[str]) -> str:
+    failed = [s for s in search.order if s.candidate.structure in chosen and not s.ok]
+    why = "; ".join(f"{s.candidate.label}: {s.reason}" for s in failed[:3])
+    return (
+        f"no candidate of {', '.join(chosen)} could be fitted and trusted on these data"
+        + (f" ({why})" if why else "")
+        + "; try other structures, or more data"
+    )
+
+
+def _stages(
+    search: _Search,
+    chosen: Sequence[str],
+    recommended: tuple[int, int, int] | None,
+    notes: list[str],
+) -> None:
+    """Run the stages (module docstring); every score lands in ``search``."""
+    eff = search.effort
+    # 1. delay
+    delays_scored = search.run(
+        "delay", delay_candidates(eff.max_delay, min(4, eff.max_order)), False, capped=False
+    )
+    by_delay = search.ranked(delays_scored)
+    delays: list[int] = []
+    for s in by_delay:
+        nk = int(s.candidate.options["nk"])
+        if nk not in delays:
+            delays.append(nk)
+        if len(delays) >= 2:
+            break
+    if recommended is not None and recommended[2] not in delays:
+        delays.append(recommended[2])
+    delays = delays or [1]
+    # 2. linear orders (ARX grid), then output-error orders around the best
+    grid = order_grid(recommended, delays, eff.max_order)
+    search.run("linear orders", grid, False)
+    arx = search.ranked([s for s in search.order if s.candidate.structure == LINEAR])
+    if not arx:
+        raise EstimationError(
+            "no linear model of any order in the grid simulates stably on the held-back "
+            "folds; check the data (input and output columns, sampling) or give more data"
+        )
+    orders: list[tuple[int, int, int]] = []
+    for s in arx:
+        if _orders_of(s) not in orders:
+            orders.append(_orders_of(s))
+        if len(orders) >= eff.linear_keep:
+            break
+    block = [s for s in chosen if STRUCTURES[s].block_oriented]
+    if not block:
+        return
+    screen = _iterations(eff.screen_nfev)
+    oe = output_error_orders(orders[0], eff.max_order, screen)
+    best_oe = search.ranked(search.run("output-error orders", oe, True))
+    if best_oe and _orders_of(best_oe[0]) not in orders:
+        orders = [*orders[: max(eff.linear_keep - 1, 1)], _orders_of(best_oe[0])]
+    # the false-nearest-neighbours orders are those of a nonlinear model: the linear
+    # part of a block structure may need fewer lags than the best linear approximation
+    if recommended is not None:
+        na, nb, nk = recommended
+        fnn = (max(na, 1), max(nb, 1), nk)
+        if fnn not in orders:
+            orders.append(fnn)
+    # 3. structures
+    integrations = _integrations(search.data, orders)
+    candidates = integrating_candidates(block, orders, search.data, screen, integrations)
+    if candidates:
+        notes.append(
+            f"the estimation data suggest a plant that integrates (least-squares ARX poles "
+            f"within {INTEGRATING_POLE:g} of 1): {len(candidates)} candidates with up to "
+            f"{integrations} integrator(s) tried first"
+        )
+    candidates += structure_candidates(block, orders, search.data, screen, eff.families)
+    search.run("structures", candidates, True)
+    # 4. finalists: the best block-oriented candidates again with more iterations
+    pool = [s for s in search.order if s.candidate.structure in block]
+    best = search.ranked(pool)[: eff.finalists]
+    final = _iterations(eff.final_nfev)
+    search.run("finalists", [s.candidate.with_options(**final) for s in best], False)
+    # 5. the richer nonlinearity of the best block-oriented candidate
+    pool = [s for s in search.order if s.candidate.structure in block]
+    ranked = search.ranked(pool)
+    if not ranked:
+        return
+    current = ranked[0]
+    for _ in range(eff.grow_steps):
+        trials = grown(current.candidate)
+        if not trials:
+            break
+        scored = [s for s in search.run("nonlinearity", trials, False) if s.ok]
+        better = [s for s in scored if s.rmse < current.rmse * (1.0 - search.tie)]
+        if not better:
+            break
+        current = min(better, key=lambda s: (s.rmse, s.candidate.label))

@@ -1,0 +1,205 @@
+"""Run many fits on one data set in worker processes, with results in a fixed order.
+
+:class:`TaskRunner` runs a top-level function ``fn(data, item)`` over a list of items,
+either here (``jobs = 1``) or in ``jobs`` worker processes of the standard library's
+:class:`concurrent.futures.ProcessPoolExecutor`. Either way the results come back as a
+list in the order of the items, whatever order the workers finish in, so a search that
+merges them gives the same answer with one worker or two.
+
+* **The data are shared, not copied.** The record is written once into one block of
+  shared memory (:mod:`multiprocessing.shared_memory`); every worker maps it and builds
+  the same :class:`~blockid.data.dataset.Dataset` of read-only views on it, so two
+  workers on a long record cost one copy of it, not three.
+* **Started by fork where there is one** (Linux, macOS before 3.14's default): a
+  ``spawn`` start would import the user's script again in every worker and run it from
+  the top unless it is guarded by ``if __name__ == "__main__"``, which a plain analysis
+  script is not. Elsewhere, ``spawn``.
+* **Same arithmetic everywhere.** Every fit, here or in a worker, runs with the BLAS and
+  OpenMP thread pools limited to one thread (:mod:`threadpoolctl`): the results do not
+  depend on how the work is spread, and ``jobs`` workers use ``jobs`` cores.
+* **A cap, not a budget.** :meth:`TaskRunner.map` takes a ``deadline`` (a
+  :func:`time.monotonic` value): items not started by then are cancelled and their
+  results are None. The caller says so; nothing else depends on the clock.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from blockid.data.dataset import Dataset, Experiment
+
+__all__ = ["TaskRunner", "available_cores"]
+
+#: Set in each worker process by :func:`_start_worker`.
+_WORKER_DATA: Dataset | None = None
+_WORKER_MEMORY: Any = None
+
+
+def available_cores() -> int:
+    """Cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _start_method() -> str:
+    import multiprocessing
+
+    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+
+
+def _single_threaded() -> Any:
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1)
+
+
+def _layout(data: Dataset) -> tuple[list[tuple[str, int]], int]:
+    """``(name, samples)`` per experiment and the floats they need (u then y, row major)."""
+    shapes = [(e.name, e.n_samples) for e in data.experiments]
+    width = data.n_inputs + data.n_outputs
+    return shapes, sum(n for _, n in shapes) * width
+
+
+def _views(buffer: Any, data_meta: tuple[Any, ...]) -> Dataset:
+    inputs, outputs, ts, source, shapes = data_meta
+    nu, ny = len(inputs), len(outputs)
+    flat = np.ndarray((sum(n for _, n in shapes) * (nu + ny),), dtype=np.float64, buffer=buffer)
+    exps, at = [], 0
+    for name, n in shapes:
+        u = flat[at : at + n * nu].reshape(n, nu)
+        at += n * nu
+        y = flat[at : at + n * ny].reshape(n, ny)
+        at += n * ny
+        u.flags.writeable = False
+        y.flags.writeable = False
+        exps.append(Experiment(name, u, y))
+    return Dataset(list(inputs), list(outputs), ts, exps, source)
+
+
+def _start_worker(memory_name: str, data_meta: tuple[Any, ...]) -> None:
+    """Worker initialiser: map the shared record, limit the thread pools."""
+    global _WORKER_DATA, _WORKER_MEMORY
+    from multiprocessing import shared_memory
+
+    _WORKER_MEMORY = shared_memory.SharedMemory(name=memory_name)
+    _WORKER_DATA = _views(_WORKER_MEMORY.buf, data_meta)
+    _single_threaded()  # for the life of the worker
+
+
+def _call(fn: Callable[[Dataset, Any], Any], item: Any) -> Any:
+    assert _WORKER_DATA is not None, "worker started without its data"
+    return fn(_WORKER_DATA, item)
+
+
+class TaskRunner:
+    """Runs ``fn(data, item)`` over items, here or in worker processes (module notes).
+
+    Use as a context manager: the workers and the shared memory live until it exits.
+
+    Parameters
+    ----------
+    data : Dataset
+        The record every call gets.
+    jobs : int
+        Worker processes; 1 runs everything in this process.
+    """
+
+    def __init__(self, data: Dataset, jobs: int) -> None:
+        self.data = data
+        self.jobs = max(1, int(jobs))
+        self._pool: Any = None
+        self._memory: Any = None
+
+    def __enter__(self) -> TaskRunner:
+        if self.jobs > 1:
+            self._start()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def _start(self) -> None:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+        from multiprocessing import shared_memory
+
+        shapes, floats = _layout(self.data)
+        self._memory = shared_memory.SharedMemory(create=True, size=max(floats, 1) * 8)
+        flat = np.ndarray((floats,), dtype=np.float64, buffer=self._memory.buf)
+        at = 0
+        for e in self.data.experiments:
+            for block in (e.u, e.y):
+                flat[at : at + block.size] = block.reshape(-1)
+                at += block.size
+        meta = (
+            tuple(self.data.inputs),
+            tuple(self.data.outputs),
+            self.data.sampling_time,
+            self.data.source,
+            shapes,
+        )
+        self._pool = ProcessPoolExecutor(
+            max_workers=self.jobs,
+            mp_context=multiprocessing.get_context(_start_method()),
+            initializer=_start_worker,
+            initargs=(self._memory.name, meta),
+        )
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+        if self._memory is not None:
+            self._memory.close()
+            self._memory.unlink()
+            self._memory = None
+
+    def map(
+        self,
+        fn: Callable[[Dataset, Any], Any],
+        items: Sequence[Any],
+        *,
+        done: Callable[[int, Any], None] | None = None,
+        deadline: float | None = None,
+    ) -> list[Any]:
+        """``[fn(data, item) for item in items]``, in the items' order.
+
+        ``done(i, result)`` is called as each result arrives (in any order with
+        workers). Items not started by ``deadline`` (:func:`time.monotonic`) give None.
+        """
+        results: list[Any] = [None] * len(items)
+        if self._pool is None:
+            with _single_threaded():
+                for i, item in enumerate(items):
+                    if deadline is not None and time.monotonic() > deadline:
+                        break
+                    results[i] = fn(self.data, item)
+                    if done is not None:
+                        done(i, results[i])
+            return results
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        futures = {self._pool.submit(_call, fn, item): i for i, item in enumerate(items)}
+        pending = set(futures)
+        while pending:
+            timeout = None if deadline is None else max(deadline - time.monotonic(), 0.0)
+            finished, pending = wait(pending, timeout=timeout, return_when=FIRST_COMPLETED)
+            for future in finished:
+                if future.cancelled():
+                    continue
+                i = futures[future]
+                results[i] = future.result()
+                if done is not None:
+                    done(i, results[i])
+            if deadline is not None and time.monotonic() > deadline:
+                for future in pending:
+                    future.cancel()  # those already running finish; the rest do not start
+                deadline = None  # then wait for the running ones without a timeout
+        return results

@@ -1,0 +1,225 @@
+"""identify(): choosing on estimation data only, by cross-validated free-run simulation,
+the same answer on any machine and with any number of workers."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from blockid import errors
+from blockid.blocks import DeadZone, LinearBlock
+from blockid.blocks.integrator import Integrator
+from blockid.cli.main import app
+from blockid.data import Dataset
+from blockid.models import ARX, ChainModel, Hammerstein
+from blockid.workflows.identify import EFFORTS, Effort, identify
+
+#: A small search for tests: 3 folds, orders up to 3, delays up to 2, 3 block families.
+SMALL = Effort("small", 3, 2, 3, 2, 1, 3, 15, 10_000, 2, 40, 1)
+
+
+def dead_zone_record(n=1200, seed=0, noise=0.01):
+    plant = Hammerstein("u", "y", input_block=DeadZone(-0.3, 0.3, 1.0, 1.0),
+                        na=2, nb=2, nk=1, a=[-1.2, 0.5], b=[1.0, 0.4])  # fmt: skip
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, n // 4), 4)
+    y = plant.simulate(u)[:, 0] + noise * rng.standard_normal(u.size)
+    return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+
+def _fits(result):
+    """(label, stage) of every scored or rejected candidate."""
+    return [(s.candidate.key, s.stage) for s in result.ranked + result.rejected]
+
+
+def test_a_dead_zone_plant_gets_its_structure_and_beats_the_linear_model():
+    data = dead_zone_record()
+    effort = Effort("dz", 3, 2, 3, 2, 1, None, 15, 10_000, 2, 40, 1)
+    result = identify(data, structures=["arx", "hammerstein"], effort=effort, jobs=1)
+    best = result.selected
+    linear = min(s.rmse for s in result.ranked if s.candidate.structure == "arx")
+    assert best.candidate.structure == "hammerstein"
+    assert best.candidate.options["input_block"] == "dead-zone"
+    assert best.rmse < 0.2 * linear  # measured 0.0098 against 0.12
+    assert best.candidate.options["nk"] == 1 and best.candidate.options["na"] == 2
+    band = result.model.input_block
+    assert band.lower == pytest.approx(-0.3, abs=0.01) and band.upper == pytest.approx(
+        0.3, abs=0.01
+    )
+    assert result.on == "estimation" and any("optimistic" in n for n in result.notes)
+    assert result.search["effort"] == "dz" and len(result.search["folds"]) == 3
+
+
+def test_validation_data_never_change_the_choice():
+    data = dead_zone_record()
+    val1 = dead_zone_record(seed=1)
+    val2 = Dataset.from_arrays(
+        val1.experiments[0].u, 10 * val1.experiments[0].y, ["u"], ["y"]
+    )  # a wildly different record
+    r1 = identify(data, val1, structures=["arx", "hammerstein"], effort=SMALL, jobs=1)
+    r2 = identify(data, val2, structures=["arx", "hammerstein"], effort=SMALL, jobs=1)
+    assert r1.selected.candidate == r2.selected.candidate
+    assert np.array_equal(r1.model.free_parameters(), r2.model.free_parameters())
+    assert r1.on == "validation"
+    assert r1.simulation.metrics["rmse"]["y"] < r2.simulation.metrics["rmse"]["y"]
+
+
+def test_one_worker_or_two_give_the_same_model_bit_for_bit():
+    data = dead_zone_record(800)
+    one = identify(data, structures=["arx", "hammerstein", "wiener"], effort=SMALL, jobs=1)
+    two = identify(data, structures=["arx", "hammerstein", "wiener"], effort=SMALL, jobs=2)
+    assert one.selected.candidate == two.selected.candidate
+    assert np.array_equal(one.model.free_parameters(), two.model.free_parameters())
+    assert [s.rmse for s in one.ranked] == [s.rmse for s in two.ranked]
+    assert _fits(one) == _fits(two)
+    assert one.search["jobs"] == 1 and two.search["jobs"] == 2
+
+
+def test_a_busy_machine_gives_the_same_model_bit_for_bit():
+    """A process burning a core beside the search changes nothing: the search is a fixed
+    amount of work, not a time budget."""
+    data = dead_zone_record(800)
+    options = dict(structures=["arx", "hammerstein"], effort=SMALL, jobs=1)
+    quiet = identify(data, **options)
+    hog = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        busy = identify(data, **options)
+    finally:
+        os.kill(hog.pid, 9)
+        hog.wait()
+    assert busy.selected.candidate == quiet.selected.candidate
+    assert np.array_equal(busy.model.free_parameters(), quiet.model.free_parameters())
+    assert _fits(busy) == _fits(quiet)
+
+
+def test_a_time_limit_cuts_the_search_and_says_so():
+    data = dead_zone_record(800)
+    result = identify(data, structures=["arx", "hammerstein"], effort=SMALL, jobs=1,
+                      time_limit=1e-6)  # fmt: skip
+    assert result.cut_by_time_limit
+    doc = result.to_dict()
+    assert doc["search"]["cut_by_time_limit"] is True
+    assert any("time limit" in n for n in result.notes)
+    # the delay scan always completes, so a (linear) model is there
+    assert result.selected.candidate.structure == "arx"
+    assert not identify(data, structures=["arx"], effort=SMALL, jobs=1).cut_by_time_limit
+
+
+def test_no_candidate_is_fitted_twice():
+    data = dead_zone_record(800)
+    result = identify(data, effort=SMALL, jobs=1)
+    keys = [s.candidate.key for s in result.ranked + result.rejected]
+    assert len(keys) == len(set(keys))
+    fits = sum(stage["fits"] for stage in result.search["stages"])
+    assert fits == len(keys) * len(result.search["folds"])
+
+
+def test_structures_asked_for_are_what_comes_back():
+    """``--structures output-error`` returned an ARX model (the order stage's) without a
+    word; now the answer is an output-error model, or an error saying why none."""
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-1, 1, 300), 3)
+    plant = ChainModel("u", "y", [LinearBlock(2, 2, 1, [-1.5, 0.7], [0.2, 0.1])])
+    y = plant.simulate(u)[:, 0] + 0.05 * rng.standard_normal(u.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    result = identify(data, structures=["output-error"], effort=SMALL, jobs=1)
+    assert result.selected.candidate.structure == "output-error"
+    assert result.fit.model.structure == "output-error"
+    # ARX fits still chose the orders, but are not offered as the answer
+    assert any(s.candidate.structure == "arx" for s in result.ranked)
+
+
+def test_when_no_structure_asked_for_fits_the_error_says_why(monkeypatch):
+    import blockid.fitting.dispatch as dispatch
+
+    real = dispatch.fit_model
+
+    def failing(data, structure, **options):
+        if structure == "backlash":
+            raise errors.EstimationError("the backlash would not close")
+        return real(data, structure, **options)
+
+    monkeypatch.setattr(dispatch, "fit_model", failing)
+    with pytest.raises(errors.EstimationError, match="no candidate of backlash") as info:
+        identify(dead_zone_record(600), structures=["backlash"], effort=SMALL, jobs=1)
+    assert "the backlash would not close" in str(info.value)
+
+
+def test_parsimony_among_near_ties_and_the_json_document():
+    rng = np.random.default_rng(2)
+    plant = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-0.7]}}, b={"y": {"u": [0.5]}})
+    u = rng.standard_normal(1500)
+    y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(1500)
+    result = identify(Dataset.from_arrays(u, y, ["u"], ["y"]), structures=["arx"], effort=SMALL,
+                      jobs=1)  # fmt: skip
+    assert result.selected.candidate.orders() == {"na": 1, "nb": 1, "nk": 1}
+    doc = json.loads(json.dumps(result.to_dict(), allow_nan=False))
+    assert doc["selected"]["structure"] == "arx"
+    assert doc["models"][0]["structure"] == "arx" and doc["search"]["candidates"] > 10
+    assert len(doc["selected"]["fold_rmse"]) == len(doc["search"]["folds"]) == 3
+    assert doc["search"]["effort"] == "small" and doc["search"]["cut_by_time_limit"] is False
+    assert set(doc["selected"]["simulation"]) >= {"rmse", "fit_percent"}
+
+
+def test_an_integrating_plant_gets_an_integrator():
+    rng = np.random.default_rng(1)
+    linear = LinearBlock(2, 2, 1, [-1.2, 0.35], [1.0, 0.4])
+    u = rng.uniform(-1, 1, 1500)
+    y = ChainModel("u", "y", [linear, Integrator(1)]).simulate(u)[:, 0]
+    y = y + 0.02 * rng.standard_normal(u.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    result = identify(data, structures=["arx", "output-error"], effort=SMALL, jobs=1)
+    assert any("integrates" in n for n in result.notes)
+    assert result.selected.candidate.options.get("integrator") == 1
+    assert [b.integrates for b in result.model.linear_blocks] == [0, 1]
+
+
+def test_bad_requests():
+    data = dead_zone_record(300)
+    with pytest.raises(errors.ParameterError, match="unknown"):
+        identify(data, structures=["narx"])
+    with pytest.raises(errors.ParameterError, match="effort"):
+        identify(data, effort="huge")
+    with pytest.raises(errors.ParameterError, match="jobs"):
+        identify(data, jobs=0)
+    with pytest.raises(errors.ParameterError, match="time_limit"):
+        identify(data, time_limit=0)
+    with pytest.raises(errors.ParameterError, match="rule"):
+        identify(data, rule="vote")
+    two = Dataset.from_arrays(np.ones((300, 2)) * np.arange(300)[:, None], np.arange(300.0),
+                              ["a", "b"], ["y"])  # fmt: skip
+    with pytest.raises(errors.ParameterError, match="one input and one output"):
+        identify(two, structures=["hammerstein"])
+
+
+def test_efforts_grow_monotonically():
+    quick, standard, thorough = (EFFORTS[k] for k in ("quick", "standard", "thorough"))
+    for field in ("folds", "max_order", "max_delay", "screen_nfev", "finalists", "final_nfev"):
+        assert getattr(quick, field) <= getattr(standard, field) <= getattr(thorough, field)
+
+
+def test_cli_refuses_overlapping_ranges_and_the_old_budget_and_writes_the_model(tmp_path):
+    data = dead_zone_record(800)
+    path = tmp_path / "d.csv"
+    e = data.experiments[0]
+    np.savetxt(path, np.column_stack((e.u[:, 0], e.y[:, 0])), delimiter=",", header="u,y",
+               comments="")  # fmt: skip
+    runner = CliRunner()
+    base = ["identify", str(path), "-u", "u", "-y", "y"]
+    r = runner.invoke(app, [*base, "--estimation", "0:600", "--validation", "500:800"])
+    assert r.exit_code == 2 and "overlap" in r.stderr
+    r = runner.invoke(app, [*base, "--budget", "60"])
+    assert r.exit_code == 2 and "--effort" in r.stderr
+    out = tmp_path / "m.json"
+    r = runner.invoke(app, [*base, "--estimation", "0:600", "--validation", "600:800",
+                            "--structures", "arx", "--effort", "quick", "--jobs", "1",
+                            "-o", str(out), "--json"])  # fmt: skip
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["selected"]["scored_on"] == "validation"
+    assert doc["search"]["effort"] == "quick" and doc["search"]["jobs"] == 1
+    assert json.loads(out.read_text())["model"]["structure"] == "arx"
