@@ -2,10 +2,10 @@
 
 Usage::
 
-    nice -n 5 .venv/bin/python benchmarks/real/run.py [--only NAME ...] [--budget SECONDS]
+    .venv/bin/python benchmarks/real/run.py [--only NAME ...] [--effort E] [--jobs N]
         [--time-limit SECONDS] [--write-docs] [--docs-only] [--results DIR] [--reruns DIR]
 
-Per data set (``datasets.py``): ``identify(estimation, budget=...)`` chooses and fits a
+Per data set (``datasets.py``): ``identify(estimation, effort=...)`` chooses and fits a
 model on the estimation data alone (no validation data enter the search); afterwards the
 model is simulated free-run on every standard test record, initialised with at most the
 benchmark's allowed initial test samples, and scored on the rest. Results go to
@@ -97,12 +97,12 @@ def _load() -> str:
     return " ".join(f"{v:.2f}" for v in os.getloadavg())
 
 
-def run_one(bench: Benchmark, budget: float) -> dict[str, Any]:
-    from blockid.fitting.identify import identify
+def run_one(bench: Benchmark, effort: str, jobs: int | None) -> dict[str, Any]:
+    from blockid.workflows.identify import identify
 
     out: dict[str, Any] = _meta(bench)
     out.update(
-        budget=budget, load_before=_load(), started=datetime.now(UTC).isoformat(), commit=_commit()
+        effort=effort, load_before=_load(), started=datetime.now(UTC).isoformat(), commit=_commit()
     )
     last = [""]
     stage_times: dict[str, float] = {}  # seconds at the first report of each stage
@@ -117,7 +117,7 @@ def run_one(bench: Benchmark, budget: float) -> dict[str, Any]:
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = identify(bench.estimation, budget=budget, progress=progress)
+        result = identify(bench.estimation, effort=effort, jobs=jobs, progress=progress)
         wall = time.perf_counter() - t0
         sel = result.selected
         model = result.model
@@ -152,9 +152,11 @@ def run_one(bench: Benchmark, budget: float) -> dict[str, Any]:
             "options": {k: str(v) for k, v in sel.candidate.options.items()},
             "method": result.fit.method,
             "stage": sel.stage,
-            "holdout_rmse": sel.rmse * bench.scale,
+            "cv_rmse": sel.rmse * bench.scale,
+            "fold_rmse": [f.rmse * bench.scale for f in sel.folds],
             "n_parameters": sel.n_parameters,
             "max_lag": int(model.max_lag),
+            "flags": list(sel.flags),
         },
         refinement={
             "initial_simulation_mse": ini,
@@ -167,11 +169,25 @@ def run_one(bench: Benchmark, budget: float) -> dict[str, Any]:
             {
                 "label": s.candidate.label,
                 "stage": s.stage,
-                "holdout_rmse": s.rmse * bench.scale,
+                "cv_rmse": s.rmse * bench.scale,
                 "n_parameters": s.n_parameters,
             }
             for s in result.ranked[:5]
         ],
+        # every scored candidate with its fold scores: enough to replay other rules
+        scored=[
+            {
+                "structure": s.candidate.structure,
+                "options": s.candidate.options,
+                "stage": s.stage,
+                "relative": [f.relative for f in s.folds],
+                "fold_rmse": [f.rmse * bench.scale for f in s.folds],
+                "n_parameters": s.n_parameters,
+                "flags": len(s.flags),
+            }
+            for s in result.ranked
+        ],
+        search=result.search,
         stage_times=stage_times,
         structures_scored=sorted(
             {s.candidate.structure for s in result.ranked if s.candidate.structure != "arx"}
@@ -575,7 +591,8 @@ def _section(name: str, r: dict[str, Any]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--only", nargs="+", metavar="NAME", choices=list(ALL))
-    p.add_argument("--budget", type=float, help="seconds per set (default: each set's own)")
+    p.add_argument("--effort", default="standard", choices=["quick", "standard", "thorough"])
+    p.add_argument("--jobs", type=int, help="worker processes (default: every core)")
     p.add_argument(
         "--time-limit", type=float, default=45 * 60,
         help="no set is started after this many seconds (the rest: 'not run (time)')",
@@ -604,19 +621,18 @@ def main(argv: list[str] | None = None) -> int:
                                       "error": str(exc)})  # fmt: skip
                 print(f"  skipped: {exc}", flush=True)
                 continue
-            budget = args.budget or bench.budget
             elapsed = time.perf_counter() - t_start
-            if elapsed + budget > args.time_limit:
-                rec = {**_meta(bench), "status": "not run (time)", "budget": budget,
+            if elapsed > args.time_limit:
+                rec = {**_meta(bench), "status": "not run (time)", "effort": args.effort,
                        "reason": f"not run (time): {elapsed:.0f} s of the run's "
                                  f"{args.time_limit:.0f} s were spent before it"}  # fmt: skip
                 _save(results, name, rec)
                 print("  not run (time)", flush=True)
                 continue
             try:
-                record = run_one(bench, budget)
+                record = run_one(bench, args.effort, args.jobs)
             except Exception as exc:  # noqa: BLE001 - recorded in the doc, not raised
-                record = {**_meta(bench), "status": "failed", "budget": budget,
+                record = {**_meta(bench), "status": "failed", "effort": args.effort,
                           "error": f"{type(exc).__name__}: {exc}",
                           "traceback": traceback.format_exc()}  # fmt: skip
                 print(record["traceback"], flush=True)

@@ -80,6 +80,7 @@ from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.fitting.checks import STABILITY_MARGIN, check_model, simulation_mse
 from blockid.fitting.initial import initial_estimate, resolve_structure
+from blockid.fitting.levenberg_marquardt import levenberg_marquardt
 from blockid.fitting.result import FitResult
 from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
 
@@ -414,66 +415,6 @@ class _Problem:
         return float(np.mean(err**2)) if np.all(np.isfinite(err)) else np.inf
 
 
-def _levenberg_marquardt(
-    problem: _Problem,
-    theta0: np.ndarray,
-    bounds: tuple[np.ndarray, np.ndarray],
-    max_nfev: int,
-    ftol: float,
-    xtol: float,
-    gtol: float,
-) -> tuple[np.ndarray, str]:
-    """Levenberg-Marquardt on the normal equations, for records whose Jacobian is too
-    large to hold (:data:`LARGE_JACOBIAN`).
-
-    Columns scaled to unit norm (as ``x_scale="jac"``), damping by Nielsen's rule from
-    the gain ratio, steps clipped to the bounds; a rejected residual (unstable, invalid
-    or exploding candidate: :meth:`_Problem.residuals`) raises the damping. Stops like
-    ``scipy.optimize.least_squares``: relative cost reduction below ``ftol``, step below
-    ``xtol`` relative to the parameters, every scaled gradient entry below ``gtol``
-    times the residual norm (the cosine between the residual and each column), or
-    ``max_nfev`` residual evaluations. Returns the final iterate and why it stopped.
-    """
-    lower, upper = bounds
-    theta = theta0.copy()
-    r = problem.residuals(theta)
-    cost = 0.5 * float(r @ r)
-    H, g = problem.normal_equations(theta)
-    mu, nu = 1e-3, 2.0
-    while problem.tracker.nfev < max_nfev:
-        d = np.sqrt(np.diag(H))
-        d[d == 0] = 1.0
-        Hs, gs = H / np.outer(d, d), g / d
-        if np.max(np.abs(gs), initial=0.0) <= gtol * np.sqrt(2.0 * cost):
-            return theta, "`gtol` termination condition is satisfied."
-        try:
-            p = -np.linalg.solve(Hs + mu * np.eye(theta.size), gs)
-        except np.linalg.LinAlgError:
-            mu, nu = mu * nu, 2.0 * nu
-            continue
-        new = np.clip(theta + p / d, lower, upper)
-        r_new = problem.residuals(new)
-        cost_new = 0.5 * float(r_new @ r_new)
-        predicted = 0.5 * float(p @ (mu * p - gs))
-        rho = (cost - cost_new) / predicted if predicted > 0 else -1.0
-        if rho > 0 and cost_new < cost:
-            reduction = cost - cost_new
-            small = np.linalg.norm(new - theta) <= xtol * (xtol + np.linalg.norm(theta))
-            theta, cost = new, cost_new
-            if reduction <= ftol * (cost + reduction):
-                return theta, "`ftol` termination condition is satisfied."
-            if small:
-                return theta, "`xtol` termination condition is satisfied."
-            H, g = problem.normal_equations(theta)
-            mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
-            nu = 2.0
-        else:
-            mu, nu = mu * nu, 2.0 * nu
-            if mu > 1e16:
-                return theta, "no step reduces the error"
-    return theta, "max_nfev reached"
-
-
 def _describe(model: ChainModel) -> dict[str, Any]:
     """Orders and block kinds of a model, for ``settings``."""
     out: dict[str, Any] = {}
@@ -604,7 +545,7 @@ def refine(
     try:
         with np.errstate(all="ignore"):
             if large:
-                theta, stop_reason = _levenberg_marquardt(
+                theta, stop_reason = levenberg_marquardt(
                     problem, theta0, (lower, upper), int(max_nfev), ftol, xtol, gtol
                 )
             else:

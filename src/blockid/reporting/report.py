@@ -273,7 +273,8 @@ def _identify_search(identify: Any) -> str:
     parts = [
         paragraph(
             f"identify() chose {sel.candidate.label} by its cross-validated free-run RMSE "
-            f"on the estimation data ({identify.holdout}; the median over the folds); "
+            f"on the estimation data ({identify.holdout}; folds combined by their "
+            f"{search.get('rule', 'geometric-mean').replace('-', ' ')}); "
             f"among near-ties the model with the fewest parameters wins. "
             f"{len(identify.ranked)} candidates scored, {len(identify.rejected)} rejected, "
             f"in {identify.seconds:.1f} s (effort {search.get('effort', '?')}). The chosen "
@@ -293,7 +294,7 @@ def _identify_search(identify: Any) -> str:
                 "candidate (best first)",
                 "stage",
                 "parameters",
-                "CV RMSE (median over folds)",
+                "CV RMSE",
                 "CV fit %",
                 "seconds",
             ],

@@ -12,12 +12,13 @@ simulated free-run on the held-back one from the fold's start, its initial state
 estimated from the fold's first ``n_init`` measured outputs
 (:func:`~blockid.evaluation.validate.evaluate` with ``initial_samples``, the function
 ``compare`` scores with), and scored on the rest of the fold. A fold's RMSE is divided
-by the spread of its output; the candidate's score is the **median** over the folds
-(``rule``), in units of the output's spread over all estimation data (so it reads as an
-RMSE). A single held-back tail of 100-250 samples was too noisy a judge on short
-records; the plain mean lets one unusual fold decide (``docs/identify.md`` has the
-study). A candidate that fails, is unstable, does not simulate finitely or is not
-trusted (:mod:`blockid.evaluation.trust`) on any fold is **rejected with its reason**.
+by the spread of its output; the candidate's score is the **geometric mean** over the
+folds (``rule``), in units of the output's spread over all estimation data (so it reads
+as an RMSE): every fold counts, none by its size alone. A single held-back tail of
+100-250 samples was too noisy a judge on short records, and the plain mean lets one
+unusual fold decide (``docs/identify.md`` has the study that chose the rule). A
+candidate that fails, is unstable, does not simulate finitely or is not trusted
+(:mod:`blockid.evaluation.trust`) on any fold is **rejected with its reason**.
 
 **The stages** (``effort`` sets their sizes, :data:`EFFORTS`):
 
@@ -99,8 +100,9 @@ Progress = Callable[[str, int, int, str], None]
 INTEGRATING_POLE = 1e-2
 #: Records of at least this many samples get fewer folds and screening on a part.
 LONG_RECORD = 20_000
-#: How fold scores are combined into a candidate's score.
-RULES = ("median", "mean")
+#: How fold scores are combined into a candidate's score (``docs/identify.md`` has the
+#: study that chose the first).
+RULES = ("geometric-mean", "median", "mean")
 
 
 @dataclass(frozen=True)
@@ -419,7 +421,7 @@ class _Search:
             score.reason = f"{f.reason} ({self.plan.folds[i].name})"
             return score
         rel = np.array([f.relative for f in folds])
-        agg = float(np.median(rel)) if self.rule == "median" else float(np.mean(rel))
+        agg = _combine_folds(rel, self.rule)
         score.rmse = agg * self.spread
         score.fit_percent = 100.0 * (1.0 - agg)
         score.n_parameters = max(f.n_parameters for f in folds)
@@ -445,6 +447,15 @@ class _Search:
             key=lambda s: (bool(s.flags), s.n_parameters, -_delay(s), s.rmse, s.candidate.label)
         )
         return near + [s for s in ordered if s not in near]
+
+
+def _combine_folds(relative: np.ndarray, rule: str) -> float:
+    """One number from the folds' relative errors (:data:`RULES`)."""
+    if rule == "geometric-mean":
+        return float(np.exp(np.mean(np.log(np.maximum(relative, 1e-300)))))
+    if rule == "median":
+        return float(np.median(relative))
+    return float(np.mean(relative))
 
 
 def _delay(score: Score) -> int:
@@ -499,7 +510,7 @@ def identify(
     effort: str | Effort = "standard",
     jobs: int | None = None,
     time_limit: float | None = None,
-    rule: str = "median",
+    rule: str = "geometric-mean",
     tie: float = 0.02,
     use_orders_test: bool = True,
     progress: Progress | None = None,
@@ -526,8 +537,8 @@ def identify(
     time_limit : float, optional
         Seconds after which no new fit starts (a safety cap; the result then says it was
         cut and may differ from an uncut run). None: no cap.
-    rule : {"median", "mean"}
-        How a candidate's fold scores are combined.
+    rule : {"geometric-mean", "median", "mean"}
+        How a candidate's fold scores are combined (module docstring).
     tie : float
         Relative score within which the candidate with fewer parameters wins.
     use_orders_test : bool

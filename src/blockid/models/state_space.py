@@ -1,0 +1,468 @@
+"""Linear and polynomial nonlinear state-space models (discrete time, MIMO).
+
+.. math::
+
+    x(k+1) = A x(k) + B u(k) + E\\, \\zeta(x(k), u(k)), \\qquad
+    y(k) = C x(k) + D u(k) + F\\, \\eta(x(k), u(k))
+
+in normalised signals: the model works on ``u_n = (u - input_offset) / input_scale``
+and returns ``y = output_offset + output_scale * y_n`` (offsets and scales are the
+estimation data's means and spreads, so that the matrices are of order one whatever
+the units). ``ζ`` and ``η`` are the same monomials of ``z = [x; u_n]`` (the rows of
+``exponents``), of total degree 2 to ``degree`` (PNLSS: Paduart et al., Automatica 46,
+2010). :class:`StateSpace` is the linear model (no monomials).
+
+**Bounded beyond the estimation range.** Before the monomials are taken, every
+coordinate of ``z`` is clipped to ``[lower, upper]``, the range the fit let it span:
+the monomials hold their boundary values beyond it (a saturated-monomial variant of
+PNLSS), so with ``A`` stable a free run on a record whose input exceeds the estimation
+range stays bounded, where a cubic in ``x`` would run away. Inside the range the model
+is the polynomial one exactly. :meth:`range_excursion` reports how far data drive
+``z`` out of it.
+
+**Initial state.** :meth:`simulate` given ``n`` measured outputs estimates ``x(0)`` from
+them by least squares (Gauss-Newton with the exact sensitivity of the first ``n``
+outputs, :mod:`blockid._kernels.state_space`); without, it starts at ``x(0) = 0`` (the
+operating point). ``max_lag`` is ``nx``: the default start of a free run is estimated
+from the first ``nx`` outputs, the fewest that determine the state of an observable
+single-output model.
+"""
+
+from __future__ import annotations
+
+from itertools import combinations_with_replacement
+from typing import Any, ClassVar
+
+import numpy as np
+
+from blockid._kernels.state_space import pnlss_jacobian, pnlss_simulate
+from blockid.errors import DataError, ModelFileError, OrderError
+from blockid.models.base import Model, excursion
+
+__all__ = ["PolynomialStateSpace", "StateSpace", "monomial_exponents"]
+
+#: Gauss-Newton iterations of the initial-state estimate.
+INITIAL_ITERATIONS = 20
+
+
+def monomial_exponents(nx: int, nu: int, degree: int, which: str = "full") -> np.ndarray:
+    """Exponents of the monomials of ``z = [x; u]`` of total degree ``2 .. degree``.
+
+    ``which``: ``"full"`` (every monomial of states and inputs), ``"states"`` (of the
+    states only) or ``"inputs"`` (of the inputs only: a Hammerstein-like nonlinearity
+    entering the state equation).
+
+    >>> monomial_exponents(2, 1, 2, "states").tolist()
+    [[2, 0, 0], [1, 1, 0], [0, 2, 0]]
+    """
+    if which not in ("full", "states", "inputs"):
+        raise OrderError(f"monomials={which!r}: choose full, states or inputs")
+    if degree < 1:
+        raise OrderError(f"degree must be >= 1 (1: linear), got {degree}")
+    variables = {
+        "full": range(nx + nu),
+        "states": range(nx),
+        "inputs": range(nx, nx + nu),
+    }[which]
+    rows = []
+    for d in range(2, degree + 1):
+        for combo in combinations_with_replacement(variables, d):
+            row = [0] * (nx + nu)
+            for i in combo:
+                row[i] += 1
+            rows.append(row)
+    return np.array(rows, dtype=np.int64).reshape(-1, nx + nu)
+
+
+def _matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.size == 0 and 0 in shape:
+        return np.zeros(shape)
+    arr = arr.reshape(shape) if arr.size == shape[0] * shape[1] else arr
+    if arr.shape != shape:
+        raise OrderError(f"{name} must have shape {shape}, got {np.shape(value)}")
+    out = np.ascontiguousarray(arr, dtype=float)
+    out.setflags(write=False)
+    return out
+
+
+def _vector(value: Any, n: int, name: str, default: float) -> np.ndarray:
+    arr = np.full(n, default) if value is None else np.asarray(value, dtype=float).reshape(-1)
+    if arr.size == 1 and n > 1:
+        arr = np.full(n, float(arr[0]))
+    if arr.size != n:
+        raise OrderError(f"{name} needs {n} value(s), got {arr.size}")
+    return arr
+
+
+class PolynomialStateSpace(Model):
+    """Polynomial nonlinear state-space model (module docstring).
+
+    Parameters
+    ----------
+    inputs, outputs : sequence of str
+    A, B, C, D : array_like
+        Linear part, shapes (nx, nx), (nx, nu), (ny, nx), (ny, nu).
+    E, F : array_like, optional
+        Coefficients of the monomials, (nx, nm) and (ny, nm) (zeros by default).
+    exponents : array_like of int, optional
+        (nm, nx + nu): the monomials (:func:`monomial_exponents`); none by default.
+    lower, upper : array_like, optional
+        Clipping range of ``z = [x; u_n]`` for the monomials (default unbounded).
+    input_offset, input_scale, output_offset, output_scale : array_like, optional
+        Normalisation of the signals (default 0 and 1).
+    K : array_like, optional
+        (nx, ny) gain of the one-step predictor ``x(k+1) = ... + K (y - ŷ)`` (a subspace
+        estimate's innovation form); None: :meth:`predict` is the free run.
+    sampling_time : float, optional
+
+    Examples
+    --------
+    >>> m = StateSpace(["u"], ["y"], A=[[0.5]], B=[[1.0]], C=[[1.0]], D=[[0.0]])
+    >>> m.simulate([1.0, 1.0, 1.0])[:, 0].tolist()
+    [0.0, 1.0, 1.5]
+    """
+
+    structure: ClassVar[str] = "polynomial-state-space"
+
+    def __init__(
+        self,
+        inputs: Any,
+        outputs: Any,
+        A: Any,
+        B: Any,
+        C: Any,
+        D: Any,
+        E: Any = None,
+        F: Any = None,
+        exponents: Any = None,
+        *,
+        lower: Any = None,
+        upper: Any = None,
+        input_offset: Any = None,
+        input_scale: Any = None,
+        output_offset: Any = None,
+        output_scale: Any = None,
+        K: Any = None,
+        sampling_time: float | None = None,
+    ) -> None:
+        self.inputs = tuple(str(v) for v in ([inputs] if isinstance(inputs, str) else inputs))
+        self.outputs = tuple(str(v) for v in ([outputs] if isinstance(outputs, str) else outputs))
+        nu, ny = len(self.inputs), len(self.outputs)
+        A = np.asarray(A, dtype=float)
+        nx = int(A.shape[0]) if A.ndim == 2 else 0
+        if nx < 1 or A.shape != (nx, nx):
+            raise OrderError(f"A must be a square matrix with at least one state, got {A.shape}")
+        self.A = _matrix(A, (nx, nx), "A")
+        self.B = _matrix(B, (nx, nu), "B")
+        self.C = _matrix(C, (ny, nx), "C")
+        self.D = _matrix(D, (ny, nu), "D")
+        expo = np.zeros((0, nx + nu), dtype=np.int64) if exponents is None else exponents
+        expo = np.asarray(expo, dtype=np.int64).reshape(-1, nx + nu)
+        if (expo < 0).any():
+            raise OrderError("monomial exponents must be whole numbers >= 0")
+        self.exponents = np.ascontiguousarray(expo)
+        self.exponents.setflags(write=False)
+        nm = expo.shape[0]
+        self.E = _matrix(np.zeros((nx, nm)) if E is None else E, (nx, nm), "E")
+        self.F = _matrix(np.zeros((ny, nm)) if F is None else F, (ny, nm), "F")
+        self.lower = _vector(lower, nx + nu, "lower", -np.inf)
+        self.upper = _vector(upper, nx + nu, "upper", np.inf)
+        if (self.lower > self.upper).any():
+            raise OrderError("every lower bound of the monomials' range must be <= its upper")
+        self.input_offset = _vector(input_offset, nu, "input_offset", 0.0)
+        self.input_scale = _vector(input_scale, nu, "input_scale", 1.0)
+        self.output_offset = _vector(output_offset, ny, "output_offset", 0.0)
+        self.output_scale = _vector(output_scale, ny, "output_scale", 1.0)
+        if (self.input_scale <= 0).any() or (self.output_scale <= 0).any():
+            raise OrderError("signal scales must be positive")
+        self.K = None if K is None else _matrix(K, (nx, ny), "K")
+        self.sampling_time = sampling_time
+
+    # ------------------------------------------------------------------ structure
+    @property
+    def nx(self) -> int:
+        return int(self.A.shape[0])
+
+    @property
+    def n_monomials(self) -> int:
+        return int(self.exponents.shape[0])
+
+    @property
+    def degree(self) -> int:
+        """Largest total degree of the monomials (1 for a linear model)."""
+        return int(self.exponents.sum(axis=1).max()) if self.n_monomials else 1
+
+    @property
+    def max_lag(self) -> int:
+        return self.nx
+
+    def poles(self) -> np.ndarray:
+        """Eigenvalues of ``A`` (the poles of the model linearised at the operating point,
+        where the monomials of degree 2 and more have zero slope)."""
+        return np.linalg.eigvals(self.A)
+
+    def is_stable(self, margin: float = 0.0) -> bool:
+        return bool(np.max(np.abs(self.poles())) < 1.0 - margin)
+
+    def linear_part(self) -> StateSpace:
+        """The model without its monomials (``E = F = 0``)."""
+        return StateSpace(
+            self.inputs, self.outputs, self.A, self.B, self.C, self.D,
+            input_offset=self.input_offset, input_scale=self.input_scale,
+            output_offset=self.output_offset, output_scale=self.output_scale, K=self.K,
+            sampling_time=self.sampling_time,
+        )  # fmt: skip
+
+    # ------------------------------------------------------------------ parameters
+    def free_parameters(self) -> np.ndarray:
+        """``[A, B, C, D, E, F]``, each row-major (the state basis is not fixed: any
+        invertible ``T`` gives the same model, so the parameters are unique only up to
+        it)."""
+        return np.concatenate(
+            [m.reshape(-1) for m in (self.A, self.B, self.C, self.D, self.E, self.F)]
+        )
+
+    def free_parameter_names(self) -> list[str]:
+        names = []
+        for key, m in zip("ABCDEF", (self.A, self.B, self.C, self.D, self.E, self.F), strict=True):
+            names += [f"{key}[{i},{j}]" for i in range(m.shape[0]) for j in range(m.shape[1])]
+        return names
+
+    def with_free_parameters(self, theta: Any) -> PolynomialStateSpace:
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        shapes = [m.shape for m in (self.A, self.B, self.C, self.D, self.E, self.F)]
+        sizes = [a * b for a, b in shapes]
+        if theta.size != sum(sizes):
+            raise OrderError(f"the model takes {sum(sizes)} parameters, got {theta.size}")
+        parts = np.split(theta, np.cumsum(sizes)[:-1])
+        mats = [p.reshape(s) for p, s in zip(parts, shapes, strict=True)]
+        return self.replace(A=mats[0], B=mats[1], C=mats[2], D=mats[3], E=mats[4], F=mats[5])
+
+    def replace(self, **changes: Any) -> PolynomialStateSpace:
+        """A copy with some constructor arguments changed."""
+        kwargs = dict(
+            A=self.A, B=self.B, C=self.C, D=self.D, E=self.E, F=self.F, exponents=self.exponents,
+            lower=self.lower, upper=self.upper, input_offset=self.input_offset,
+            input_scale=self.input_scale, output_offset=self.output_offset,
+            output_scale=self.output_scale, K=self.K, sampling_time=self.sampling_time,
+        )  # fmt: skip
+        kwargs.update(changes)
+        cls = PolynomialStateSpace if np.asarray(kwargs["exponents"]).size else type(self)
+        if cls is StateSpace:
+            for key in ("E", "F", "exponents", "lower", "upper"):
+                kwargs.pop(key)
+        return cls(self.inputs, self.outputs, **kwargs)
+
+    def _arrays(self) -> tuple[np.ndarray, ...]:
+        return (self.A, self.B, self.C, self.D, self.E, self.F, self.exponents,
+                np.ascontiguousarray(self.lower), np.ascontiguousarray(self.upper))  # fmt: skip
+
+    # ------------------------------------------------------------------ signals
+    def normalised_input(self, u: Any) -> np.ndarray:
+        u, _ = self._check_signals(u)
+        return np.ascontiguousarray((u - self.input_offset) / self.input_scale)
+
+    def normalised_output(self, y: Any) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        y = y.reshape(-1, 1) if y.ndim == 1 else y
+        if y.ndim != 2 or y.shape[1] != len(self.outputs):
+            raise DataError(
+                f"the model has {len(self.outputs)} output(s) {list(self.outputs)} but got an "
+                f"output array of shape {np.shape(y)}"
+            )
+        return (y - self.output_offset) / self.output_scale
+
+    def run(self, un: np.ndarray, x0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Free run on a normalised input from ``x0`` (default 0): normalised outputs
+        (N, ny) and the state after the last sample."""
+        x = np.zeros(self.nx) if x0 is None else np.array(x0, dtype=float)
+        y = np.zeros((un.shape[0], len(self.outputs)))
+        pnlss_simulate(*self._arrays(), np.ascontiguousarray(un), x, y)
+        return y, x
+
+    def states(self, u: Any, x0: np.ndarray | None = None) -> np.ndarray:
+        """The states of a free run on input ``u`` (rows: samples), with ``x(0) = x0``."""
+        un = self.normalised_input(u)
+        out = np.empty((un.shape[0], self.nx))
+        x = np.zeros(self.nx) if x0 is None else np.array(x0, dtype=float)
+        one = np.zeros((1, len(self.outputs)))
+        for k in range(un.shape[0]):
+            out[k] = x
+            pnlss_simulate(*self._arrays(), np.ascontiguousarray(un[k : k + 1]), x, one)
+        return out
+
+    def initial_state(self, u: Any, y_initial: Any) -> np.ndarray:
+        """``x(0)`` fitted to the measured outputs ``y_initial`` (their number ``n``; the
+        first ``n`` inputs of ``u``): least squares, Gauss-Newton from 0 with the exact
+        sensitivity (one step for a linear model)."""
+        yn = self.normalised_output(y_initial)
+        n = yn.shape[0]
+        un = self.normalised_input(u)[:n]
+        nx, P = self.nx, self.free_parameters().size + self.nx
+        x0 = np.zeros(nx)
+        best = np.inf
+        for _ in range(INITIAL_ITERATIONS):
+            x = x0.copy()
+            S = np.zeros((nx, P))
+            S[:, P - nx :] = np.eye(nx)
+            y = np.zeros((n, len(self.outputs)))
+            J = np.zeros((n * len(self.outputs), P))
+            with np.errstate(all="ignore"):
+                pnlss_jacobian(*self._arrays(), un, x, S, y, J)
+            r = (yn - y).reshape(-1)
+            cost = float(r @ r)
+            if not np.isfinite(cost) or cost >= best * (1 - 1e-12):
+                break
+            best = cost
+            step = np.linalg.lstsq(J[:, P - nx :], r, rcond=None)[0]
+            x0 = x0 + step
+            if self.n_monomials == 0:
+                break  # exact in one step
+        return x0
+
+    # ------------------------------------------------------------------ Model
+    def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
+        """Free run; with measured outputs ``y_initial`` the initial state is estimated
+        from all of them (module docstring) and the first ``min(n, max_lag)`` outputs are
+        copied from them, as every model does."""
+        un = self.normalised_input(u)
+        x0 = None
+        n = 0
+        if y_initial is not None and len(np.atleast_1d(y_initial)):
+            y0 = np.asarray(y_initial, dtype=float)
+            n = min(y0.shape[0], un.shape[0])
+            x0 = self.initial_state(u, y0[:n])
+        yn, _ = self.run(un, x0)
+        y = yn * self.output_scale + self.output_offset
+        k = min(n, self.max_lag)
+        if k:
+            y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, len(self.outputs))[:k]
+        return y
+
+    def predict(self, u: Any, y: Any) -> np.ndarray:
+        """One step ahead. With a predictor gain ``K`` (subspace estimates) the state is
+        corrected by every measured output; without (an output-error model, fitted on
+        its free run) the one-step prediction is the free run from the state estimated
+        from the first ``max_lag`` outputs, as MATLAB's for ``K = 0``."""
+        u, y = self._check_signals(u, y)
+        if self.K is None:
+            return self.simulate(u, y[: self.max_lag])
+        un = self.normalised_input(u)
+        yn = self.normalised_output(y)
+        x = self.initial_state(u, y[: self.max_lag])
+        out = np.zeros_like(yn)
+        one = np.zeros((1, len(self.outputs)))
+        for k in range(un.shape[0]):
+            before = x.copy()
+            pnlss_simulate(*self._arrays(), np.ascontiguousarray(un[k : k + 1]), x, one)
+            out[k] = one[0]
+            x = x + self.K @ (yn[k] - one[0]) if np.all(np.isfinite(before)) else x
+        pred = out * self.output_scale + self.output_offset
+        pred[: self.max_lag] = y[: self.max_lag]
+        return pred
+
+    def range_excursion(self, u: Any) -> dict[str, float]:
+        """How far a free run from rest on ``u`` drives ``z = [x; u_n]`` beyond the range
+        its monomials are clipped to (fractions of each range's width); empty for a
+        linear model or an unbounded range."""
+        if not self.n_monomials:
+            return {}
+        z = np.hstack([self.states(u), self.normalised_input(u)])
+        inputs = ["u" if i == 0 else f"u{i + 1}" for i in range(len(self.inputs))]
+        names = [f"x{i + 1}" for i in range(self.nx)] + inputs
+        out = {}
+        for i, name in enumerate(names):
+            if np.isfinite(self.lower[i]) and np.isfinite(self.upper[i]):
+                out[name] = excursion((self.lower[i], self.upper[i]), z[:, i])
+        return out
+
+    def extrapolation(self, u: Any) -> list[str]:
+        """Warnings when ``u`` drives the monomials' arguments beyond their range."""
+        notes = []
+        for name, value in self.range_excursion(u).items():
+            if value > 0.02:
+                what = f"state {name}" if name.startswith("x") else f"input {name}"
+                notes.append(
+                    f"the {what} leaves the range the monomials were fitted on by up to "
+                    f"{100 * value:.0f} % of it: the nonlinear terms hold their boundary "
+                    "values there"
+                )
+        return notes
+
+    def to_dict(self) -> dict[str, Any]:
+        def finite(v: np.ndarray) -> list[float | None]:
+            return [float(x) if np.isfinite(x) else None for x in v]
+
+        out: dict[str, Any] = {
+            "structure": self.structure,
+            "inputs": list(self.inputs),
+            "outputs": list(self.outputs),
+            "sampling_time": self.sampling_time,
+            "nx": self.nx,
+            "A": self.A.tolist(),
+            "B": self.B.tolist(),
+            "C": self.C.tolist(),
+            "D": self.D.tolist(),
+            "normalisation": {
+                "input_offset": self.input_offset.tolist(),
+                "input_scale": self.input_scale.tolist(),
+                "output_offset": self.output_offset.tolist(),
+                "output_scale": self.output_scale.tolist(),
+            },
+        }
+        if self.K is not None:
+            out["K"] = self.K.tolist()
+        if self.n_monomials:
+            out.update(
+                exponents=self.exponents.tolist(), E=self.E.tolist(), F=self.F.tolist(),
+                lower=finite(self.lower), upper=finite(self.upper),
+            )  # fmt: skip
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> PolynomialStateSpace:
+        norm = data.get("normalisation", {})
+
+        def bound(key: str, default: float) -> Any:
+            values = data.get(key)
+            return None if values is None else [default if v is None else v for v in values]
+
+        try:
+            kwargs = dict(
+                input_offset=norm.get("input_offset"), input_scale=norm.get("input_scale"),
+                output_offset=norm.get("output_offset"), output_scale=norm.get("output_scale"),
+                K=data.get("K"), sampling_time=data.get("sampling_time"),
+            )  # fmt: skip
+            args = (data["inputs"], data["outputs"], data["A"], data["B"], data["C"], data["D"])
+            if cls is StateSpace or "exponents" not in data:
+                return StateSpace(*args, **kwargs)
+            return PolynomialStateSpace(
+                *args, data["E"], data["F"], data["exponents"], lower=bound("lower", -np.inf),
+                upper=bound("upper", np.inf), **kwargs,
+            )  # fmt: skip
+        except OrderError as exc:
+            raise ModelFileError(f"the state-space model description is invalid: {exc}") from None
+
+
+class StateSpace(PolynomialStateSpace):
+    """Linear state-space model, ``x(k+1) = A x + B u``, ``y = C x + D u`` (normalised
+    signals, module docstring)."""
+
+    structure: ClassVar[str] = "state-space"
+
+    def __init__(self, inputs: Any, outputs: Any, A: Any, B: Any, C: Any, D: Any, **kwargs: Any):
+        for key in ("E", "F", "exponents", "lower", "upper"):
+            if kwargs.get(key) is not None:
+                raise OrderError(f"a linear state-space model has no {key}")
+            kwargs.pop(key, None)
+        super().__init__(inputs, outputs, A, B, C, D, **kwargs)
+
+    def transfer_function(self, i: int = 0, j: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Numerator and denominator of output ``i`` over input ``j`` in ``z`` (descending
+        powers), in the signals' own units: ``y_i = G(z) u_j``."""
+        from scipy.signal import ss2tf
+
+        num, den = ss2tf(self.A, self.B[:, [j]], self.C[[i], :], self.D[[i], [j]].reshape(1, 1))
+        gain = self.output_scale[i] / self.input_scale[j]
+        return np.asarray(num[0]) * gain, np.asarray(den)
