@@ -24,6 +24,7 @@ from blockid.models import (
     Wiener,
     WienerHammerstein,
 )
+from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
 
 #: The linear block of every plant: poles 0.7 and 0.5 (na = 2, nb = 2, nk = 1).
 A = [-1.2, 0.35]
@@ -60,6 +61,22 @@ def output_error_plant() -> OutputError:
     return OutputError("u", "y", **LINEAR)
 
 
+def state_space_plant() -> StateSpace:
+    """Poles 0.7 and 0.5 (the other plants' linear block), as a state-space model."""
+    return StateSpace(["u"], ["y"], A=[[1.2, -0.35], [1.0, 0.0]], B=[[1.0], [0.0]],
+                      C=[[1.0, 0.4]], D=[[0.0]])  # fmt: skip
+
+
+def polynomial_state_space_plant() -> PolynomialStateSpace:
+    """The state-space plant with x1^2 and x1^3 feeding the first state."""
+    expo = monomial_exponents(2, 1, 3, "states")
+    E = np.zeros((2, expo.shape[0]))
+    E[0, 0], E[0, 3] = 0.05, -0.02  # x1^2, x1^3
+    lin = state_space_plant()
+    return PolynomialStateSpace(["u"], ["y"], lin.A, lin.B, lin.C, lin.D, E,
+                                np.zeros((1, expo.shape[0])), expo)  # fmt: skip
+
+
 def wiener_hammerstein_plant() -> WienerHammerstein:
     return WienerHammerstein(
         "u",
@@ -90,6 +107,8 @@ PLANTS = {
     "output-error": output_error_plant,
     "wiener-hammerstein": wiener_hammerstein_plant,
     "feedback": feedback_plant,
+    "state-space": state_space_plant,
+    "polynomial-state-space": polynomial_state_space_plant,
 }
 
 
@@ -196,6 +215,16 @@ CASES = {
             {**ORDERS, "r2": 3, **_FAST},
             amplitude=1.5,
             mean=0.2,
+        ),
+        Case("state-space", "simulation-error", 300, {"max_nfev": 30}, mean=0.5, snr_db=50.0),
+        Case("state-space", "subspace", 300, {}, mean=0.5, snr_db=50.0),
+        Case(
+            "polynomial-state-space",
+            "simulation-error",
+            500,
+            {"nx": 2, "degree": 2, "max_nfev": 20},
+            mean=0.2,
+            snr_db=50.0,
         ),
     )
 }

@@ -30,6 +30,8 @@ def _text(name: str) -> object:
     """A value of the option that is not its default, as the user types it."""
     option = OPTIONS[name]
     low = 0.0 if option.low is None else option.low
+    if option.kind == "choice":
+        return option.choices[-1]
     return {
         "orders": "2",
         "count": str(int(low) + 2),

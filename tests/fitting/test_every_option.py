@@ -390,6 +390,50 @@ def _check_tolerance(name):
     return check
 
 
+def _check_nx(case, default, changed, value):
+    assert default.settings["order_from"].startswith("canonical correlations")
+    assert default.model.nx == 2 and changed.model.nx == value == changed.settings["nx"]
+    assert changed.settings["order_from"] == "given"
+
+
+def _check_max_order(case, default, changed, value):
+    assert default.model.nx == 2 and changed.model.nx == value == 1
+
+
+def _check_horizon(case, default, changed, value):
+    assert changed.settings["horizon"] == value != default.settings["horizon"]
+    _differs(default, changed)
+
+
+def _check_weighting(case, default, changed, value):
+    assert default.settings["weighting"] == "moesp" and changed.settings["weighting"] == value
+    # canonical correlations lie between 0 and 1; MOESP's singular values need not
+    assert 0 < max(changed.settings["singular_values"]) <= 1.0 + 1e-9
+    _differs(default, changed)
+
+
+def _check_feedthrough(case, default, changed, value):
+    assert np.all(default.model.D == 0.0) and changed.settings["feedthrough"] is True
+    assert np.any(changed.model.D != 0.0)
+
+
+def _check_degree(case, default, changed, value):
+    assert default.model.degree == case.options["degree"] and changed.model.degree == value
+    assert changed.model.n_monomials > default.model.n_monomials
+
+
+def _check_monomials(case, default, changed, value):
+    nx = changed.model.nx
+    assert np.any(default.model.exponents[:, nx:] > 0)  # full: the input's too
+    assert np.all(changed.model.exponents[:, nx:] == 0) and changed.settings["monomials"] == value
+
+
+def _check_margin(case, default, changed, value):
+    width = [r.model.upper - r.model.lower for r in (default, changed)]
+    np.testing.assert_allclose(width[1] / width[0], (1 + 2 * value) / (1 + 2 * 0.25), rtol=1e-9)
+    assert changed.settings["margin"] == value
+
+
 # ----------------------------------------------------------------------------- the table
 @dataclass(frozen=True)
 class Expect:
@@ -441,7 +485,10 @@ def _passes_extra(case: Case) -> dict[str, Any]:
     return {"initial_parameters": recursion_vector(case.structure)}  # one pass suffices
 
 
-_SOLVER = {"max_nfev": 20, "tail_fraction": 0.0}
+def _SOLVER(case: Case) -> dict[str, Any]:  # noqa: N802 - a table entry
+    takes_tail = "tail_fraction" in STRUCTURES[case.structure].accepted(case.method)
+    return {"max_nfev": 20, **({"tail_fraction": 0.0} if takes_tail else {})}
+
 
 #: option -> its non-default value and what it must change (see the checks above).
 EXPECT: dict[str, Expect] = {
@@ -499,6 +546,14 @@ EXPECT: dict[str, Expect] = {
     "eps1": Expect(5.0, _check_eps("eps1")),
     "eps2": Expect(0.5, _check_eps("eps2")),
     "record_history": Expect(True, _check_record_history),
+    "nx": Expect(3, _check_nx, {"nx": None}),
+    "max_order": Expect(1, _check_max_order, {"nx": None}),
+    "horizon": Expect(12, _check_horizon),
+    "weighting": Expect("cva", _check_weighting),
+    "feedthrough": Expect(True, _check_feedthrough),
+    "degree": Expect(3, _check_degree),
+    "monomials": Expect("states", _check_monomials),
+    "margin": Expect(1.0, _check_margin),
     "max_nfev": Expect(2, _check_max_nfev),
     "tail_fraction": Expect(0.0, _check_tail_fraction),
     "patience": Expect(1, _check_patience, {"max_nfev": 40}, n=lambda case: 150),

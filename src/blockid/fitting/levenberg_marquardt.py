@@ -39,6 +39,7 @@ def levenberg_marquardt(
     ftol: float,
     xtol: float,
     gtol: float,
+    null_space: float | None = None,
 ) -> tuple[np.ndarray, str]:
     """Levenberg-Marquardt on the normal equations (module docstring).
 
@@ -49,6 +50,14 @@ def levenberg_marquardt(
     ``xtol`` relative to the parameters, every scaled gradient entry below ``gtol``
     times the residual norm (the cosine between the residual and each column), or
     ``max_nfev`` residual evaluations. Returns the final iterate and why it stopped.
+
+    ``null_space``: the steps are solved in the eigenvectors of the scaled ``J^T J`` whose
+    eigenvalues exceed ``null_space`` times the largest, the rest left alone. For a
+    problem whose parameters are unique only up to a transformation (a state-space
+    model's basis), rounding puts a little of the gradient in those directions, and the
+    damping divides it by ``mu``: steps along them, harmless to first order, spoil the
+    model of the cost and the convergence (PNLSS fits stalled at a gain ratio of 0.6
+    without it). None: the damped system is solved as it is.
     """
     lower, upper = bounds
     theta = theta0.copy()
@@ -56,6 +65,7 @@ def levenberg_marquardt(
     cost = 0.5 * float(r @ r)
     H, g = problem.normal_equations(theta)
     mu, nu = 1e-3, 2.0
+    basis = None  # eigen-decomposition of the scaled J^T J at the current iterate
     while problem.tracker.nfev < max_nfev:
         d = np.sqrt(np.diag(H))
         d[d == 0] = 1.0
@@ -63,7 +73,15 @@ def levenberg_marquardt(
         if np.max(np.abs(gs), initial=0.0) <= gtol * np.sqrt(2.0 * cost):
             return theta, "`gtol` termination condition is satisfied."
         try:
-            p = -np.linalg.solve(Hs + mu * np.eye(theta.size), gs)
+            if null_space is None:
+                p = -np.linalg.solve(Hs + mu * np.eye(theta.size), gs)
+            else:
+                if basis is None:
+                    lam, V = np.linalg.eigh(Hs)
+                    keep = lam > null_space * max(float(lam.max()), 1e-300)
+                    basis = (lam[keep], V[:, keep])
+                lam, V = basis
+                p = -V @ ((V.T @ gs) / (lam + mu))
         except np.linalg.LinAlgError:
             mu, nu = mu * nu, 2.0 * nu
             continue
@@ -81,6 +99,7 @@ def levenberg_marquardt(
             if small:
                 return theta, "`xtol` termination condition is satisfied."
             H, g = problem.normal_equations(theta)
+            basis = None
             mu *= max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
             nu = 2.0
         else:

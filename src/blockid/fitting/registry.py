@@ -205,8 +205,8 @@ class Option:
     number ``>= low``, ``<= high`` when given), ``"real"`` (number in ``[low, high]``,
     ``(low, high]`` with ``open_low``), ``"bool"``, ``"forgetting"`` (factor or
     schedule, parsed once into a :class:`~blockid.estimators.ForgettingSchedule`),
-    ``"block"`` (a block or its name, see :func:`blockid.blocks.base.block_template`)
-    and ``"numbers"``.
+    ``"block"`` (a block or its name, see :func:`blockid.blocks.base.block_template`),
+    ``"numbers"`` and ``"choice"`` (one of ``choices``).
     """
 
     name: str
@@ -217,6 +217,8 @@ class Option:
     open_low: bool = False
     #: Shown as the value's placeholder in help, e.g. ``SCHEDULE``.
     metavar: str = ""
+    #: The allowed values of a ``"choice"``.
+    choices: tuple[str, ...] = ()
 
     def convert(self, value: Any) -> Any:
         """The typed, checked value of ``value`` (a Python value or text); None (or the
@@ -246,6 +248,13 @@ class Option:
             return _block(value, self.name)
         if self.kind == "numbers":
             return _numbers(value, self.name)
+        if self.kind == "choice":
+            text = _text(value)
+            if text is None or text.lower() not in self.choices:
+                raise ParameterError(
+                    f"{self.name} must be one of {', '.join(self.choices)}, got {value!r}"
+                )
+            return text.lower()
         raise AssertionError(f"unknown option kind {self.kind!r}")  # pragma: no cover
 
 
@@ -363,6 +372,42 @@ OPTIONS: dict[str, Option] = _options(
         "piecewise-linear[:knots=N], piecewise-linear-free[:knots=N] or a user block's kind.",
         metavar="KIND",
     ),
+    Option(
+        "nx",
+        "count",
+        "State dimension (default: where the subspace singular values drop most).",
+        low=1,
+    ),
+    Option("max_order", "count", "Largest state dimension the singular values are read to.", low=1),
+    Option("horizon", "count", "Past and future horizon of the subspace method.", low=2),
+    Option(
+        "weighting",
+        "choice",
+        "Subspace weighting: moesp or cva (canonical correlations).",
+        metavar="moesp|cva",
+        choices=("moesp", "cva"),
+    ),
+    Option("feedthrough", "bool", "Estimate a direct term D from input to output."),
+    Option(
+        "degree",
+        "count",
+        "Largest total degree of the state-space monomials (2-5; 1: linear).",
+        low=1,
+        high=5,
+    ),
+    Option(
+        "monomials",
+        "choice",
+        "Monomials of the states and inputs (full), of the states only, or of the inputs only.",
+        metavar="full|states|inputs",
+        choices=("full", "states", "inputs"),
+    ),
+    Option(
+        "margin",
+        "real",
+        "Widening of the monomials' clipping range beyond the linear start's, per side.",
+        low=0.0,
+    ),
     Option("max_nfev", "count", "Simulation-error fit: limit on simulations.", low=1),
     Option(
         "tail_fraction",
@@ -439,6 +484,9 @@ class Structure:
     min_delay: int = 0
     #: The search gives the structure ``nb = na + 1`` (a proper BLA of a chain).
     proper: bool = False
+    #: How the search gives the structure its orders: ``"polynomial"`` (``na, nb, nk``
+    #: of the order stages) or ``"state"`` (a state dimension ``nx``).
+    orders: str = "polynomial"
     #: With ``integrator``: the structure and options fitted to the differenced output
     #: for the start, where the structure's own blocks cannot carry the operating point
     #: (None: the structure itself).
@@ -516,6 +564,8 @@ def _key_term(blocks: tuple[str, ...]) -> Method:
 
 
 _CHECK = ("convergence_check", "max_mse_ratio")
+_STATE_SPACE = ("nx", "max_order", "horizon", "weighting", "feedthrough")
+_REFINEMENT = ("max_nfev", "ftol", "xtol", "gtol")
 
 #: The structures, in the order the command line lists them.
 STRUCTURES: dict[str, Structure] = {
@@ -630,6 +680,47 @@ STRUCTURES: dict[str, Structure] = {
             search=({"r2": 5},),
             proper=True,
             search_rank=6,
+        ),
+        Structure(
+            "state-space",
+            "blockid.models.state_space:StateSpace",
+            "linear state space x(k+1) = A x + B u, y = C x + D u, multi-input multi-output: "
+            "subspace (MOESP or CVA), refined on the free-run error",
+            (
+                Method(
+                    "simulation-error",
+                    "blockid.fitting.state_space:fit_state_space",
+                    _STATE_SPACE + _REFINEMENT,
+                    "subspace estimate, then every parameter refined on the free-run error",
+                ),
+                Method(
+                    "subspace",
+                    "blockid.fitting.state_space:fit_subspace",
+                    _STATE_SPACE,
+                    "subspace estimate only (MOESP or CVA weighting)",
+                ),
+            ),
+            block_oriented=False,
+            orders="state",
+            search_rank=8,
+        ),
+        Structure(
+            "polynomial-state-space",
+            "blockid.models.state_space:PolynomialStateSpace",
+            "polynomial nonlinear state space (PNLSS): A x + B u + E z(x, u), C x + D u + "
+            "F z(x, u), monomials z of degree 2..r, started from the linear state space",
+            (
+                Method(
+                    "simulation-error",
+                    "blockid.fitting.state_space:fit_polynomial_state_space",
+                    _STATE_SPACE + ("degree", "monomials", "margin") + _REFINEMENT,
+                    "linear state-space start, then every parameter refined on the free-run "
+                    "error with the monomials",
+                ),
+            ),
+            block_oriented=False,
+            orders="state",
+            search_rank=9,
         ),
         Structure(
             "feedback",

@@ -21,9 +21,12 @@ from blockid.models.serialization import (
     model_from_document,
     save_model,
 )
+from blockid.models.state_space import PolynomialStateSpace, StateSpace
 
 __all__ = [
     "LinearFeedback",
+    "PolynomialStateSpace",
+    "StateSpace",
     "Network",
     "BLOCK_STRUCTURES",
     "BacklashModel",

@@ -10,7 +10,9 @@ and returns ``y = output_offset + output_scale * y_n`` (offsets and scales are t
 estimation data's means and spreads, so that the matrices are of order one whatever
 the units). ``ζ`` and ``η`` are the same monomials of ``z = [x; u_n]`` (the rows of
 ``exponents``), of total degree 2 to ``degree`` (PNLSS: Paduart et al., Automatica 46,
-2010). :class:`StateSpace` is the linear model (no monomials).
+2010), and a constant (the monomial 1, which the fits include: the nonlinear terms move
+the operating point off the one the signals' means give). :class:`StateSpace` is the
+linear model (no monomials).
 
 **Bounded beyond the estimation range.** Before the monomials are taken, every
 coordinate of ``z`` is clipped to ``[lower, upper]``, the range the fit let it span:
@@ -45,15 +47,21 @@ __all__ = ["PolynomialStateSpace", "StateSpace", "monomial_exponents"]
 INITIAL_ITERATIONS = 20
 
 
-def monomial_exponents(nx: int, nu: int, degree: int, which: str = "full") -> np.ndarray:
+def monomial_exponents(
+    nx: int, nu: int, degree: int, which: str = "full", constant: bool = False
+) -> np.ndarray:
     """Exponents of the monomials of ``z = [x; u]`` of total degree ``2 .. degree``.
 
     ``which``: ``"full"`` (every monomial of states and inputs), ``"states"`` (of the
     states only) or ``"inputs"`` (of the inputs only: a Hammerstein-like nonlinearity
-    entering the state equation).
+    entering the state equation). ``constant`` puts the monomial ``1`` first: constant
+    terms in the state and output equations, which a polynomial model needs when its
+    operating point is not where the signals' means put it (``(x + c)^2`` has a ``c^2``).
 
     >>> monomial_exponents(2, 1, 2, "states").tolist()
     [[2, 0, 0], [1, 1, 0], [0, 2, 0]]
+    >>> monomial_exponents(1, 1, 2, "inputs", constant=True).tolist()
+    [[0, 0], [0, 2]]
     """
     if which not in ("full", "states", "inputs"):
         raise OrderError(f"monomials={which!r}: choose full, states or inputs")
@@ -64,7 +72,7 @@ def monomial_exponents(nx: int, nu: int, degree: int, which: str = "full") -> np
         "states": range(nx),
         "inputs": range(nx, nx + nu),
     }[which]
-    rows = []
+    rows = [[0] * (nx + nu)] if constant else []
     for d in range(2, degree + 1):
         for combo in combinations_with_replacement(variables, d):
             row = [0] * (nx + nu)
@@ -191,7 +199,7 @@ class PolynomialStateSpace(Model):
     @property
     def degree(self) -> int:
         """Largest total degree of the monomials (1 for a linear model)."""
-        return int(self.exponents.sum(axis=1).max()) if self.n_monomials else 1
+        return max(int(self.exponents.sum(axis=1).max()), 1) if self.n_monomials else 1
 
     @property
     def max_lag(self) -> int:

@@ -75,8 +75,11 @@ from blockid.workflows.search_space import (
     delay_candidates,
     grown,
     integrating_candidates,
+    n_state_space_parameters,
     order_grid,
     output_error_orders,
+    polynomial_state_candidates,
+    state_candidates,
     structure_candidates,
     unique,
 )
@@ -121,6 +124,12 @@ class Effort:
     finalists: int  # candidates fitted again with final_nfev
     final_nfev: int  # iterations of a finalist's fit
     grow_steps: int  # richer-nonlinearity steps
+    #: (degree, monomials) of the polynomial state-space candidates
+    state_plans: tuple[tuple[int, str], ...] = ((3, "states"),)
+    #: largest number of parameters of a polynomial state-space candidate
+    state_parameters: int = 100
+    #: state dimensions carried from the linear state-space stage to the polynomial one
+    state_keep: int = 1
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -130,9 +139,41 @@ class Effort:
 EFFORTS: dict[str, Effort] = {
     e.name: e
     for e in (
-        Effort("quick", 3, 2, 5, 10, 1, 3, 15, 10_000, 2, 60, 1),
-        Effort("standard", 4, 3, 8, 20, 2, None, 30, 20_000, 3, 150, 3),
-        Effort("thorough", 5, 3, 10, 30, 3, None, 60, 50_000, 5, 300, 4),
+        Effort("quick", 3, 2, 5, 10, 1, 3, 15, 10_000, 2, 60, 1, ((3, "states"),), 60, 1),
+        Effort(
+            "standard",
+            4,
+            3,
+            8,
+            20,
+            2,
+            None,
+            30,
+            20_000,
+            3,
+            150,
+            3,
+            ((2, "full"), (3, "states"), (3, "full")),
+            300,
+            1,
+        ),  # fmt: skip
+        Effort(
+            "thorough",
+            5,
+            3,
+            10,
+            30,
+            3,
+            None,
+            60,
+            50_000,
+            5,
+            300,
+            4,
+            ((2, "full"), (3, "states"), (3, "full"), (4, "states")),
+            1200,
+            2,
+        ),  # fmt: skip
     )
 }
 
@@ -579,13 +620,18 @@ def identify(
     if data.n_inputs != 1 or data.n_outputs != 1:
         block = [s for s in chosen if STRUCTURES[s].block_oriented]
         if block and asked:
+            multi = [s for s in STRUCTURES if not STRUCTURES[s].block_oriented]
             raise ParameterError(
                 f"{', '.join(block)} take one input and one output; the data have "
-                f"{data.n_inputs} input(s) and {data.n_outputs} output(s): search arx",
+                f"{data.n_inputs} input(s) and {data.n_outputs} output(s): search "
+                f"{', '.join(multi)}",
                 parameter="structures",
             )
         if block:
-            notes.append("several inputs or outputs: only ARX models are searched")
+            notes.append(
+                "several inputs or outputs: the block structures (one input, one output) "
+                "are not searched"
+            )
         chosen = [s for s in chosen if not STRUCTURES[s].block_oriented] or [LINEAR]
     n_samples = sum(e.n_samples for e in data.experiments)
     plan = fold_plan(data, eff.folds if n_samples < LONG_RECORD else eff.folds_long)
@@ -719,9 +765,64 @@ def _stages(
         if len(orders) >= eff.linear_keep:
             break
     block = [s for s in chosen if STRUCTURES[s].block_oriented]
-    if not block:
-        return
+    states = [s for s in chosen if STRUCTURES[s].orders == "state"]
     screen = _iterations(eff.screen_nfev)
+    if block:
+        orders = _block_structures(search, block, orders, recommended, screen, notes)
+    if states:
+        _state_space(search, states, orders, screen)
+    iterative = block + states
+    if not iterative:
+        return
+    # finalists: the best candidates that iterate again, with more iterations
+    pool = [s for s in search.order if s.candidate.structure in iterative]
+    best = search.ranked(pool)[: eff.finalists]
+    final = _iterations(eff.final_nfev)
+    search.run("finalists", [_with_iterations(s.candidate, final) for s in best], False)
+    # the richer nonlinearity of the best of them
+    pool = [s for s in search.order if s.candidate.structure in iterative]
+    ranked = search.ranked(pool)
+    if not ranked:
+        return
+    current = ranked[0]
+    signals = (search.data.n_inputs, search.data.n_outputs)
+    for _ in range(eff.grow_steps):
+        trials = [c for c in grown(current.candidate) if _affordable(c, signals, eff)]
+        if not trials:
+            break
+        scored = [s for s in search.run("nonlinearity", trials, False) if s.ok]
+        better = [s for s in scored if s.rmse < current.rmse * (1.0 - search.tie)]
+        if not better:
+            break
+        current = min(better, key=lambda s: (s.rmse, s.candidate.label))
+
+
+def _with_iterations(candidate: Candidate, iterations: dict[str, Any]) -> Candidate:
+    accepted = STRUCTURES[candidate.structure].accepted(None)
+    return candidate.with_options(**{k: v for k, v in iterations.items() if k in accepted})
+
+
+def _affordable(candidate: Candidate, signals: tuple[int, int], effort: Effort) -> bool:
+    """A polynomial state-space candidate within the effort's parameter budget (every
+    other candidate is)."""
+    o = candidate.options
+    if "degree" not in o:
+        return True
+    n = n_state_space_parameters(o["nx"], *signals, o["degree"], o.get("monomials", "full"))
+    return n <= effort.state_parameters
+
+
+def _block_structures(
+    search: _Search,
+    block: list[str],
+    orders: list[tuple[int, int, int]],
+    recommended: tuple[int, int, int] | None,
+    screen: dict[str, Any],
+    notes: list[str],
+) -> list[tuple[int, int, int]]:
+    """The output-error orders and the block structures' screening; returns the order
+    sets the structures were screened at."""
+    eff = search.effort
     oe = output_error_orders(orders[0], eff.max_order, screen)
     best_oe = search.ranked(search.run("output-error orders", oe, True))
     if best_oe and _orders_of(best_oe[0]) not in orders:
@@ -733,7 +834,6 @@ def _stages(
         fnn = (max(na, 1), max(nb, 1), nk)
         if fnn not in orders:
             orders.append(fnn)
-    # 3. structures
     integrations = _integrations(search.data, orders)
     candidates = integrating_candidates(block, orders, search.data, screen, integrations)
     if candidates:
@@ -744,23 +844,37 @@ def _stages(
         )
     candidates += structure_candidates(block, orders, search.data, screen, eff.families)
     search.run("structures", candidates, True)
-    # 4. finalists: the best block-oriented candidates again with more iterations
-    pool = [s for s in search.order if s.candidate.structure in block]
-    best = search.ranked(pool)[: eff.finalists]
-    final = _iterations(eff.final_nfev)
-    search.run("finalists", [s.candidate.with_options(**final) for s in best], False)
-    # 5. the richer nonlinearity of the best block-oriented candidate
-    pool = [s for s in search.order if s.candidate.structure in block]
-    ranked = search.ranked(pool)
-    if not ranked:
-        return
-    current = ranked[0]
-    for _ in range(eff.grow_steps):
-        trials = grown(current.candidate)
-        if not trials:
-            break
-        scored = [s for s in search.run("nonlinearity", trials, False) if s.ok]
-        better = [s for s in scored if s.rmse < current.rmse * (1.0 - search.tie)]
-        if not better:
-            break
-        current = min(better, key=lambda s: (s.rmse, s.candidate.label))
+    return orders
+
+
+def _state_space(
+    search: _Search,
+    states: list[str],
+    orders: list[tuple[int, int, int]],
+    screen: dict[str, Any],
+) -> None:
+    """Linear state-space models at the state dimensions the data suggest (the
+    canonical-correlation rule of the subspace method, and the orders' ``na``), then
+    polynomial ones at the best of those dimensions."""
+    from blockid.fitting.state_space import subspace
+
+    eff = search.effort
+    nxs = sorted({max(1, min(o[0], eff.max_order)) for o in orders})
+    try:
+        with np.errstate(all="ignore"):
+            nxs = sorted({*nxs, subspace(search.data, max_order=eff.max_order).nx})
+    except BlockidError:
+        pass  # too short for the horizon: the orders' dimensions only
+    search.run("state space", state_candidates(states, nxs, screen), True)
+    linear = search.ranked([s for s in search.order if s.stage == "state space"])
+    best = []
+    for s in linear:
+        if s.candidate.options["nx"] not in best:
+            best.append(s.candidate.options["nx"])
+    best = best[: eff.state_keep] or nxs[:1]
+    signals = (search.data.n_inputs, search.data.n_outputs)
+    candidates = polynomial_state_candidates(
+        states, best, eff.state_plans, signals, screen, eff.state_parameters
+    )
+    if candidates:
+        search.run("nonlinear state space", candidates, True)

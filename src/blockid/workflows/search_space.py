@@ -33,6 +33,9 @@ __all__ = [
     "delay_candidates",
     "grown",
     "integrating_candidates",
+    "n_state_space_parameters",
+    "polynomial_state_candidates",
+    "state_candidates",
     "order_grid",
     "output_error_orders",
     "structure_candidates",
@@ -48,6 +51,8 @@ OUTPUT_ERROR = "output-error"
 
 #: Largest polynomial degree, and knots, the richer-nonlinearity stage tries.
 MAX_SIZE = {"degree": 9, "knots": 11}
+#: Largest monomial degree of a state-space model it tries (grown by one).
+MAX_STATE_DEGREE = 5
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,15 +261,71 @@ def integrating_candidates(
     return unique(out)
 
 
+# ----------------------------------------------------------------------------- states
+def state_candidates(
+    structures: Sequence[str], nxs: Sequence[int], iterations: dict[str, Any]
+) -> list[Candidate]:
+    """The linear state-space structures (``orders = "state"`` and no monomials) at every
+    state dimension in ``nxs``."""
+    out = []
+    for name in structures:
+        decl = STRUCTURES[name]
+        if decl.orders != "state" or "degree" in decl.accepted(None):
+            continue
+        accepted = decl.accepted(None)
+        for nx in nxs:
+            options = {"nx": int(nx), **iterations}
+            out.append(Candidate(name, {k: v for k, v in options.items() if k in accepted}))
+    return unique(out)
+
+
+def n_state_space_parameters(nx: int, nu: int, ny: int, degree: int, monomials: str) -> int:
+    """Parameters of a polynomial state-space model fitted with a constant term
+    (:func:`~blockid.models.state_space.monomial_exponents`); ``D`` is not fitted."""
+    from blockid.models.state_space import monomial_exponents
+
+    nm = monomial_exponents(nx, nu, degree, monomials, constant=True).shape[0] if degree > 1 else 0
+    return nx * nx + nx * nu + ny * nx + (nx + ny) * nm
+
+
+def polynomial_state_candidates(
+    structures: Sequence[str],
+    nxs: Sequence[int],
+    plans: Sequence[tuple[int, str]],
+    signals: tuple[int, int],
+    iterations: dict[str, Any],
+    max_parameters: int,
+) -> list[Candidate]:
+    """The state-space structures with monomials (those taking ``degree``) at every
+    state dimension in ``nxs`` and every ``(degree, monomials)`` of ``plans``, each with
+    at most ``max_parameters`` parameters (``signals`` = inputs, outputs)."""
+    out = []
+    for name in structures:
+        decl = STRUCTURES[name]
+        if decl.orders != "state" or "degree" not in decl.accepted(None):
+            continue
+        accepted = decl.accepted(None)
+        for nx in nxs:
+            for degree, which in plans:
+                if n_state_space_parameters(nx, *signals, degree, which) > max_parameters:
+                    continue
+                options = {"nx": int(nx), "degree": degree, "monomials": which, **iterations}
+                out.append(Candidate(name, {k: v for k, v in options.items() if k in accepted}))
+    return unique(out)
+
+
 # ----------------------------------------------------------------------------- growth
 def grown(candidate: Candidate) -> list[Candidate]:
     """The candidate with one nonlinearity made richer, one option at a time: a degree
     (``r``, ``r1``, ``r2``) or a block's :attr:`~blockid.blocks.base.Block.size_option`
-    raised by 2, up to :data:`MAX_SIZE`."""
+    raised by 2, up to :data:`MAX_SIZE`; a state-space model's monomial ``degree`` by 1,
+    up to :data:`MAX_STATE_DEGREE`."""
     out = []
     for key, value in candidate.options.items():
         if key in ("r", "r1", "r2") and isinstance(value, int) and value + 2 <= MAX_SIZE["degree"]:
             out.append(candidate.with_options(**{key: value + 2}))
+        elif key == "degree" and isinstance(value, int) and value + 1 <= MAX_STATE_DEGREE:
+            out.append(candidate.with_options(degree=value + 1))
         elif isinstance(value, str) and key.endswith("_block"):
             bigger = _grown_spec(value)
             if bigger is not None:

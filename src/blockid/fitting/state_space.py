@@ -1,0 +1,668 @@
+"""Linear state-space models by subspace identification, refined on simulation error;
+polynomial nonlinear state-space models (PNLSS) started from them.
+
+**Subspace (PO-MOESP, Verhaegen & Dewilde 1992; the CVA weighting of Van Overschee &
+De Moor 1996).** On normalised signals, block Hankel matrices of ``s`` past and ``s``
+future inputs and outputs are stacked (the columns of every experiment side by side)
+and reduced by one LQ factorisation (a QR of the transpose, accumulated ``CHUNK``
+columns at a time, so memory stays a few copies of the data):
+
+.. math::
+
+    \\begin{bmatrix} U_f \\\\ W_p \\\\ Y_f \\end{bmatrix} =
+    \\begin{bmatrix} L_{11} & & \\\\ L_{21} & L_{22} & \\\\ L_{31} & L_{32} & L_{33}
+    \\end{bmatrix} Q^T, \\qquad W_p = \\begin{bmatrix} U_p \\\\ Y_p \\end{bmatrix}
+
+``L_32`` is the part of the future outputs that the past explains once the future inputs
+are removed; its column space is that of the extended observability matrix ``Γ_s``.
+``weighting="moesp"`` takes the SVD of ``L_32``; ``"cva"`` that of ``W L_32`` with ``W``
+the inverse square root of the covariance of ``Y_f`` given ``U_f`` (canonical
+correlations: singular values between 0 and 1). ``Γ_s = W^{-1} U_n S_n^{1/2}``, ``C`` its
+first block row, ``A`` from its shift invariance by least squares; ``B``, ``D`` and every
+experiment's initial state by linear least squares on the outputs (the simulated
+response is linear in them). An unstable eigenvalue of ``A`` (possible on short or
+noisy records) is reflected into the unit circle before ``B`` and ``D`` are fitted.
+
+**Order.** Unless ``nx`` is given, the order is where the canonical correlations between
+past and future (the CVA singular values, whatever the weighting of the estimate) drop
+most: ``argmax_n log(σ_n / σ_{n+1})`` over ``n = 1 .. max_order``. Being scale-free they
+separate the states from the noise and the nonlinearity more cleanly than MOESP's
+singular values (on a mildly nonlinear second-order plant: 0.9997, 0.986, 0.43 against
+1.59, 0.35, 0.095, where the MOESP gap reads one state); ``settings`` records both.
+
+**Refinement (output error).** Every entry of ``A, B, C, D`` and every experiment's
+initial state are refined together by Levenberg-Marquardt on the free-run simulation
+error (:mod:`blockid.fitting.levenberg_marquardt`), the Jacobian computed forward in
+time by a compiled kernel (:mod:`blockid._kernels.state_space`) and summed into
+``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole.
+The parameters are unique only up to the state basis; the damping keeps the steps
+defined. A candidate with an eigenvalue of ``A`` outside the circle of radius
+``1 - STABILITY_MARGIN``, or a non-finite or exploding run, is rejected (the damping
+grows).
+
+**PNLSS.** :func:`fit_polynomial_state_space` starts from the refined linear model
+(``E = F = 0``: the start is the best linear approximation, so the fit never ends worse
+than it) and refines every parameter with the monomials of degree 2 to ``degree``
+added, and constant terms in both equations (the nonlinear terms move the operating
+point). The monomials' arguments are clipped to the range the linear start's states and
+the input span, widened by ``margin`` of it on each side: fixed for the whole fit, they
+are the model's bounds (:class:`~blockid.models.state_space.PolynomialStateSpace`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from blockid._kernels.state_space import pnlss_jacobian, pnlss_simulate
+from blockid.data.dataset import Dataset
+from blockid.errors import DataError, EstimationError, OrderError, ParameterError
+from blockid.evaluation.metrics import metrics_by_output
+from blockid.fitting.checks import STABILITY_MARGIN
+from blockid.fitting.levenberg_marquardt import levenberg_marquardt
+from blockid.fitting.result import FitResult
+from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
+
+__all__ = [
+    "fit_polynomial_state_space",
+    "fit_state_space",
+    "fit_subspace",
+    "refine_state_space",
+    "subspace",
+]
+
+#: Samples per piece of the Jacobian walk and of the LQ factorisation.
+CHUNK = 4096
+#: Eigenvalues of the scaled ``J^T J`` below this fraction of the largest are the
+#: directions the parameters are not unique in (the state basis): steps leave them.
+NULL_SPACE = 1e-11
+#: A run whose mean squared error exceeds this many times the output variance explodes.
+_EXPLODE = 1e6
+
+
+# ----------------------------------------------------------------------------- signals
+@dataclass(frozen=True)
+class _Signals:
+    """Normalised experiments and the normalisation."""
+
+    u: list[np.ndarray]
+    y: list[np.ndarray]
+    input_offset: np.ndarray
+    input_scale: np.ndarray
+    output_offset: np.ndarray
+    output_scale: np.ndarray
+
+
+def _normalised(data: Dataset) -> _Signals:
+    u_all = np.vstack([e.u for e in data.experiments])
+    y_all = np.vstack([e.y for e in data.experiments])
+    u_off, y_off = u_all.mean(axis=0), y_all.mean(axis=0)
+    u_sc, y_sc = u_all.std(axis=0), y_all.std(axis=0)
+    for names, scale, what in ((data.inputs, u_sc, "input"), (data.outputs, y_sc, "output")):
+        for name, s in zip(names, scale, strict=True):
+            if not s > 0:
+                raise DataError(
+                    f"{what} '{name}' is constant over the estimation data; a state-space "
+                    "model needs every signal to vary (choose another range or column)"
+                )
+    return _Signals(
+        [np.ascontiguousarray((e.u - u_off) / u_sc) for e in data.experiments],
+        [np.ascontiguousarray((e.y - y_off) / y_sc) for e in data.experiments],
+        u_off, u_sc, y_off, y_sc,
+    )  # fmt: skip
+
+
+def _model(data: Dataset, sig: _Signals, A, B, C, D, **extra: Any) -> PolynomialStateSpace:
+    cls = PolynomialStateSpace if extra.get("exponents") is not None else StateSpace
+    return cls(
+        data.inputs, data.outputs, A, B, C, D,
+        input_offset=sig.input_offset, input_scale=sig.input_scale,
+        output_offset=sig.output_offset, output_scale=sig.output_scale,
+        sampling_time=data.sampling_time, **extra,
+    )  # fmt: skip
+
+
+# ----------------------------------------------------------------------------- subspace
+def _hankel(x: np.ndarray, start: int, rows: int, cols: int) -> np.ndarray:
+    """Block Hankel matrix: block row ``i`` holds ``x[start + i : start + i + cols].T``."""
+    m = x.shape[1]
+    out = np.empty((rows * m, cols))
+    for i in range(rows):
+        out[i * m : (i + 1) * m] = x[start + i : start + i + cols].T
+    return out
+
+
+def _lq(sig: _Signals, s: int) -> np.ndarray:
+    """``L`` of the LQ factorisation of ``[1; U_f; U_p; Y_p; Y_f]``, accumulated by
+    columns. The row of ones comes first, so that every later block is taken relative
+    to its mean over the columns: an offset between the output's and the input's means
+    (an operating point the linear model does not pass through) would otherwise look
+    like a state with a pole at 1."""
+    m, l = sig.u[0].shape[1], sig.y[0].shape[1]
+    size = 2 * s * (m + l) + 1
+    R = np.zeros((0, size))
+    used = 0
+    for u, y in zip(sig.u, sig.y, strict=True):
+        j = u.shape[0] - 2 * s + 1
+        for c0 in range(0, max(j, 0), CHUNK):
+            c = min(CHUNK, j - c0)
+            block = np.vstack(
+                (np.ones((1, c)), _hankel(u, s + c0, s, c), _hankel(u, c0, s, c),
+                 _hankel(y, c0, s, c), _hankel(y, s + c0, s, c))
+            )  # fmt: skip
+            R = np.linalg.qr(np.vstack((R, block.T)), mode="r")
+            used += c
+    if used < size:
+        raise DataError(
+            f"subspace identification with horizon {s} needs at least {size + 2 * s - 1} "
+            f"samples in one experiment; the data have {max(len(u) for u in sig.u)}: give "
+            "more data or a smaller horizon / order"
+        )
+    return R.T / np.sqrt(used)
+
+
+def _stable(A: np.ndarray) -> np.ndarray:
+    """``A`` with eigenvalues outside the unit circle reflected inside (``λ -> 1/λ̄``)."""
+    lam, V = np.linalg.eig(A)
+    bad = np.abs(lam) >= 1.0 - STABILITY_MARGIN
+    if not bad.any():
+        return A
+    lam = np.where(bad, 1.0 / np.conj(lam) * (1.0 - 2 * STABILITY_MARGIN), lam)
+    lam = np.where(np.abs(lam) >= 1.0 - STABILITY_MARGIN, lam * 0.99, lam)
+    return np.real(V @ np.diag(lam) @ np.linalg.inv(V))
+
+
+def _bd_x0(
+    A: np.ndarray, C: np.ndarray, sig: _Signals, feedthrough: bool
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray]:
+    """``B``, ``D``, each experiment's ``x(0)`` and an output bias (the operating point's
+    offset that the means leave) by least squares on the outputs."""
+    nx, m, l = A.shape[0], sig.u[0].shape[1], C.shape[0]
+    n_exp = len(sig.u)
+    n_b, n_d = nx * m, (l * m if feedthrough else 0)
+    n_theta = n_b + n_d + nx * n_exp + l
+    rows, targets = [], []
+    zero_e, zero_f = np.zeros((nx, 0)), np.zeros((l, 0))
+    no_expo = np.zeros((0, nx + 1), dtype=np.int64)
+    lims = np.full(nx + 1, np.inf)
+
+    def response(B1: np.ndarray, u1: np.ndarray, x0: np.ndarray) -> np.ndarray:
+        out = np.zeros((u1.shape[0], l))
+        pnlss_simulate(A, B1, C, np.zeros((l, 1)), zero_e, zero_f, no_expo, -lims, lims,
+                       np.ascontiguousarray(u1), x0, out)  # fmt: skip
+        return out
+
+    for e, (u, y) in enumerate(zip(sig.u, sig.y, strict=True)):
+        N = u.shape[0]
+        phi = np.zeros((N, l, n_theta))
+        for i in range(m):  # B[r, i]: the response to input i entering state r
+            for r in range(nx):
+                Br = np.zeros((nx, 1))
+                Br[r, 0] = 1.0
+                phi[:, :, r * m + i] = response(Br, u[:, [i]], np.zeros(nx))
+        if feedthrough:
+            for i in range(l):
+                for j in range(m):
+                    phi[:, i, n_b + i * m + j] = u[:, j]
+        for r in range(nx):  # the free response to x(0) = e_r
+            x0 = np.zeros(nx)
+            x0[r] = 1.0
+            phi[:, :, n_b + n_d + e * nx + r] = response(np.zeros((nx, 1)), np.zeros((N, 1)), x0)
+        for i in range(l):
+            phi[:, i, n_theta - l + i] = 1.0
+        rows.append(phi.reshape(N * l, n_theta))
+        targets.append(y.reshape(-1))
+    theta = np.linalg.lstsq(np.vstack(rows), np.concatenate(targets), rcond=None)[0]
+    B = theta[:n_b].reshape(nx, m)
+    D = theta[n_b : n_b + n_d].reshape(l, m) if feedthrough else np.zeros((l, m))
+    x0s = [theta[n_b + n_d + e * nx : n_b + n_d + (e + 1) * nx] for e in range(n_exp)]
+    return B, D, x0s, theta[n_theta - l :]
+
+
+@dataclass(frozen=True)
+class SubspaceResult:
+    """A subspace estimate: the model, the singular values, the order and how chosen."""
+
+    model: StateSpace
+    singular_values: np.ndarray
+    nx: int
+    horizon: int
+    initial_states: list[np.ndarray] = field(default_factory=list)
+    correlations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def order_from_singular_values(sv: np.ndarray, max_order: int) -> int:
+    """``argmax_n log(σ_n / σ_{n+1})`` over ``n = 1 .. max_order`` (module docstring).
+
+    >>> order_from_singular_values(np.array([5.0, 3.0, 1e-3, 9e-4, 8e-4]), 4)
+    2
+    """
+    k = min(max_order, sv.size - 1)
+    if k < 1:
+        return 1
+    s = np.maximum(sv[: k + 1], 1e-300)
+    return int(np.argmax(np.log(s[:-1] / s[1:]))) + 1
+
+
+def subspace(
+    data: Dataset,
+    *,
+    nx: int | None = None,
+    max_order: int = 10,
+    horizon: int | None = None,
+    weighting: str = "moesp",
+    feedthrough: bool = False,
+) -> SubspaceResult:
+    """Linear state-space model by subspace identification (module docstring).
+
+    Parameters
+    ----------
+    data : Dataset
+        Estimation data, any number of inputs, outputs and experiments.
+    nx : int, optional
+        Model order; by default chosen from the singular values.
+    max_order : int
+        Largest order the singular-value rule considers.
+    horizon : int, optional
+        Past and future horizon ``s`` (default ``max(nx or max_order, 5) + 5``): more than
+        the order, and enough samples per column to average the noise.
+    weighting : {"moesp", "cva"}
+    feedthrough : bool
+        Estimate ``D`` (a direct term from input to output); off by default, as for
+        sampled plants with a hold.
+    """
+    if weighting not in ("moesp", "cva"):
+        raise ParameterError(f"weighting={weighting!r}: choose moesp or cva", parameter="weighting")
+    top = nx if nx is not None else max_order
+    if top < 1:
+        raise OrderError(f"the state-space order must be >= 1, got {top}")
+    sig = _normalised(data)
+    m, l = sig.u[0].shape[1], sig.y[0].shape[1]
+    s = horizon if horizon is not None else max(top, 5) + 5
+    if s * l < top + 1:
+        s = (top + 1 + l - 1) // l + 1
+    L = _lq(sig, s)
+    r1, r2 = 1 + s * m, 1 + s * (2 * m + l)
+    L32 = L[r2:, r1:r2]
+    # CVA: W the inverse square root of the covariance of Y_f given U_f; its singular
+    # values are the canonical correlations between the past and the future outputs
+    rest = L[r2:, r1:]
+    w_val, w_vec = np.linalg.eigh(rest @ rest.T)
+    w_val = np.maximum(w_val, 1e-12 * max(float(w_val.max()), 1e-300))
+    W_cva = w_vec @ np.diag(w_val**-0.5) @ w_vec.T
+    correlations = np.linalg.svd(W_cva @ L32, compute_uv=False)
+    if weighting == "cva":
+        W, W_inv = W_cva, w_vec @ np.diag(w_val**0.5) @ w_vec.T
+    else:
+        W = W_inv = np.eye(L32.shape[0])
+    U, sv, _ = np.linalg.svd(W @ L32, full_matrices=False)
+    limit = min(max_order, s * l - 1)
+    n = nx if nx is not None else order_from_singular_values(correlations, limit)
+    if n > min(sv.size, s * l - 1):
+        raise OrderError(
+            f"order {n} needs a horizon of more than {n} output samples; raise the horizon"
+        )
+    gamma = W_inv @ U[:, :n] * np.sqrt(sv[:n])
+    C = gamma[:l]
+    A = np.linalg.lstsq(gamma[:-l], gamma[l:], rcond=None)[0]
+    A = _stable(A)
+    B, D, x0s, bias = _bd_x0(A, C, sig, feedthrough)
+    sig = replace(sig, output_offset=sig.output_offset + bias * sig.output_scale, y=[
+        np.ascontiguousarray(y - bias) for y in sig.y])  # fmt: skip
+    model = _model(data, sig, A, B, C, D)
+    return SubspaceResult(model, sv, n, s, x0s, correlations)
+
+
+# ----------------------------------------------------------------------------- refinement
+@dataclass
+class _Tracker:
+    nfev: int = 0
+    njev: int = 0
+    cost: list[float] = field(default_factory=list)
+
+
+class _Problem:
+    """Simulation error of a (polynomial) state-space model and its normal equations,
+    over the model's free parameters (``D`` is held at zero without a feedthrough) and
+    every experiment's initial state."""
+
+    def __init__(self, template: PolynomialStateSpace, sig: _Signals, feedthrough: bool):
+        self.template = template
+        self.sig = sig
+        full = template.free_parameters()
+        names = template.free_parameter_names()
+        self.free = np.array([feedthrough or not n.startswith("D[") for n in names])
+        self.full = full
+        self.n_model = int(self.free.sum())
+        self.nx = template.nx
+        self.tracker = _Tracker()
+        y_all = np.concatenate([y.reshape(-1) for y in sig.y])
+        self.size = y_all.size
+        self.limit = _EXPLODE * (float(np.var(y_all)) + 1e-300)
+        self.penalty = np.full(self.size, 2.0 * np.sqrt(self.limit))
+
+    def split(self, theta: np.ndarray) -> tuple[PolynomialStateSpace | None, list[np.ndarray]]:
+        x0s = [theta[self.n_model + e * self.nx : self.n_model + (e + 1) * self.nx]
+               for e in range(len(self.sig.u))]  # fmt: skip
+        if not np.all(np.isfinite(theta)):
+            return None, x0s
+        full = self.full.copy()
+        full[self.free] = theta[: self.n_model]
+        model = self.template.with_free_parameters(full)
+        if not model.is_stable(STABILITY_MARGIN):
+            return None, x0s
+        return model, x0s
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        self.tracker.nfev += 1
+        model, x0s = self.split(theta)
+        if model is None:
+            return self.penalty
+        parts = []
+        with np.errstate(all="ignore"):
+            for u, y, x0 in zip(self.sig.u, self.sig.y, x0s, strict=True):
+                out, _ = model.run(u, x0)
+                parts.append((y - out).reshape(-1))
+        r = np.concatenate(parts)
+        if not np.all(np.isfinite(r)) or float(np.mean(r**2)) > self.limit:
+            return self.penalty
+        return r
+
+    def normal_equations(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        model, x0s = self.split(theta)
+        assert model is not None, "the Jacobian is taken at accepted iterates only"
+        arrays = model._arrays()
+        n_exp, nm, nx = len(self.sig.u), self.n_model, self.nx
+        P = self.full.size + nx
+        kept = np.r_[np.flatnonzero(self.free), self.full.size + np.arange(nx)]
+        H = np.zeros((nm + nx * n_exp, nm + nx * n_exp))
+        g = np.zeros(nm + nx * n_exp)
+        l = self.sig.y[0].shape[1]
+        cost = 0.0
+        for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
+            x = np.array(x0, dtype=float)
+            S = np.zeros((nx, P))
+            S[:, P - nx :] = np.eye(nx)
+            cols = np.r_[np.arange(nm), nm + e * nx + np.arange(nx)]
+            for k0 in range(0, u.shape[0], CHUNK):
+                uk = u[k0 : k0 + CHUNK]
+                out = np.zeros((uk.shape[0], l))
+                J = np.zeros((uk.shape[0] * l, P))
+                pnlss_jacobian(*arrays, uk, x, S, out, J)
+                J = J[:, kept]
+                r = (y[k0 : k0 + CHUNK] - out).reshape(-1)
+                cost += float(r @ r)
+                H[np.ix_(cols, cols)] += J.T @ J
+                g[cols] -= J.T @ r
+        self.tracker.njev += 1
+        self.tracker.cost.append(cost / self.size)
+        return H, g
+
+
+def refine_state_space(
+    model: PolynomialStateSpace,
+    data: Dataset,
+    *,
+    initial_states: list[np.ndarray] | None = None,
+    feedthrough: bool = True,
+    max_nfev: int = 100,
+    ftol: float = 1e-10,
+    xtol: float = 1e-10,
+    gtol: float = 1e-10,
+) -> tuple[PolynomialStateSpace, dict[str, Any]]:
+    """Refine every parameter of ``model`` (``D`` held where it is without
+    ``feedthrough``) and every experiment's initial state on the free-run simulation
+    error (module docstring); returns the model and what the solver did."""
+    sig = _Signals(
+        [np.ascontiguousarray(model.normalised_input(e.u)) for e in data.experiments],
+        [np.ascontiguousarray(model.normalised_output(e.y)) for e in data.experiments],
+        model.input_offset, model.input_scale, model.output_offset, model.output_scale,
+    )  # fmt: skip
+    if initial_states is None:
+        initial_states = [model.initial_state(e.u, e.y[: 4 * model.nx]) for e in data.experiments]
+    problem = _Problem(model, sig, feedthrough)
+    theta0 = np.concatenate([model.free_parameters()[problem.free], *initial_states])
+    r0 = problem.residuals(theta0)
+    if r0 is problem.penalty:
+        raise EstimationError(
+            "the state-space start is unstable or its simulation explodes on the estimation "
+            "data; no refinement is possible (try another order)"
+        )
+    t0 = time.perf_counter()
+    bounds = (np.full(theta0.size, -np.inf), np.full(theta0.size, np.inf))
+    theta, reason = levenberg_marquardt(
+        problem, theta0, bounds, max_nfev, ftol, xtol, gtol, null_space=NULL_SPACE
+    )
+    fitted, _ = problem.split(theta)
+    if fitted is None:  # pragma: no cover - the solver keeps accepted iterates only
+        fitted = model
+    r = problem.residuals(theta)
+    info = {
+        "stop_reason": reason,
+        "iterations": problem.tracker.njev - 1,
+        "function_evaluations": problem.tracker.nfev,
+        "initial_normalised_mse": float(np.mean(r0**2)),
+        "final_normalised_mse": float(np.mean(r**2)),
+        "seconds": time.perf_counter() - t0,
+    }
+    return fitted, info
+
+
+def _solver_settings(info: dict[str, Any], max_nfev: int) -> dict[str, Any]:
+    """What the (last) refinement did, at the top of ``settings`` as for every
+    simulation-error fit."""
+    return {
+        "max_nfev": int(max_nfev),
+        "iterations": info["iterations"],
+        "function_evaluations": info["function_evaluations"],
+        "stop_reason": info["stop_reason"],
+    }
+
+
+# ----------------------------------------------------------------------------- public
+def _check(model: PolynomialStateSpace, data: Dataset, method: str) -> dict[str, dict[str, float]]:
+    """Finite, stable, a finite free run on the estimation data; its metrics."""
+    if not np.all(np.isfinite(model.free_parameters())):
+        raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
+    if not model.is_stable(STABILITY_MARGIN):
+        rho = float(np.max(np.abs(model.poles())))
+        raise EstimationError(
+            f"{method} returned an unstable state matrix (largest eigenvalue magnitude "
+            f"{rho:.6g}); no model is returned: try another order"
+        )
+    ys, sims = [], []
+    for e in data.experiments:
+        with np.errstate(all="ignore"):
+            sim = model.simulate(e.u, e.y[: model.max_lag])
+        ys.append(e.y[model.max_lag :])
+        sims.append(sim[model.max_lag :])
+    y, sim = np.vstack(ys), np.vstack(sims)
+    if not np.all(np.isfinite(sim)):
+        raise EstimationError(
+            f"{method} returned a model whose free-run simulation of the estimation data is "
+            "not finite; no model is returned"
+        )
+    return metrics_by_output(y, sim, data.outputs)
+
+
+def fit_state_space(
+    data: Dataset,
+    *,
+    nx: int | None = None,
+    max_order: int = 10,
+    horizon: int | None = None,
+    weighting: str = "moesp",
+    feedthrough: bool = False,
+    refine: bool = True,
+    max_nfev: int = 100,
+    ftol: float = 1e-10,
+    xtol: float = 1e-10,
+    gtol: float = 1e-10,
+) -> FitResult:
+    """Linear state-space model: subspace estimate, then (``refine``) output error.
+
+    Parameters are those of :func:`subspace` and of :func:`refine_state_space`.
+
+    Returns
+    -------
+    FitResult
+        ``settings`` holds the order, how it was chosen, the horizon, the weighting, the
+        singular values and what the refinement did; ``metrics_mode = "simulation"``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from blockid.data import Dataset
+    >>> plant = StateSpace(["u"], ["y"], A=[[0.9, 0.2], [-0.2, 0.9]], B=[[1.0], [0.0]],
+    ...                    C=[[1.0, 0.5]], D=[[0.0]])
+    >>> u = np.random.default_rng(0).standard_normal(2000)
+    >>> fit = fit_state_space(Dataset.from_arrays(u, plant.simulate(u)), refine=False)
+    >>> fit.settings["nx"], np.round(np.sort(np.abs(fit.model.poles())), 6).tolist()
+    (2, [0.921954, 0.921954])
+    """
+    t0 = time.perf_counter()
+    sub = subspace(
+        data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
+        feedthrough=feedthrough,
+    )  # fmt: skip
+    model: PolynomialStateSpace = sub.model
+    settings: dict[str, Any] = {
+        "nx": sub.nx,
+        "order_from": "given" if nx is not None else "canonical correlations (largest log gap)",
+        "horizon": sub.horizon,
+        "weighting": weighting,
+        "feedthrough": feedthrough,
+        "singular_values": [float(v) for v in sub.singular_values[: 2 * max(sub.nx, max_order)]],
+        "canonical_correlations": [
+            float(v) for v in sub.correlations[: 2 * max(sub.nx, max_order)]
+        ],
+    }
+    method = "subspace"
+    if refine:
+        model, info = refine_state_space(
+            model, data, initial_states=sub.initial_states, feedthrough=feedthrough,
+            max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
+        )  # fmt: skip
+        settings.update(_solver_settings(info, max_nfev))
+        settings["refinement"] = info
+        method = "subspace+simulation-error"
+    metrics = _check(model, data, method)
+    return FitResult(
+        model=model,
+        method=method,
+        settings=settings,
+        estimation_metrics=metrics,
+        n_samples=int(sum(e.n_samples for e in data.experiments)),
+        history={"seconds": time.perf_counter() - t0},
+        metrics_mode="simulation",
+    )
+
+
+def fit_subspace(
+    data: Dataset,
+    *,
+    nx: int | None = None,
+    max_order: int = 10,
+    horizon: int | None = None,
+    weighting: str = "moesp",
+    feedthrough: bool = False,
+) -> FitResult:
+    """The subspace estimate alone (:func:`fit_state_space` with ``refine=False``)."""
+    return fit_state_space(
+        data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
+        feedthrough=feedthrough, refine=False,
+    )  # fmt: skip
+
+
+def fit_polynomial_state_space(
+    data: Dataset,
+    *,
+    nx: int | None = None,
+    degree: int = 3,
+    monomials: str = "full",
+    max_order: int = 10,
+    horizon: int | None = None,
+    weighting: str = "moesp",
+    feedthrough: bool = False,
+    margin: float = 0.25,
+    max_nfev: int = 100,
+    ftol: float = 1e-10,
+    xtol: float = 1e-10,
+    gtol: float = 1e-10,
+) -> FitResult:
+    """Polynomial nonlinear state-space model started from the best linear one.
+
+    Parameters
+    ----------
+    data : Dataset
+    nx, max_order, horizon, weighting, feedthrough
+        Of the linear start (:func:`fit_state_space`).
+    degree : int
+        Largest total degree of the monomials (2 to 5; 1 gives the linear model).
+    monomials : {"full", "states", "inputs"}
+        Of which variables the monomials are (:func:`monomial_exponents`).
+    margin : float
+        Widening of the monomials' clipping range beyond the linear start's states and the
+        input, as a fraction of each range's width on each side.
+    max_nfev, ftol, xtol, gtol
+        Of each refinement (the linear start's and the nonlinear one's).
+    """
+    if not 1 <= degree <= 5:
+        raise ParameterError(f"degree must be from 1 to 5, got {degree}", parameter="degree")
+    if not margin >= 0:
+        raise ParameterError(f"margin must be >= 0, got {margin}", parameter="margin")
+    t0 = time.perf_counter()
+    linear = fit_state_space(
+        data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
+        feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
+    )  # fmt: skip
+    start = linear.model
+    n = start.nx
+    if degree == 1:
+        return linear
+    expo = monomial_exponents(n, len(data.inputs), degree, monomials, constant=True)
+    states, inputs = [], []
+    for e in data.experiments:
+        x0 = start.initial_state(e.u, e.y[: 4 * n])
+        states.append(start.states(e.u, x0))
+        inputs.append(start.normalised_input(e.u))
+    z = np.hstack((np.vstack(states), np.vstack(inputs)))
+    lo, hi = z.min(axis=0), z.max(axis=0)
+    span = np.maximum(hi - lo, 1e-12)
+    template = PolynomialStateSpace(
+        start.inputs, start.outputs, start.A, start.B, start.C, start.D,
+        np.zeros((n, expo.shape[0])), np.zeros((len(data.outputs), expo.shape[0])), expo,
+        lower=lo - margin * span, upper=hi + margin * span,
+        input_offset=start.input_offset, input_scale=start.input_scale,
+        output_offset=start.output_offset, output_scale=start.output_scale,
+        sampling_time=start.sampling_time,
+    )  # fmt: skip
+    model, info = refine_state_space(
+        template, data, feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol,
+        gtol=gtol,
+    )  # fmt: skip
+    method = "subspace+polynomial-state-space"
+    metrics = _check(model, data, method)
+    settings = {
+        **{k: v for k, v in linear.settings.items() if k != "refinement"},
+        **_solver_settings(info, max_nfev),
+        "linear_refinement": linear.settings.get("refinement"),
+        "degree": degree,
+        "monomials": monomials,
+        "n_monomials": int(expo.shape[0]),
+        "margin": margin,
+        "refinement": info,
+        "linear_simulation_metrics": linear.estimation_metrics,
+    }
+    return FitResult(
+        model=model,
+        method=method,
+        settings=settings,
+        estimation_metrics=metrics,
+        n_samples=int(sum(e.n_samples for e in data.experiments)),
+        history={"seconds": time.perf_counter() - t0},
+        metrics_mode="simulation",
+    )

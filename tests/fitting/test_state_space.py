@@ -1,0 +1,187 @@
+"""Subspace identification and the simulation-error fits of (polynomial) state-space
+models, against plants whose matrices are known."""
+
+import numpy as np
+import pytest
+
+from blockid.data import Dataset
+from blockid.fitting import fit_model
+from blockid.fitting.state_space import (
+    fit_polynomial_state_space,
+    fit_state_space,
+    order_from_singular_values,
+    subspace,
+)
+from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
+
+
+def _markov(model, k):
+    """``C A^k B`` (``D`` for k = -1) in the signals' own units."""
+    scale = np.diag(model.output_scale) @ (
+        model.D if k < 0 else model.C @ np.linalg.matrix_power(model.A, k) @ model.B
+    )
+    return scale @ np.diag(1.0 / model.input_scale)
+
+
+SYSTEMS = {
+    "siso, 2 states": StateSpace(
+        ["u"], ["y"], A=[[1.2, -0.35], [1.0, 0.0]], B=[[1.0], [0.0]], C=[[1.0, 0.4]], D=[[0.0]]
+    ),  # fmt: skip
+    "2 in, 2 out, 3 states": StateSpace(
+        ["u1", "u2"],
+        ["y1", "y2"],
+        A=[[0.8, 0.2, 0.0], [-0.2, 0.8, 0.1], [0.0, 0.0, 0.5]],
+        B=[[1.0, 0.0], [0.0, 1.0], [0.5, 0.5]],
+        C=[[1.0, 0.0, 0.3], [0.0, 1.0, 0.0]],
+        D=[[0.0, 0.0], [0.0, 0.0]],
+    ),  # fmt: skip
+    "1 in, 2 out, 4 states, feedthrough": StateSpace(
+        ["u"],
+        ["y1", "y2"],
+        A=np.diag([0.9, -0.5, 0.3, 0.6]) + np.diag([0.2, 0.1, 0.0], 1),
+        B=[[1.0], [1.0], [0.5], [-1.0]],
+        C=[[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0]],
+        D=[[0.5], [0.0]],
+    ),  # fmt: skip
+}
+
+
+def _record(plant, n, seed=0, snr_db=None, mean=0.3):
+    rng = np.random.default_rng(seed)
+    u = mean + rng.standard_normal((n, len(plant.inputs)))
+    y = plant.simulate(u)
+    if snr_db is not None:
+        y = y + rng.standard_normal(y.shape) * y.std(axis=0) * 10 ** (-snr_db / 20)
+    return Dataset.from_arrays(u, y, list(plant.inputs), list(plant.outputs))
+
+
+@pytest.mark.parametrize("name", list(SYSTEMS))
+def test_subspace_recovers_known_systems_noise_free(name):
+    plant = SYSTEMS[name]
+    feedthrough = bool(np.any(plant.D))
+    fit = fit_model(_record(plant, 3000), "state-space", method="subspace",
+                    feedthrough=feedthrough)  # fmt: skip
+    model = fit.model
+    assert model.nx == plant.nx and fit.settings["order_from"].startswith("canonical")
+    np.testing.assert_allclose(np.sort_complex(model.poles()), np.sort_complex(plant.poles()),
+                               atol=1e-8)  # fmt: skip
+    for k in range(-1, 12):
+        np.testing.assert_allclose(_markov(model, k), _markov(plant, k), atol=1e-8)
+
+
+def test_subspace_is_consistent_at_40_db_and_the_refinement_follows_the_free_run():
+    plant = SYSTEMS["2 in, 2 out, 3 states"]
+    data = _record(plant, 20000, snr_db=40.0)
+    sub = fit_model(data, "state-space", method="subspace", nx=3).model
+    refined = fit_model(data, "state-space", nx=3, max_nfev=30)
+    for model in (sub, refined.model):
+        np.testing.assert_allclose(np.sort(np.abs(model.poles())), np.sort(np.abs(plant.poles())),
+                                   rtol=0.01)  # fmt: skip
+    assert refined.method == "subspace+simulation-error"
+    info = refined.settings["refinement"]
+    assert info["final_normalised_mse"] <= info["initial_normalised_mse"]
+
+
+def test_the_state_space_fit_equals_the_output_error_fit_where_they_coincide():
+    """A single-input single-output model with two states and no direct term is an
+    output-error model B/A with na = 2, nb = 2, nk = 1: both fits reach the same
+    free-run error and the same transfer function."""
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 2000, snr_db=30.0)
+    oe = fit_model(data, "output-error", na=2, nb=2, nk=1, tail_fraction=0.0, max_nfev=200)
+    ss = fit_model(data, "state-space", nx=2, max_nfev=200)
+    mse = [r.estimation_metrics["mse"]["y"] for r in (oe, ss)]
+    assert mse[1] == pytest.approx(mse[0], rel=2e-3)
+    num, den = ss.model.transfer_function()
+    a = oe.model.a
+    np.testing.assert_allclose(den[1:] / den[0], a, atol=2e-3)
+    np.testing.assert_allclose(num[1:] / den[0], oe.model.b, atol=2e-3)
+
+
+def test_the_order_rule_reads_the_largest_gap():
+    assert order_from_singular_values(np.array([1.0, 0.99, 0.4, 0.38, 0.3]), 4) == 2
+    assert order_from_singular_values(np.array([1.0, 0.5]), 5) == 1
+    r = subspace(_record(SYSTEMS["siso, 2 states"], 1000, snr_db=40.0), max_order=1)
+    assert r.nx == 1
+
+
+def _cubic_plant():
+    """Two states, the first fed back through -0.15 x1^3 (an odd nonlinearity: the
+    operating point stays at zero, so the linear part is comparable)."""
+    expo = monomial_exponents(2, 1, 3, "states")
+    E = np.zeros((2, expo.shape[0]))
+    E[0, 3] = -0.15  # x1^3
+    return PolynomialStateSpace(["u"], ["y"], [[1.2, -0.35], [1.0, 0.0]], [[1.0], [0.0]],
+                                [[1.0, 0.4]], [[0.0]], E, np.zeros((1, expo.shape[0])),
+                                expo)  # fmt: skip
+
+
+def _uniform(plant, n, amplitude=1.0, seed=0, snr_db=None):
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-amplitude, amplitude, n)
+    y = plant.simulate(u)[:, 0]
+    noise = 0.0 if snr_db is None else y.std() * 10 ** (-snr_db / 20)
+    return Dataset.from_arrays(u, y + noise * rng.standard_normal(n), ["u"], ["y"]), noise
+
+
+def _linearised_poles(model, u_physical=0.0):
+    """Eigenvalues of the model's Jacobian at its equilibrium for a constant input: an
+    invariant of every state basis, linear or not."""
+    u0 = np.array([(u_physical - model.input_offset[0]) / model.input_scale[0]])
+    x = np.zeros(model.nx)
+    for _ in range(2000):  # the equilibrium, by the (contracting) iteration itself
+        z = np.concatenate([x, u0])
+        zeta = np.prod(np.clip(z, model.lower, model.upper) ** model.exponents, axis=1)
+        x = model.A @ x + model.B @ u0 + model.E @ zeta
+    z = np.concatenate([x, u0])
+    slopes = np.zeros((model.n_monomials, model.nx))
+    for j, row in enumerate(model.exponents):
+        for i in range(model.nx):
+            if row[i]:
+                d = row.copy()
+                d[i] -= 1
+                slopes[j, i] = row[i] * np.prod(z**d)
+    return np.sort(np.abs(np.linalg.eigvals(model.A + model.E @ slopes)))
+
+
+def test_pnlss_noise_free_recovers_the_plant_up_to_its_state_basis():
+    """Noise-free, the fit reaches the plant to rounding: the same outputs on a new
+    record to 1e-6 of their spread, and the same poles of the dynamics linearised at
+    the equilibrium (invariant of the state basis, which a polynomial model may even
+    change nonlinearly) to 1e-6."""
+    plant = _cubic_plant()
+    data, _ = _uniform(plant, 3000)
+    fit = fit_polynomial_state_space(data, nx=2, degree=3, monomials="states", max_nfev=300)
+    model = fit.model
+    assert fit.settings["refinement"]["final_normalised_mse"] < 1e-16
+    np.testing.assert_allclose(_linearised_poles(model), [0.5, 0.7], atol=1e-6)
+    fresh, _ = _uniform(plant, 1000, amplitude=0.9, seed=5)
+    f = fresh.experiments[0]
+    np.testing.assert_allclose(model.simulate(f.u, f.y[:20]), f.y, atol=1e-6 * f.y.std())
+
+
+def test_pnlss_at_40_db_reaches_the_noise_floor_and_its_linear_part_the_poles():
+    plant = _cubic_plant()
+    data, noise = _uniform(plant, 4000, snr_db=40.0)
+    fit = fit_polynomial_state_space(data, nx=2, degree=3, monomials="states", max_nfev=200)
+    linear = fit_state_space(data, nx=2)
+    rmse = fit.estimation_metrics["rmse"]["y"]
+    assert rmse < 1.1 * noise < 0.2 * linear.estimation_metrics["rmse"]["y"]
+    np.testing.assert_allclose(_linearised_poles(fit.model), [0.5, 0.7], rtol=0.01)
+    # beyond the estimation range (input 20 % larger): bounded, and still close
+    fresh, _ = _uniform(plant, 2000, amplitude=1.2, seed=7)
+    f = fresh.experiments[0]
+    y = fit.model.simulate(f.u, f.y[:20])
+    assert np.all(np.isfinite(y)) and np.abs(y).max() < 2 * np.abs(f.y).max()
+
+
+def test_a_linear_degree_gives_the_linear_model_and_bad_options_are_named():
+    data, _ = _uniform(_cubic_plant(), 500)
+    fit = fit_polynomial_state_space(data, nx=2, degree=1)
+    assert type(fit.model) is StateSpace
+    from blockid.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="degree"):
+        fit_polynomial_state_space(data, nx=2, degree=7)
+    with pytest.raises(ParameterError, match="weighting"):
+        subspace(data, weighting="pca")
