@@ -366,3 +366,25 @@ def test_arx_update_divergence_rolls_back_every_output():
         online.update(u[151], y[151])
     np.testing.assert_array_equal(_vector(online), good)  # y1 rolled back too
     assert online.n_samples == 151
+
+
+@pytest.mark.parametrize("method", ["rls", "aw-rls", "hierarchical-rls"])
+def test_arx_with_lags_of_three_or_more_learns_from_the_first_sample(method):
+    """Issue 21: ``update`` crashed from the first samples for any ARX whose longest
+    lag is 3 or more (a regressor slice wrapped around before ``max_lag`` samples had
+    arrived); sample by sample it now ends where the one-chunk fit ends, bit for bit."""
+    from blockid import ARXEstimator
+
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal(300)
+    y = np.convolve(u, [0.0, 0.5, 0.3, 0.1], "full")[:300] + 0.01 * rng.standard_normal(300)
+    orders = dict(na=3, nb=3, nk=2)
+    one = ARXEstimator(method=method, **orders)
+    for k in range(300):
+        one.update(u[k : k + 1], y[k : k + 1])
+    whole = ARXEstimator(method=method, **orders).partial_fit(_dataset_siso(u, y))
+    np.testing.assert_array_equal(one.model_.parameter_vector(0), whole.model_.parameter_vector(0))
+
+
+def _dataset_siso(u, y):
+    return Dataset.from_arrays(u, y, ["u"], ["y"])

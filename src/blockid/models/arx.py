@@ -197,6 +197,8 @@ class ARX(Model):
         u = u - self.input_offset
         y = y - self.output_offset
         n0, N = self.max_lag, u.shape[0]
+        if N <= n0:  # no sample has a full regressor yet (slices would wrap around)
+            return np.zeros((0, self.n_parameters(i))), y[:0, i]
         cols = [
             -y[n0 - k : N - k, j]
             for j in range(len(self.outputs))
