@@ -46,6 +46,7 @@ from blockid.models.export import (
     transfer_functions,
 )
 from blockid.models.feedback import LinearFeedback
+from blockid.models.state_space import PolynomialStateSpace, StateSpace
 from plants_for_options import PLANTS, record
 
 LIN = {"na": 2, "nb": 2, "nk": 1, "a": [-1.2, 0.35], "b": [1.0, 0.4]}
@@ -102,6 +103,18 @@ def _models() -> dict:
             "u", "y", linear=LinearBlock(2, 1, 1, a=[-1.5, 0.7], b=[0.5]),
             feedback=PiecewiseLinear([-1.0, 0.0, 0.5, 1.0], [-0.6, 0.0, 0.1, 0.6]),
         ),
+        "state-space-mimo": StateSpace(
+            ["u1", "u2"], ["y1", "y2"], A=[[0.8, 0.2], [-0.2, 0.7]], B=[[1.0, 0.0], [0.5, 1.0]],
+            C=[[1.0, 0.0], [0.3, 1.0]], D=[[0.0, 0.1], [0.0, 0.0]], input_offset=[0.4, 0.4],
+            input_scale=[2.0, 1.0], output_offset=[1.0, -1.0], output_scale=[3.0, 0.5],
+        ),
+        "polynomial-state-space": PolynomialStateSpace(
+            ["u"], ["y"], A=[[1.2, -0.35], [1.0, 0.0]], B=[[1.0], [0.0]], C=[[1.0, 0.4]],
+            D=[[0.0]], E=[[0.02, 0.05, 0.0, -0.05], [0.0, 0.0, 0.0, 0.0]],
+            F=[[0.0, 0.0, 0.01, 0.0]], exponents=[[0, 0, 0], [2, 0, 0], [1, 1, 0], [3, 0, 0]],
+            lower=[-1.5, -1.5, -1.0], upper=[1.5, 1.5, 1.0], input_offset=0.4,
+            input_scale=0.8, output_offset=-0.3, output_scale=2.0,
+        ),
     }  # fmt: skip
 
 
@@ -135,9 +148,11 @@ def test_exported_module_reproduces_simulate(name, tmp_path):
     module = _load(path)
     starts = [None, y[: model.max_lag], y[:1], y[:50]]
     for y0 in starts:
-        # the module starts from the first max_lag outputs of a longer y0 (the
-        # estimated start of a chain given more is not exported)
-        expected = model.simulate(u, None if y0 is None else y0[: model.max_lag])
+        # the module starts a chain from the first max_lag outputs of a longer y0 (the
+        # estimated start of a chain given more is not exported); a state-space model
+        # estimates its initial state from all of them, as in blockid
+        whole = isinstance(model, PolynomialStateSpace)
+        expected = model.simulate(u, None if y0 is None else y0 if whole else y0[: model.max_lag])
         got = module.simulate(u, y0)
         assert got.shape == expected.shape
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-10)

@@ -10,7 +10,8 @@ self-contained Python module.
   model's parameters embedded and ``simulate(u, y0=None)`` reproducing
   ``model.simulate(u, y_initial=y0[:max_lag])`` to rounding, for ARX (MIMO), every chain of
   blocks (Hammerstein, Wiener, Hammerstein-Wiener, backlash, Wiener-Hammerstein, output
-  error) and the feedback model.
+  error), the feedback model, and linear and polynomial state-space models (MIMO; their
+  initial state estimated from all of ``y0``, by the same Gauss-Newton iteration).
 
 The linear block ``x = z^-nk B(z^-1)/A(z^-1) w`` (MATLAB convention) is, in positive
 powers with ``n = max(na, nk + nb - 1)``,
@@ -100,9 +101,20 @@ def transfer_functions(model: Any) -> list[dict[str, Any]]:
     >>> transfer_functions(LinearBlock(2, 1, 1, a=[-1.2, 0.35], b=[0.5]))
     [{'num': [0.5, 0.0], 'den': [1.0, -1.2, 0.35], 'dt': None}]
     """
+    from blockid.models.state_space import PolynomialStateSpace
+
     if getattr(model, "role", None) == "linear":
         return [_tf(model, None)]
     dt = getattr(model, "sampling_time", None)
+    if isinstance(model, PolynomialStateSpace):  # every input-output pair of A, B, C, D
+        linear = model.linear_part()
+        out = []
+        for i, name_y in enumerate(model.outputs):
+            for j, name_u in enumerate(model.inputs):
+                num, den = linear.transfer_function(i, j)
+                out.append({"num": num.tolist(), "den": den.tolist(), "dt": dt,
+                            "input": name_u, "output": name_y})  # fmt: skip
+        return out
     if hasattr(model, "lag_arrays"):  # ARX
         if len(model.inputs) != 1 or len(model.outputs) != 1:
             raise ParameterError(
@@ -233,6 +245,10 @@ def _check_kinds(blocks: Any) -> None:
 
 def _spec(model: Any) -> dict[str, Any]:
     """What the module's ``simulate`` needs beyond the model description."""
+    from blockid.models.state_space import INITIAL_ITERATIONS, PolynomialStateSpace
+
+    if isinstance(model, PolynomialStateSpace):
+        return {"form": "state-space", "max_lag": model.max_lag, "iterations": INITIAL_ITERATIONS}
     if hasattr(model, "lag_arrays"):  # ARX
         A, B = model.lag_arrays()
         return {"form": "arx", "A": A.tolist(), "B": B.tolist(), "max_lag": model.max_lag}
@@ -529,6 +545,83 @@ def _arx_model(u, y0):
     return y + _offsets("outputs")
 
 
+def _ss_matrices():
+    m = MODEL
+    nx, nu, ny = int(m["nx"]), len(INPUTS), len(OUTPUTS)
+    out = {k: np.asarray(m[k], dtype=float).reshape(s) for k, s in
+           (("A", (nx, nx)), ("B", (nx, nu)), ("C", (ny, nx)), ("D", (ny, nu)))}
+    expo = np.asarray(m.get("exponents", []), dtype=np.int64).reshape(-1, nx + nu)
+    nm = expo.shape[0]
+    out["E"] = np.asarray(m.get("E", []), dtype=float).reshape(nx, nm)
+    out["F"] = np.asarray(m.get("F", []), dtype=float).reshape(ny, nm)
+    out["expo"] = expo
+    lo = m.get("lower") or [None] * (nx + nu)
+    hi = m.get("upper") or [None] * (nx + nu)
+    out["lo"] = np.array([-np.inf if v is None else v for v in lo], dtype=float)
+    out["hi"] = np.array([np.inf if v is None else v for v in hi], dtype=float)
+    return out
+
+
+def _ss_run(M, un, x, sens=False):
+    """Normalised outputs of a free run from ``x`` and, with ``sens``, their derivative
+    with respect to the initial state (rows k * ny + i)."""
+    A, B, C, D, E, F, expo = M["A"], M["B"], M["C"], M["D"], M["E"], M["F"], M["expo"]
+    lo, hi = M["lo"], M["hi"]
+    nx, ny, N = A.shape[0], C.shape[0], un.shape[0]
+    y = np.zeros((N, ny))
+    J = np.zeros((N * ny, nx)) if sens else None
+    S = np.eye(nx)
+    x = np.array(x, dtype=float)
+    for k in range(N):
+        z = np.concatenate((x, un[k]))
+        zc = np.minimum(np.maximum(z, lo), hi)
+        zeta = np.prod(zc[None, :] ** expo, axis=1) if expo.size else np.zeros(0)
+        y[k] = C @ x + D @ un[k] + F @ zeta
+        if sens:
+            dz = np.zeros((expo.shape[0], nx))
+            for j in range(expo.shape[0]):
+                for i in range(nx):
+                    p = expo[j, i]
+                    if p and lo[i] < z[i] < hi[i]:
+                        d = expo[j].copy()
+                        d[i] -= 1
+                        dz[j, i] = p * np.prod(zc ** d)
+            J[k * ny : (k + 1) * ny] = (C + F @ dz) @ S
+            S = (A + E @ dz) @ S
+        x = A @ x + B @ un[k] + E @ zeta
+    return y, J
+
+
+def _state_space(u, y0):
+    m, M = MODEL["normalisation"], _ss_matrices()
+    un = (u - np.asarray(m["input_offset"])) / np.asarray(m["input_scale"])
+    y_off, y_scale = np.asarray(m["output_offset"]), np.asarray(m["output_scale"])
+    nx = M["A"].shape[0]
+    x0 = np.zeros(nx)
+    n = 0
+    if y0 is not None and len(np.atleast_1d(y0)):
+        y0 = _rows(y0)
+        n = min(y0.shape[0], u.shape[0])
+        yn = (y0[:n] - y_off) / y_scale
+        best = np.inf
+        for _ in range(SPEC["iterations"]):
+            out, J = _ss_run(M, un[:n], x0, sens=True)
+            r = (yn - out).reshape(-1)
+            cost = float(r @ r)
+            if not np.isfinite(cost) or cost >= best * (1 - 1e-12):
+                break
+            best = cost
+            x0 = x0 + np.linalg.lstsq(J, r, rcond=None)[0]
+            if not M["expo"].size:
+                break
+    y, _ = _ss_run(M, un, x0)
+    y = y * y_scale + y_off
+    k = min(n, SPEC["max_lag"])
+    if k:
+        y[:k] = y0[:k]
+    return y
+
+
 def simulate(u, y0=None):
     """Free-run simulation: outputs (N, len(OUTPUTS)) for inputs ``u``; ``y0`` holds the
     first measured outputs to start from (None: from rest)."""
@@ -541,6 +634,8 @@ def simulate(u, y0=None):
             % (len(INPUTS), INPUTS, u.shape)
         )
     form = SPEC["form"]
+    if form == "state-space":
+        return _state_space(u, y0)
     if form == "arx":
         return _arx_model(u, y0)
     if form == "feedback":
