@@ -1,15 +1,18 @@
-"""Speed and memory of the structure search, ``blockid identify`` (issue 10).
+"""Speed, parallel speed-up and memory of the structure search, ``blockid identify``.
 
-Usage: ``python benchmarks/bench_identify.py [--samples 10000,100000] [--budget S]
+Usage: ``python benchmarks/bench_identify.py [--samples 2000,20000] [--effort E]
 [--write-docs]``
 
 For each record length, a Hammerstein-Wiener plant (two-segment polynomial, second-order
 linear block, cubic output polynomial) with white output noise at 40 dB is written as a
-CSV, and ``blockid identify DATA --input u --output y --budget S --json -o model.json``
-runs on it in a fresh process, as a user would: the wall time, the search time
-``identify`` reports, the number of candidates and rejections, the peak resident memory
-of the process (``ru_maxrss``) and the chosen structure. The reference measured in the
-same run is a single default fit of the true structure (``blockid fit --structure
+CSV, and ``blockid identify DATA --input u --output y --effort E --jobs J --json`` runs on
+it in a fresh process, as a user would, with ``--jobs 1`` and ``--jobs 2``: the wall
+time, the search time ``identify`` reports, the candidates and rejections, the peak
+resident memory of the process and of its workers (``ru_maxrss`` of the children: the
+largest one, and their sum bounds what they held together) and the chosen structure.
+The speed-up is the ratio of the two search times, measured in the same run; the two
+runs must choose the same model (the JSON documents are compared). The reference is a
+single default fit of the true structure (``blockid fit --structure
 hammerstein-wiener``) on the same file: what one candidate of the search costs.
 """
 
@@ -38,6 +41,8 @@ _CHILD = (
     "sys.stderr.write(run.stdout); "
     "print(run.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
 )
+#: ``ru_maxrss`` of the children is the largest of the process tree's members: the
+#: ``identify`` process and its workers each hold their own part of it.
 
 
 def write_record(path: Path, samples: int) -> None:
@@ -72,8 +77,8 @@ def measured(command: list[str]) -> tuple[int, float, float, str]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--samples", default="10000,100000")
-    ap.add_argument("--budget", type=float, default=300.0)
+    ap.add_argument("--samples", default="2000,20000")
+    ap.add_argument("--effort", default="standard")
     ap.add_argument("--write-docs", action="store_true")
     args = ap.parse_args()
     blockid = shutil.which("blockid", path=str(Path(sys.executable).parent)) or "blockid"
@@ -86,40 +91,53 @@ def main() -> None:
             fit = base + ["--structure", "hammerstein-wiener", "--na", "2", "--nb", "2"]
             fit += ["--nk", "1", "--quiet", "-o", str(Path(tmp) / "fit.json"), "--force"]
             _, fit_gb, fit_s, _ = measured(fit)
-            load = os.getloadavg()[0]
-            search = [blockid, "identify", str(csv), "--input", "u", "--output", "y"]
-            search += ["--budget", str(args.budget), "--json", "--quiet"]
-            search += ["-o", str(Path(tmp) / f"id{n}.json"), "--force"]
-            code, gb, seconds, stdout = measured(search)
-            doc = json.loads(stdout) if code == 0 else {}
-            info = doc.get("search", {})
-            selected = doc.get("selected", {})
-            structure = selected.get("structure", f"exit {code}")
-            rejected = len(info.get("rejected") or [])
-            searched = info.get("seconds")
-            row = (n, fit_s, fit_gb, seconds, searched, info.get("candidates"), rejected, gb)
-            rows.append((*row, structure, load))
-            print(rows[-1], flush=True)
+            runs = {}
+            for jobs in (1, 2):
+                load = os.getloadavg()[0]
+                search = [blockid, "identify", str(csv), "--input", "u", "--output", "y"]
+                search += ["--effort", args.effort, "--jobs", str(jobs), "--json", "--quiet"]
+                code, gb, seconds, stdout = measured(search)
+                doc = json.loads(stdout) if code == 0 else {}
+                runs[jobs] = (doc, gb, seconds, load)
+            (one, gb1, _, load1), (two, gb2, _, load2) = runs[1], runs[2]
+            s1, s2 = one.get("search", {}).get("seconds"), two.get("search", {}).get("seconds")
+            same = json.dumps(one.get("selected"), sort_keys=True) == json.dumps(
+                two.get("selected"), sort_keys=True
+            )
+            info = one.get("search", {})
+            row = (
+                n, fit_s, fit_gb, s1, s2, (s1 / s2) if s1 and s2 else None, info.get("candidates"),
+                len(info.get("rejected") or []), gb1, gb2,
+                one.get("selected", {}).get("structure", "failed"), same, max(load1, load2),
+            )  # fmt: skip
+            rows.append(row)
+            print(row, flush=True)
     lines = [
-        "## Structure search (issue 10: blockid identify)",
+        "## Structure search: `blockid identify`, one worker and two",
         "",
-        "`python benchmarks/bench_identify.py` — `blockid identify` on a simulated "
-        "Hammerstein-Wiener record (40 dB output noise) of each length, budget "
-        f"{args.budget:g} s, in a fresh process: wall time (start-up and the final refit "
-        "included), the search time `identify` reports, candidates scored and rejected, "
-        "peak resident memory of the process, the structure chosen. Reference in the same "
-        "run: one default fit of the true structure on the same file. Machine: "
-        f"{machine()}.",
+        "`python benchmarks/bench_identify.py` — `blockid identify --effort "
+        f"{args.effort}` on a simulated Hammerstein-Wiener record (40 dB output noise) of "
+        "each length, in a fresh process, with `--jobs 1` and `--jobs 2`: the search time "
+        "`identify` reports, the speed-up (ratio of the two, same run), candidates scored "
+        "and rejected, peak resident memory (the largest process of the tree: the search "
+        "or one worker), the structure chosen and whether both runs chose the same model "
+        "(their `selected` documents equal). Reference: one default fit of the true "
+        f"structure on the same file. Machine: {machine()}.",
         "",
-        "| samples | one H-W fit s | one H-W fit GB | identify wall s | search s | candidates "
-        "| rejected | identify peak GB | chosen | load average |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|",
+        "| samples | one H-W fit s | search s, 1 job | search s, 2 jobs | speed-up | "
+        "candidates | rejected | peak GB, 1 job | peak GB, 2 jobs | chosen | same model "
+        "| load average |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---:|",
     ]
-    for n, fs, fg, s, ss, c, r, g, chosen, load in rows:
-        shown = "-" if ss is None else f"{ss:.0f}"
+    for n, fs, _fg, s1, s2, up, c, r, g1, g2, chosen, same, load in rows:
+
+        def f(v, spec):
+            return "-" if v is None else format(v, spec)
+
         lines.append(
-            f"| {n:,} | {fs:.1f} | {fg:.2f} | {s:.0f} | {shown} | {c} | {r} | {g:.2f} | "
-            f"{chosen} | {load:.1f} |"
+            f"| {n:,} | {fs:.1f} | {f(s1, '.0f')} | {f(s2, '.0f')} | {f(up, '.2f')} | {c} | "
+            f"{r} | {g1:.2f} | {g2:.2f} | {chosen} | {'yes' if same else '**no**'} | "
+            f"{load:.1f} |"
         )
     text = "\n".join(lines)
     print(text)

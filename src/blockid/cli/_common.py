@@ -249,16 +249,6 @@ def print_model(model: Any) -> None:
     table = Table(title=f"{model.structure} model", title_justify="left")
     table.add_column("parameter")
     table.add_column("value", justify="right")
-    if hasattr(model, "parameter_names"):  # ARX
-        for i in range(len(model.outputs)):
-            names, values = model.parameter_names(i), model.parameter_vector(i)
-            for name, value in zip(names, values, strict=True):
-                table.add_row(escape(name), f"{value:.6g}")
-    elif hasattr(model, "subsystems"):
-        for name, sub in model.subsystems:
-            table.add_row(escape(name), sub.structure)
-    else:
-        for name, value in model.parameters.items():
-            values = value if isinstance(value, list) else [value]
-            table.add_row(name, ", ".join(f"{v:.6g}" for v in values))
+    for name, values in model.parameter_table():
+        table.add_row(escape(name), values)
     stdout.print(table)

@@ -137,6 +137,14 @@ class ARX(Model):
         lag_b = int((self.nk + self.nb - 1)[active].max(initial=0)) if active.any() else 0
         return max(lag_a, lag_b, 1)
 
+    def parameter_table(self) -> list[tuple[str, str]]:
+        """One row per coefficient, ``a[y1,y1,1]``-style names."""
+        rows = []
+        for i in range(len(self.outputs)):
+            for name, value in zip(self.parameter_names(i), self.parameter_vector(i), strict=True):
+                rows.append((name, f"{value:.6g}"))
+        return rows
+
     @property
     def n_free_parameters(self) -> int:
         """Estimated coefficients over every output (offsets are not estimated: means)."""

@@ -59,6 +59,15 @@ class Model(ABC):
     def from_dict(cls, data: dict[str, Any]) -> Model:
         """Inverse of :meth:`to_dict`."""
 
+    def parameter_table(self) -> list[tuple[str, str]]:
+        """``(name, values)`` rows for a printed table of the model's parameters: its
+        named ``parameters``, each list of values on one row."""
+        rows = []
+        for name, value in self.parameters.items():  # type: ignore[attr-defined]
+            values = value if isinstance(value, list) else [value]
+            rows.append((str(name), ", ".join(f"{v:.6g}" for v in values)))
+        return rows
+
     @property
     def n_free_parameters(self) -> int:
         """How many parameters a fit of this model estimates (``free_parameters()``'s

@@ -200,6 +200,10 @@ class Network(Model):
         order = [n for _, m in self.subsystems for n in m.outputs]
         return pred[:, [order.index(n) for n in self.outputs]]
 
+    def parameter_table(self) -> list[tuple[str, str]]:
+        """One row per subsystem: its name and structure (their own files hold more)."""
+        return [(name, sub.structure) for name, sub in self.subsystems]
+
     def to_dict(self) -> dict[str, Any]:
         return {
             "structure": self.structure,

@@ -231,6 +231,25 @@ class PolynomialStateSpace(Model):
             [m.reshape(-1) for m in (self.A, self.B, self.C, self.D, self.E, self.F)]
         )
 
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """The matrices by name (normalised units, module docstring), as lists of rows."""
+        out: dict[str, Any] = {k: getattr(self, k).tolist() for k in "ABCD"}
+        if self.n_monomials:
+            out.update(E=self.E.tolist(), F=self.F.tolist())
+        return out
+
+    def parameter_table(self) -> list[tuple[str, str]]:
+        """One row per matrix row (``A[0]``, ...), and the monomials' count."""
+        rows = []
+        for key, m in zip("ABCDEF", (self.A, self.B, self.C, self.D, self.E, self.F), strict=True):
+            for i, row in enumerate(m):
+                if row.size:
+                    rows.append((f"{key}[{i}]", ", ".join(f"{v:.6g}" for v in row)))
+        if self.n_monomials:
+            rows.append(("monomials", f"{self.n_monomials} up to degree {self.degree}"))
+        return rows
+
     def free_parameter_names(self) -> list[str]:
         names = []
         for key, m in zip("ABCDEF", (self.A, self.B, self.C, self.D, self.E, self.F), strict=True):
