@@ -4,6 +4,9 @@ Usage::
 
     .venv/bin/python benchmarks/real/rule_study.py RESULTS_DIR [--only NAME ...]
 
+(``run.py --rule-study`` does the same on its results folder and keeps the table for
+``docs/benchmarks.md``.)
+
 For every set whose search result is saved in ``RESULTS_DIR`` (``run.py --results``),
 each rule ranks the candidates that search scored (their per-fold relative errors are in
 the file), the winner of each rule is fitted on all estimation data with its own
@@ -23,8 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from datasets import ALL  # noqa: E402
-from run import test_rmse  # noqa: E402
+from datasets import ALL, MIMO  # noqa: E402
 
 TIE = 0.02
 
@@ -64,46 +66,11 @@ def main() -> int:
     p.add_argument("results", type=Path)
     p.add_argument("--only", nargs="+")
     args = p.parse_args()
-    from blockid.fitting.dispatch import fit_model
+    from run import rule_study
 
-    table: dict[str, dict[str, float]] = {}
-    for f in sorted(args.results.glob("*.json")):
-        r = json.loads(f.read_text())
-        if (
-            r.get("status") != "ok"
-            or "scored" not in r
-            or (args.only and r["name"] not in args.only)
-        ):
-            continue
-        bench = ALL[r["name"]]()
-        fits: dict[str, float] = {}
-        for rule in RULES:
-            c = choose(r["scored"], rule)
-            key = json.dumps([c["structure"], c["options"]], sort_keys=True)
-            if key not in fits:
-                try:
-                    with np.errstate(all="ignore"):
-                        model = fit_model(bench.estimation, c["structure"], **c["options"]).model
-                    errs = [test_rmse(model, rec, bench.n_init)[0] * bench.scale
-                            for rec in bench.tests]  # fmt: skip
-                    fits[key] = float(np.mean(errs))
-                except Exception as exc:  # noqa: BLE001 - a study: report and go on
-                    print(f"  {rule}: {exc}")
-                    fits[key] = float("nan")
-            table.setdefault(r["name"], {})[rule] = fits[key]
-            label = f"{c['structure']}({', '.join(f'{k}={v}' for k, v in c['options'].items())})"
-            print(f"{r['name']:26s} {rule:15s} {fits[key]:10.4g}  {label[:90]}", flush=True)
-    print()
-    names = sorted(table)
-    print("set".ljust(26) + "".join(rule[:12].rjust(13) for rule in RULES))
-    for name in names:
-        row = table[name]
-        best = min(v for v in row.values() if np.isfinite(v))
-        print(name.ljust(26) + "".join(f"{row[rule] / best:13.3f}" for rule in RULES))
-    ratios = {rule: [table[n][rule] / min(v for v in table[n].values() if np.isfinite(v))
-                     for n in names] for rule in RULES}  # fmt: skip
-    print("geometric mean".ljust(26)
-          + "".join(f"{np.exp(np.mean(np.log(ratios[r]))):13.3f}" for r in RULES))  # fmt: skip
+    names = args.only or sorted(f.stem for f in args.results.glob("*.json"))
+    study = rule_study(args.results, [n for n in names if n in {**ALL, **MIMO}])
+    print(json.dumps(study["summary"], indent=1))
     return 0
 
 

@@ -1,0 +1,59 @@
+"""fit_model: options resolved through the registry, the default centring decided by
+the data, and what a failed uncentred fit says."""
+
+import numpy as np
+import pytest
+
+from blockid.blocks import LinearBlock, Saturation
+from blockid.data import Dataset
+from blockid.errors import EstimationError
+from blockid.fitting import fit_model
+from blockid.fitting.dispatch import default_centring, takes_both_signs
+from blockid.fitting.registry import STRUCTURES
+
+
+def _saturated_record(mean: float, seed: int = 0) -> Dataset:
+    """A second-order lag seen through a saturating sensor, around ``mean`` (a 2-10 V
+    record for mean 6)."""
+    rng = np.random.default_rng(seed)
+    u = mean + 2.0 * rng.uniform(-1, 1, 2000)
+    x = LinearBlock(2, 2, 1, a=[-1.2, 0.5], b=[0.2, 0.1]).simulate(u - mean)
+    y = mean + np.clip(x, -0.3, 0.4) + 0.01 * rng.standard_normal(2000)
+    return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+
+def test_a_saturation_on_a_positive_output_is_fitted_around_the_operating_point():
+    """Issue 20: a hard output block was refused at default settings (fitted on the
+    signal as recorded, its centre at 0 V, far from the 2-10 V data) although centring
+    fixes it; the default now follows the data."""
+    data = _saturated_record(6.0)
+    fit = fit_model(data, "wiener", na=2, nb=2, nk=1, output_block="saturation")
+    block = fit.model.output_block
+    assert fit.settings["center"] is True
+    assert block.lower == pytest.approx(-0.3, abs=0.03) and block.upper == pytest.approx(0.4, abs=0.03)
+    # the same data shifted to take both signs keep the block at the signal's own zero
+    both = _saturated_record(0.0)
+    assert "center" not in fit_model(both, "wiener", na=2, nb=2, nk=1,
+                                     output_block="saturation").settings  # fmt: skip
+
+
+def test_a_refused_uncentred_fit_says_that_centring_may_help():
+    data = _saturated_record(6.0)
+    with pytest.raises(EstimationError, match=r"try center=True \(--center true\)"):
+        fit_model(data, "wiener", na=2, nb=2, nk=1, output_block="saturation", center=False)
+
+
+def test_default_centring_rules():
+    wiener, hammerstein = STRUCTURES["wiener"], STRUCTURES["hammerstein"]
+    positive, both = _saturated_record(6.0), _saturated_record(0.0)
+    sat = {"output_block": Saturation.template()}
+    assert default_centring(wiener, sat, positive) is True
+    assert default_centring(wiener, sat, both) is False
+    assert default_centring(wiener, {}, both) is True  # the structure's default
+    assert default_centring(hammerstein, {}, positive) is False
+    from blockid.blocks import PiecewiseLinear
+
+    given = {"input_block": PiecewiseLinear([-1.0, 0.0, 1.0], [0.0, 0.0, 1.0])}
+    assert default_centring(hammerstein, given, positive) is False  # never: given values
+    assert takes_both_signs(np.r_[-np.ones(10), np.ones(90)])
+    assert not takes_both_signs(np.r_[-np.ones(4), np.ones(96)])
