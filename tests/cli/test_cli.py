@@ -122,6 +122,26 @@ def test_existing_output_is_not_overwritten_without_force(tito_csv, tmp_path):
     assert out.read_text() == "precious"
 
 
+def test_figures_are_not_replaced_without_force(tito_csv, tmp_path):
+    """Issue 21: ``fit ... --plot figs`` run twice replaced the figures silently."""
+    figs = tmp_path / "figs"
+    args = [*FIT[:1], str(tito_csv), *FIT[1:], "--time-column", "t", "--plot", str(figs), "--json"]
+    assert runner.invoke(app, args).exit_code == 0
+    first = (figs / "simulation.png").read_bytes()
+    (figs / "simulation.png").write_bytes(b"mine")
+    r = runner.invoke(app, args)
+    assert r.exit_code == 2 and "simulation.png exist(s); pass --force" in r.stderr
+    assert (figs / "simulation.png").read_bytes() == b"mine"
+    assert runner.invoke(app, [*args, "--force"]).exit_code == 0
+    assert (figs / "simulation.png").read_bytes()[:4] == first[:4] == b"\x89PNG"
+    model = tmp_path / "m.json"
+    assert runner.invoke(app, [*args, "--force", "-o", str(model)]).exit_code == 0
+    sim = ["simulate", str(model), str(tito_csv), "--time-column", "t", "--plot", str(figs)]
+    r = runner.invoke(app, sim)
+    assert r.exit_code == 2 and "pass --force" in r.stderr
+    assert runner.invoke(app, [*sim, "--force"]).exit_code == 0
+
+
 def test_failed_run_leaves_existing_file_untouched(tito_csv, tmp_path):
     out = tmp_path / "m.json"
     out.write_text("precious")

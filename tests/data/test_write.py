@@ -124,3 +124,39 @@ def test_written_file_has_the_permissions_of_a_plain_open(tmp_path, frame):
     plain = tmp_path / "plain.csv"
     plain.write_text("x")
     assert path.stat().st_mode == plain.stat().st_mode  # not the 0600 of a mkstemp file
+
+
+def test_a_symbolic_link_is_kept_and_its_target_written(tmp_path):
+    """Issue 21: ``-o link.py --force`` replaced the link with a file."""
+    target = tmp_path / "real.json"
+    target.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    write_text_atomic("new", link, overwrite=True)
+    assert link.is_symlink() and target.read_text() == "new"
+
+
+def test_devices_and_pipes_are_written_through_not_replaced(tmp_path):
+    """Issue 21: ``-o /dev/full --force`` replaced the device with a regular file, and
+    ``-o /dev/stdout`` was refused as existing."""
+    import os
+    import stat
+    import threading
+
+    from blockid.data.io import is_stream
+
+    assert is_stream("/dev/null") and not is_stream(tmp_path) and not is_stream(tmp_path / "no")
+    write_text_atomic("ignored", "/dev/null")  # no --force needed: nothing is replaced
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+    if os.path.exists("/dev/full"):
+        with pytest.raises(DataError, match="could not write /dev/full: No space left"):
+            write_text_atomic("x" * 10_000, "/dev/full", overwrite=True)
+        assert stat.S_ISCHR(os.stat("/dev/full").st_mode)
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(open(fifo).read()))  # noqa: SIM115
+    reader.start()
+    write_text_atomic("through the pipe", fifo)
+    reader.join(timeout=10)
+    assert got == ["through the pipe"] and stat.S_ISFIFO(os.stat(fifo).st_mode)

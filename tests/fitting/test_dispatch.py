@@ -30,7 +30,9 @@ def test_a_saturation_on_a_positive_output_is_fitted_around_the_operating_point(
     fit = fit_model(data, "wiener", na=2, nb=2, nk=1, output_block="saturation")
     block = fit.model.output_block
     assert fit.settings["center"] is True
-    assert block.lower == pytest.approx(-0.3, abs=0.03) and block.upper == pytest.approx(0.4, abs=0.03)
+    assert block.lower == pytest.approx(-0.3, abs=0.03) and block.upper == pytest.approx(
+        0.4, abs=0.03
+    )
     # the same data shifted to take both signs keep the block at the signal's own zero
     both = _saturated_record(0.0)
     assert "center" not in fit_model(both, "wiener", na=2, nb=2, nk=1,

@@ -182,9 +182,24 @@ def progress_bar(quiet: bool, *columns: Any) -> Any:
 
 
 def refuse_to_overwrite(out: Path | None, force: bool) -> None:
-    """Stop before any work when ``out`` exists and ``--force`` was not given."""
-    if out is not None and out.exists() and not force:
+    """Stop before any work when ``out`` exists and ``--force`` was not given (a device,
+    a pipe or a link to one, such as ``/dev/stdout``, is written through, not replaced:
+    no need to force it)."""
+    from blockid.data.io import is_stream
+
+    if out is not None and out.exists() and not is_stream(out) and not force:
         raise ParameterError(f"{out} exists; pass --force to replace it")
+
+
+def refuse_figures(folder: Path | None, names: Sequence[str], force: bool) -> None:
+    """Stop before any work when ``--plot DIR`` holds a figure the command would write
+    and ``--force`` was not given."""
+    if folder is None or force:
+        return
+    existing = [folder / n for n in names if (folder / n).exists()]
+    if existing:
+        shown = ", ".join(str(p) for p in existing)
+        raise ParameterError(f"{shown} exist(s); pass --force to replace, or another --plot DIR")
 
 
 def load_data(

@@ -28,6 +28,7 @@ from blockid.cli._common import (
     metrics_table,
     print_json,
     print_model,
+    refuse_figures,
     refuse_to_overwrite,
     stderr,
     stdout,
@@ -97,6 +98,9 @@ def fit(
     from blockid.models import model_document, save_model
 
     _check_output(out, json_out, force)
+    from blockid.plotting.figures import FIT_FIGURES
+
+    refuse_figures(plot, FIT_FIGURES, force)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
     options = given(options)
     if plot is not None and "record_history" in accepted_options(structure, method):
@@ -108,7 +112,7 @@ def fit(
         if plot is not None:
             from blockid.plotting.figures import failed_fit_figures
 
-            for path in failed_fit_figures(exc.history, plot):
+            for path in failed_fit_figures(exc.history, plot, overwrite=force):
                 stderr.print(
                     f"parameter trajectories up to the failure written to {path}", markup=False
                 )
@@ -119,7 +123,7 @@ def fit(
     if plot is not None:
         from blockid.plotting.figures import fit_figures
 
-        fit_figures(result, data, plot)
+        fit_figures(result, data, plot, overwrite=force)
     if json_out:
         print_json(model_document(result.model, record))
         return

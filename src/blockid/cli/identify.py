@@ -29,6 +29,7 @@ from blockid.cli._common import (
     print_json,
     print_model,
     progress_bar,
+    refuse_figures,
     refuse_to_overwrite,
     stdout,
 )
@@ -142,6 +143,9 @@ def identify(
         raise ParameterError("give --validation or --validation-data, not both")
     refuse_to_overwrite(out, force)
     refuse_to_overwrite(report, force)
+    from blockid.plotting.figures import FIT_FIGURES
+
+    refuse_figures(plot, FIT_FIGURES, force)
     est = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
     val = None
     if validation:
@@ -169,7 +173,7 @@ def identify(
     if plot is not None:
         from blockid.plotting.figures import fit_figures
 
-        fit_figures(result.fit, est, plot)
+        fit_figures(result.fit, est, plot, overwrite=force)
     if report is not None:
         whole = None
         if not validation_data:

@@ -19,6 +19,7 @@ from blockid.cli._common import (
     load_data,
     metrics_table,
     print_json,
+    refuse_figures,
     refuse_to_overwrite,
     stderr,
     stdout,
@@ -102,6 +103,9 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             )
 
         refuse_to_overwrite(out, force)
+        from blockid.plotting.runs import RUN_FIGURES
+
+        refuse_figures(plot, [RUN_FIGURES[mode]], force)
         model = load_model(model_path)
         data = load_data(
             data_paths,
@@ -136,7 +140,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         if plot is not None:
             from blockid.plotting.runs import run_figure
 
-            figure = run_figure(result, plot, data_label=where)
+            figure = run_figure(result, plot, data_label=where, overwrite=force)
         if json_out:
             paths = [str(p) for p in data_paths]
             doc = {"model": str(model_path), "data": paths, "range": rng, **result.to_dict()}

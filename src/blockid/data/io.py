@@ -21,6 +21,7 @@ import math
 import os
 import re
 import secrets
+import stat
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
@@ -43,6 +44,7 @@ from blockid.data.dataset import (
 from blockid.errors import DataError
 
 __all__ = [
+    "is_stream",
     "READ_SUFFIXES",
     "json_safe",
     "WRITE_SUFFIXES",
@@ -557,8 +559,31 @@ def write_text_atomic(text: str, path: PathLike, overwrite: bool = False) -> Pat
     return _atomic_write(Path(path), overwrite, lambda handle: handle.write(data))
 
 
+def is_stream(path: PathLike) -> bool:
+    """True for an existing path (or a link to one) that is not a regular file or a
+    folder: a device (``/dev/full``), a named pipe, ``/dev/stdout``. Such a target is
+    written through, never replaced by a file."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
 def _atomic_write(target: Path, overwrite: bool, write: Callable[[IO[bytes]], Any]) -> Path:
-    """Write through a temporary sibling file, fsync it, then ``os.replace`` it over target."""
+    """Write through a temporary sibling file, fsync it, then ``os.replace`` it over the
+    target. A symbolic link is kept and its target written (atomically); a device or a
+    pipe (:func:`is_stream`) is written directly, as a stream."""
+    if is_stream(target):
+        try:
+            with open(target, "wb") as handle:
+                write(handle)
+                handle.flush()
+        except OSError as exc:
+            raise DataError(f"could not write {target}: {exc.strerror or exc}") from exc
+        return target
+    if target.is_symlink():
+        target = Path(os.path.realpath(target))
     if target.is_dir():
         raise DataError(f"cannot write {target}: it is a folder")
     if target.exists() and not overwrite:

@@ -151,13 +151,28 @@ def plot_parameter_history(
     return fig
 
 
-def fit_figures(result: Any, data: Any, folder: str | Path, truth: Any = None) -> list[Path]:
+#: The files :func:`fit_figures` may write (which of them depends on the model).
+FIT_FIGURES = ("simulation.png", "blocks.png", "parameters.png")
+
+
+def existing_figures(folder: str | Path | None, names: tuple[str, ...]) -> list[Path]:
+    """The files of ``names`` that already exist in ``folder`` (a command refuses to
+    replace them without ``--force``, before any work)."""
+    if folder is None:
+        return []
+    return [Path(folder) / n for n in names if (Path(folder) / n).exists()]
+
+
+def fit_figures(
+    result: Any, data: Any, folder: str | Path, truth: Any = None, overwrite: bool = False
+) -> list[Path]:
     """Write the figures of a fit to ``folder`` (created if needed); return their paths.
 
     ``simulation.png``: free-run simulation on the whole estimation record (the title
     says how many samples are drawn); ``blocks.png``:
     identified nonlinear blocks (block-oriented models); ``parameters.png``: parameter
-    trajectories (recursive methods that recorded them).
+    trajectories (recursive methods that recorded them). An existing file is replaced
+    only with ``overwrite`` (:class:`~blockid.errors.DataError` otherwise).
     """
     import matplotlib.pyplot as plt
 
@@ -169,20 +184,24 @@ def fit_figures(result: Any, data: Any, folder: str | Path, truth: Any = None) -
     fig = plot_model_output(
         evaluate(result.model, data, "simulation"), data_label="the estimation data"
     )
-    written.append(_save(fig, folder / "simulation.png"))
+    written.append(_save(fig, folder / "simulation.png", overwrite))
     if (
         getattr(result.model, "input_block", None) is not None
         or getattr(result.model, "output_block", None) is not None
     ):
         u = np.concatenate([e.u[:, 0] for e in data.experiments])
-        written.append(_save(plot_blocks(result.model, truth, u), folder / "blocks.png"))
+        blocks = plot_blocks(result.model, truth, u)
+        written.append(_save(blocks, folder / "blocks.png", overwrite))
     if result.history.get("theta") is not None:
-        written.append(_save(plot_parameter_history(result.history), folder / "parameters.png"))
+        history = plot_parameter_history(result.history)
+        written.append(_save(history, folder / "parameters.png", overwrite))
     plt.close("all")
     return written
 
 
-def failed_fit_figures(history: dict[str, Any], folder: str | Path) -> list[Path]:
+def failed_fit_figures(
+    history: dict[str, Any], folder: str | Path, overwrite: bool = False
+) -> list[Path]:
     """:func:`fit_figures` for a recursive fit that raised: ``parameters.png`` from the
     history attached to its :class:`~blockid.errors.EstimationError` (none if empty)."""
     import matplotlib.pyplot as plt
@@ -194,11 +213,15 @@ def failed_fit_figures(history: dict[str, Any], folder: str | Path) -> list[Path
     fig = plot_parameter_history(history)
     fig.suptitle("parameter estimates up to the failure (no model was returned)", fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.97))
-    path = _save(fig, folder / "parameters.png")
+    path = _save(fig, folder / "parameters.png", overwrite)
     plt.close(fig)
     return [path]
 
 
-def _save(fig: Any, path: Path) -> Path:
+def _save(fig: Any, path: Path, overwrite: bool = False) -> Path:
+    if path.exists() and not overwrite:
+        from blockid.errors import DataError
+
+        raise DataError(f"{path} exists; pass --force to replace it", parameter="overwrite")
     fig.savefig(path, dpi=110)
     return path

@@ -103,16 +103,26 @@ def plot_run(output: Any, *, data_label: str = "data", max_points: int | None = 
     return fig
 
 
-def run_figure(output: Any, folder: str | Path, *, data_label: str = "data") -> Path:
+#: The file :func:`run_figure` writes, by mode.
+RUN_FIGURES = {"simulation": "simulation.png", "one-step": "prediction.png"}
+
+
+def run_figure(
+    output: Any, folder: str | Path, *, data_label: str = "data", overwrite: bool = False
+) -> Path:
     """Write :func:`plot_run` to ``folder/simulation.png`` (free run) or
-    ``folder/prediction.png`` (one step); the folder is created if needed."""
+    ``folder/prediction.png`` (one step); the folder is created if needed. An existing
+    file is replaced only with ``overwrite``."""
     import matplotlib.pyplot as plt
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    name = "simulation.png" if output.mode == "simulation" else "prediction.png"
+    path = folder / RUN_FIGURES[output.mode]
+    if path.exists() and not overwrite:
+        from blockid.errors import DataError
+
+        raise DataError(f"{path} exists; pass --force to replace it", parameter="overwrite")
     fig = plot_run(output, data_label=data_label)
-    path = folder / name
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
