@@ -181,7 +181,7 @@ def calls(monkeypatch) -> Calls:
     spy(_identify_module, "identify", lambda *a, **k: _identified())
     spy(blockid.reporting, "build_report", lambda **k: REPORT)
     spy(_export_module, "export_text")
-    spy(_stream_module, "stream_identification")
+    spy(_stream_module, "StreamSession")
     spy(_fleet_module, "fit_fleet", _in_process(seen, _fleet_module.fit_fleet))
     spy(blockid.workflows.demo, "run_demo", lambda *a, **k: FakeRun())
     for module in (
@@ -904,7 +904,7 @@ def _lines(r: Any) -> list[dict[str, Any]]:
 
 
 def _streamed(calls: Calls) -> tuple[tuple[Any, ...], dict[str, Any]]:
-    return calls.one("stream_identification")
+    return calls.one("StreamSession")
 
 
 def stream_input(f, calls):
@@ -941,10 +941,10 @@ def stream_start(f, calls):
 
     cold, warm = first_error(), first_error("--model", f.model)
     assert warm < 0.1 < cold  # the first prediction is the plant's
-    initial = calls["stream_identification"][1][1]["initial"]
+    initial = calls["StreamSession"][1][1]["initial"]
     assert initial.to_dict() == load_model(f.model).to_dict()
-    assert "initial" not in calls["stream_identification"][0][1] or (
-        calls["stream_identification"][0][1]["initial"] is None
+    assert "initial" not in calls["StreamSession"][0][1] or (
+        calls["StreamSession"][0][1]["initial"] is None
     )
 
 
@@ -980,7 +980,7 @@ def _stream_scale(name: str) -> Callable[[Files, Calls], None]:
         assert "give both input_scale and output_scale" in r.stderr
         _stream(f, "--input-scale", "2.5", "--output-scale", "4", "-o", out)
         value = {"input_scale": 2.5, "output_scale": 4.0}[name]
-        assert calls["stream_identification"][-1][1]["options"][name] == value
+        assert calls["StreamSession"][-1][1]["options"][name] == value
         assert json.loads(out.read_text())["estimation"]["settings"][name] == value
 
     return check
@@ -994,11 +994,21 @@ def stream_stop_on_error(f, calls):
     text = "\n".join(rows) + "\n"
     going_on = _lines(_stream(f, text=text))
     stopped = _lines(_stream(f, "--stop-on-error", text=text, code=1))
-    flags = [kw["stop_on_error"] for _, kw in calls["stream_identification"]]
+    flags = [kw["stop_on_error"] for _, kw in calls["StreamSession"]]
     assert flags == [False, True]
     assert going_on[-1]["n_samples"] == N - 1 and "stopped" not in going_on[-1]
     assert stopped[-1]["stopped"] is True and stopped[-1]["n_samples"] == 5
     assert "oops" in stopped[-2]["error_message"]
+
+
+def stream_checkpoint(f, calls):
+    out = f.path("online.json")
+    r = _stream(f, "--checkpoint", "50", code=2)
+    assert "--checkpoint N writes to -o FILE" in r.stderr
+    _stream(f, "--checkpoint", "50", "-o", out)
+    assert _streamed(calls)[1]["checkpoint"] == 50
+    learner = json.loads(out.read_text())["estimation"]["learner"]
+    assert learner["rows"] == N and learner["state"]["n_samples"] == N
 
 
 def stream_force(f, calls):
@@ -1443,6 +1453,7 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("stream", "method"): stream_method,
     ("stream", "start"): stream_start,
     ("stream", "every"): stream_every,
+    ("stream", "checkpoint"): stream_checkpoint,
     ("stream", "out"): stream_out,
     ("stream", "fmt"): stream_fmt,
     ("stream", "input_scale"): _stream_scale("input_scale"),

@@ -328,3 +328,86 @@ def test_failure_keeps_the_last_good_state():
     np.testing.assert_array_equal(predictions(dirty), predictions(clean))
     assert dirty[-1].parameters == clean[-1].parameters
     assert dirty[-1].n_samples == clean[-1].n_samples == 59
+
+
+# ----------------------------------------------------------------------------- checkpoints
+def _model_text(path) -> str:
+    doc = json.loads(path.read_text())
+    return json.dumps(doc["model"]), json.dumps(doc["estimation"]["learner"]["state"])
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["--na", "3", "--nb", "3", "--nk", "2", "--method", "rls", "--forgetting", "0.99"], HW],
+    ids=["arx", "hammerstein-wiener"],
+)
+def test_a_checkpoint_resumes_exactly_where_the_stream_stopped(tmp_path, args):
+    """Issue 21: stop after 700 samples, resume from the file with the rest: the same
+    model and learner state, bit for bit, as one uninterrupted stream; a checkpoint is
+    written every N samples on the way."""
+    u, y = _hw_record(1500, seed=3)
+    text = _csv(u, y).splitlines()
+    head, first, rest = text[0], text[1:701], text[701:]
+    whole, part, resumed = (tmp_path / n for n in ("whole.json", "part.json", "resumed.json"))
+    base = ["stream", "-u", "u", "-y", "y", *args]
+    r = runner.invoke(app, [*base, "-o", str(whole)], input="\n".join([head, *first, *rest]))
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, [*base, "--checkpoint", "250", "-o", str(part)],
+                      input="\n".join([head, *first[:600]]))  # fmt: skip
+    assert r.exit_code == 0, r.output
+    learner = json.loads(part.read_text())["estimation"]["learner"]
+    assert learner["rows"] == 600 and learner["state"]["n_samples"] == 600
+    # resumed from a checkpoint written mid-stream (after 500 samples): the file as
+    # it was then, with the 200 samples after it fed again
+    r = runner.invoke(app, [*base, "--checkpoint", "500", "-o", str(part), "--force"],
+                      input="\n".join([head, *first[:650]]))  # fmt: skip
+    doc = json.loads(part.read_text())
+    mid = tmp_path / "mid.json"
+    assert doc["estimation"]["learner"]["rows"] == 650  # the end of input writes it too
+    r = runner.invoke(app, [*base, "--checkpoint", "500", "-o", str(mid)],
+                      input="\n".join([head, *first[:500]]))  # fmt: skip
+    assert json.loads(mid.read_text())["estimation"]["learner"]["rows"] == 500
+    r = runner.invoke(app, ["stream", "-u", "u", "-y", "y", "--model", str(mid), "-o",
+                            str(resumed)], input="\n".join([head, *first[500:], *rest]))  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert _lines(r.stdout)[0]["k"] == 500  # rows numbered on
+    assert _model_text(resumed) == _model_text(whole)
+    # options that differ from the checkpoint's are refused, naming them
+    r = runner.invoke(app, ["stream", "-u", "u", "-y", "y", "--model", str(mid), "--nb", "1"],
+                      input=head)  # fmt: skip
+    assert r.exit_code == 2 and "resume it with the same options" in r.stderr
+
+
+def test_sigterm_writes_the_model_and_the_learner_state(tmp_path):
+    """Issue 21: SIGTERM (or Ctrl-C) on ``stream -o FILE`` threw the learned model away;
+    now it is written, and resuming from it ends where one uninterrupted stream ends."""
+    import signal
+    import time
+
+    u, y = _hw_record(800, seed=4)
+    text = _csv(u, y).splitlines()
+    head, rows = text[0], text[1:]
+    out, whole = tmp_path / "stopped.json", tmp_path / "whole.json"
+    arx = ["-u", "u", "-y", "y", "--na", "3", "--nb", "3", "--nk", "2", "--method", "rls"]
+    proc = subprocess.Popen([sys.executable, "-c", _APP, "stream", *arx, "-o", str(out)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)  # fmt: skip
+    proc.stdin.write("\n".join([head, *rows[:300]]) + "\n")
+    proc.stdin.flush()
+    seen = 0
+    deadline = time.monotonic() + 60
+    while seen < 300 and time.monotonic() < deadline:
+        if proc.stdout.readline():
+            seen += 1
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "stopped by SIGTERM" in err and f"--model {out}" in err
+    assert json.loads(out.read_text())["estimation"]["learner"]["state"]["n_samples"] == 300
+    r = runner.invoke(app, ["stream", *arx, "-o", str(whole)], input="\n".join([head, *rows]))
+    assert r.exit_code == 0
+    resumed = tmp_path / "resumed.json"
+    r = runner.invoke(app, ["stream", "-u", "u", "-y", "y", "--model", str(out), "-o",
+                            str(resumed)], input="\n".join([head, *rows[300:]]))  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert _model_text(resumed) == _model_text(whole)

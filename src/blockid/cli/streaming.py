@@ -18,7 +18,6 @@ import typer
 from blockid.cli._common import Force, Inputs, Outputs, cli_errors, refuse_to_overwrite, stderr
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
-    Structure,
     given,
     structures_help,
     with_fit_options,
@@ -50,7 +49,26 @@ StartModel = Annotated[
         "--model",
         metavar="FILE",
         help="Start from this model file's parameters (theta(0)); its orders apply "
-        "where none are given.",
+        "where none are given. A file written by stream (-o, --checkpoint) resumes "
+        "exactly where it stopped.",
+    ),
+]
+CheckpointEvery = Annotated[
+    int,
+    typer.Option(
+        "--checkpoint",
+        metavar="N",
+        min=0,
+        help="Write the model and the learner's state to -o FILE (atomically) every N "
+        "samples; it is also written on Ctrl-C or SIGTERM. --model FILE resumes it.",
+    ),
+]
+StreamStructure = Annotated[
+    str | None,
+    typer.Option(
+        metavar="NAME",
+        help="Model structure (default arx, or the resumed file's; see below).",
+        show_default=False,
     ),
 ]
 Every = Annotated[
@@ -61,7 +79,12 @@ Every = Annotated[
 ]
 FinalModel = Annotated[
     Path | None,
-    typer.Option("--out", "-o", metavar="FILE", help="Model file to write at the end of input."),
+    typer.Option(
+        "--out",
+        "-o",
+        metavar="FILE",
+        help="Model file to write at the end of input (and at checkpoints, and on Ctrl-C).",
+    ),
 ]
 Format = Annotated[
     str,
@@ -95,10 +118,11 @@ StopOnError = Annotated[
 def stream(
     inputs: Inputs,
     outputs: Outputs,
-    structure: Structure = DEFAULT_STRUCTURE,
+    structure: StreamStructure = None,
     method: StreamMethod = None,
     start: StartModel = None,
     every: Every = 0,
+    checkpoint: CheckpointEvery = 0,
     out: FinalModel = None,
     fmt: Format = "csv",
     input_scale: Scale = None,
@@ -129,30 +153,59 @@ def stream(
       plant | blockid stream -u u -y y --structure hammerstein-wiener \\
           --na 3 --nb 3 --nk 8 --every 1000 -o model.json
     """
-    from blockid.errors import EstimationError
-    from blockid.models import load_model, save_model
-    from blockid.workflows.stream import JsonLines, recursive_method, stream_identification
+    import json
+    import signal
 
+    from blockid.errors import EstimationError, ParameterError
+    from blockid.models import load_model, save_model
+    from blockid.workflows.stream import (
+        Checkpoint,
+        JsonLines,
+        StreamSession,
+        recursive_method,
+    )
+
+    if checkpoint and out is None:
+        raise ParameterError("--checkpoint N writes to -o FILE: give one", parameter="out")
     refuse_to_overwrite(out, force)
-    initial = load_model(start) if start is not None else None
-    method = recursive_method(structure, method)
+    resume, initial = None, None
+    if start is not None:
+        initial = load_model(start)
+        learner = json.loads(start.read_text()).get("estimation", {}).get("learner")
+        if learner is not None:
+            resume, initial = learner, None
+            structure = structure or learner["structure"]
+    structure = structure or DEFAULT_STRUCTURE
+    method = method or (resume["method"] if resume else recursive_method(structure, method))
     settings = given(options)
     scales = {"input_scale": input_scale, "output_scale": output_scale}
-    events = stream_identification(
-        sys.stdin,
-        structure,
-        inputs,
-        outputs,
-        method=method,
-        options={**settings, **scales},
-        initial=initial,
-        fmt=fmt,
-        every=every,
-        stop_on_error=stop_on_error,
-    )
+    session = StreamSession(
+        sys.stdin, structure, inputs, outputs, method=method,
+        options={**settings, **{k: v for k, v in scales.items() if v is not None}},
+        initial=initial, fmt=fmt, every=every, stop_on_error=stop_on_error,
+        checkpoint=checkpoint, resume=resume,
+    )  # fmt: skip
+    events = iter(session)
     to_line, write, flush = JsonLines(outputs), sys.stdout.write, sys.stdout.flush
+    if start is not None and resume is None:
+        session.extra_settings["initial"] = str(start)
+
+    def save(model: Any, record: dict[str, Any]) -> bool:
+        if out is None or model is None:
+            return False
+        save_model(model, out, record, overwrite=True)  # our own file after the first
+        return True
+
+    def stop(number: int, frame: Any) -> None:
+        raise _Stopped(number)
+
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+    event: Any = None
     try:
         for event in events:  # the last is the Final
+            if isinstance(event, Checkpoint):
+                save(event.model, event.record)
+                continue
             write(to_line(event) + "\n")
             flush()  # a plant waits for its answer
     except BlockidError as exc:  # options or header: before the first sample
@@ -160,18 +213,36 @@ def stream(
         if name is None or name in str(exc):
             raise
         raise type(exc)(f"{exc} (option {name})") from None
+    except _Stopped as exc:
+        name = signal.Signals(exc.number).name
+        written = session.online is not None and save(*session.saved())
+        where = (
+            f"model and learner state after {session.online.n_samples} samples written to "
+            f"{out} (resume with --model {out})"
+            if written
+            else "nothing written (no -o FILE, or no model yet)"
+        )
+        stderr.print(f"stopped by {name}: {where}", markup=False)
+        raise typer.Exit(code=128 + exc.number) from None
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     if event.stopped:
         raise typer.Exit(code=1)
     if out is None:
         return
     if event.model is None:
         raise EstimationError(f"no model written to {out}: {event.note}")
-    settings.update({k: v for k, v in scales.items() if v is not None})
-    if start is not None:
-        settings["initial"] = str(start)
-    record = {"method": method, "settings": settings, "n_samples": event.n_samples}
-    save_model(event.model, out, {**record, "online": True}, overwrite=force)
+    save(*session.saved())
     stderr.print(f"model written to {out}", markup=False)
+
+
+class _Stopped(Exception):
+    """SIGINT or SIGTERM arrived during the stream."""
+
+    def __init__(self, number: int) -> None:
+        super().__init__(number)
+        self.number = number
 
 
 stream.__doc__ = f"{inspect.cleandoc(stream.__doc__ or '')}\n\n{structures_help()}"

@@ -254,10 +254,33 @@ class OnlineEstimator(ABC):
         Samples learned from so far.
     """
 
+    #: Attributes that hold the learner's state between samples (:meth:`state`).
+    _state: tuple[str, ...] = ("n_samples",)
+
     def __init__(self, names: tuple[tuple[str, ...], tuple[str, ...]]) -> None:
         self.names = _Names(*names)  # signal names of the model
         self.n_samples = 0  # samples learned from so far
         self._nu, self._ny = len(self.names.inputs), len(self.names.outputs)
+
+    def state(self) -> dict[str, Any]:
+        """Everything the learner carries from one sample to the next, as JSON-ready
+        values (floats exact: JSON writes them by ``repr``). A learner built with the
+        same options and given this by :meth:`restore` continues exactly as this one
+        would: ``blockid stream --checkpoint`` and its resumption."""
+        return {name: _encode(getattr(self, name)) for name in self._state}
+
+    def restore(self, state: dict[str, Any]) -> OnlineEstimator:
+        """Take the state of :meth:`state` (of a learner built with the same options);
+        arrays are copied into place, so views of them stay valid."""
+        missing = [name for name in self._state if name not in state]
+        if missing:
+            raise ParameterError(
+                f"the saved learner state lacks {', '.join(missing)}: it was not written by "
+                "this structure and method (or by another version of blockid)"
+            )
+        for name in self._state:
+            _decode_into(self, name, state[name])
+        return self
 
     def partial_fit(self, u: Any, y: Any) -> OnlineEstimator:
         """Learn from the next chunk, ``u`` of shape (N, nu) and ``y`` (N, ny); returns
@@ -342,6 +365,26 @@ class OnlineEstimator(ABC):
 
 
 # ---------------------------------------------------------------------- papers A, B
+def _encode(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return {"shape": list(value.shape), "values": value.ravel().tolist()}
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _decode_into(owner: Any, name: str, saved: Any) -> None:
+    current = getattr(owner, name)
+    if isinstance(current, np.ndarray):
+        values = np.asarray(saved["values"], dtype=current.dtype).reshape(saved["shape"])
+        if values.shape == current.shape:
+            np.copyto(current, values)
+        else:
+            setattr(owner, name, values)
+        return
+    setattr(owner, name, type(current)(saved))
+
+
 class _PaperOnline(OnlineEstimator):
     """Shared state handling of the two internal-variable recursions (B5, A6–A8).
 
@@ -352,6 +395,7 @@ class _PaperOnline(OnlineEstimator):
     """
 
     _rows: tuple[str, ...]  # signals in the window, the kernel's order
+    _state = ("n_samples", "theta", "P", "_buf", "_y_max")
 
     def _setup(self, algorithm: Any, theta0: np.ndarray, mu: float, lag: int) -> None:
         n = len(algorithm.names)
@@ -471,6 +515,8 @@ def _orders_from(initial: Any, opts: dict[str, Any], keys: tuple[str, ...]) -> d
 
 
 class _OnlineKeyTerm(_PaperOnline):
+    _state = (*_PaperOnline._state, "_limits")
+
     """Paper B's key-term RLS (B5) online; window rows ``u, y, w_hat, x_hat``."""
 
     _rows = ("u", "y", "w", "x")
@@ -639,6 +685,19 @@ class _OnlineBacklash(_PaperOnline):
 
 
 # ---------------------------------------------------------------------- ARX
+class _Item:
+    """A dict seen as an object (for :func:`_decode_into`)."""
+
+    def __init__(self, d: dict[str, Any]) -> None:
+        object.__setattr__(self, "_d", d)
+
+    def __getattr__(self, name: str) -> Any:
+        return self._d[name]
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        self._d[name] = value
+
+
 class _OnlineARX(OnlineEstimator):
     """ARX by RLS, AW-RLS or H-RLS online: one recursion per output, as
     :func:`~blockid.fitting.arx.fit_arx` runs them, on the regressor columns divided by
@@ -698,6 +757,25 @@ class _OnlineARX(OnlineEstimator):
                     "updates": 0,  # updates so far (where the schedule stands)
                 }
             )
+
+    def state(self) -> dict[str, Any]:
+        out = {name: _encode(getattr(self, name)) for name in ("n_samples", "_u", "_y")}
+        out["outputs"] = [
+            {"theta": _encode(o["theta"]), "P": _encode(o["P"]), "updates": o["updates"]}
+            for o in self.outputs
+        ]
+        return out
+
+    def restore(self, state: dict[str, Any]) -> _OnlineARX:
+        if len(state.get("outputs", ())) != len(self.outputs):
+            raise ParameterError("the saved learner state is of another model (its outputs differ)")
+        for name in ("n_samples", "_u", "_y"):
+            _decode_into(self, name, state[name])
+        for out, saved in zip(self.outputs, state["outputs"], strict=True):
+            for key in ("theta", "P"):
+                _decode_into(_Item(out), key, saved[key])
+            out["updates"] = int(saved["updates"])
+        return self
 
     def _lean_regressors(self) -> None:
         """For the per-sample path: where every regressor column of every output sits in

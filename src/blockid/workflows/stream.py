@@ -42,6 +42,7 @@ from blockid.fitting.registry import get_structure
 
 __all__ = [
     "FORMATS",
+    "Checkpoint",
     "Estimates",
     "Failure",
     "Final",
@@ -51,6 +52,7 @@ __all__ = [
     "read_samples",
     "recursive_method",
     "stream_identification",
+    "StreamSession",
 ]
 
 #: Text formats of a stream: CSV with a header line, or one JSON object per line.
@@ -235,6 +237,14 @@ def _read_back(online: Any) -> tuple[dict[str, Any] | None, Any, dict | None, st
     return model.to_dict()["parameters"], model, None, None
 
 
+class Checkpoint(NamedTuple):
+    """After row ``k``: what a checkpoint file holds (:meth:`StreamSession.saved`)."""
+
+    k: int
+    model: Any
+    record: dict[str, Any]
+
+
 def stream_identification(
     lines: Iterable[str],
     structure: str,
@@ -274,6 +284,7 @@ def stream_identification(
 
     The options are checked before the first line is read: a wrong one raises
     :class:`~blockid.errors.ParameterError` at the first ``next()``.
+    :class:`StreamSession` does the same and can also checkpoint and resume.
 
     Examples
     --------
@@ -285,37 +296,168 @@ def stream_identification(
     >>> events[-1].n_samples, round(events[-1].parameters["y"]["b"]["u"][0], 6)
     (4, 0.5)
     """
-    if every < 0:
-        raise ParameterError(f"every must be >= 0, got {every}", parameter="every")
-    opts = dict(options or {})
-    if initial is not None:
-        opts["initial"] = initial
-    method = recursive_method(structure, method)
-    online = online_estimator(structure, method, opts, inputs, outputs)
-    update = online.update
-    k = -1
-    stopped = False
-    for row in read_samples(lines, inputs, outputs, fmt):
-        k += 1
-        if row.problem is None:
-            try:
-                pred = update(row.u, row.y).tolist()
-            except (EstimationError, DataError) as exc:
-                message = " ".join(str(exc).split())
+    yield from StreamSession(
+        lines, structure, inputs, outputs, method=method, options=options, initial=initial,
+        fmt=fmt, every=every, stop_on_error=stop_on_error,
+    )  # fmt: skip
+
+
+class StreamSession:
+    """An online learner fed from a stream, which can be saved at any sample and
+    resumed exactly (``blockid stream --checkpoint``); iterating over it gives the events.
+
+    Parameters are those of :func:`stream_identification`, and
+
+    checkpoint : int
+        Yield a :class:`Checkpoint` after every ``checkpoint``-th sample learned.
+    resume : dict, optional
+        The ``"learner"`` entry of a checkpoint's estimation record (:meth:`saved`). A
+        resumed session rebuilds the learner with the saved structure, method and
+        options (given ones must agree), restores its state
+        (:meth:`~blockid.fitting.online.OnlineEstimator.restore`) and numbers the rows
+        on from the saved count, so that stopping and resuming ends bit for bit where
+        one uninterrupted stream ends.
+    """
+
+    def __init__(
+        self,
+        lines: Iterable[str],
+        structure: str,
+        inputs: Sequence[str],
+        outputs: Sequence[str],
+        *,
+        method: str | None = None,
+        options: dict[str, Any] | None = None,
+        initial: Any = None,
+        fmt: str = "csv",
+        every: int = 0,
+        stop_on_error: bool = False,
+        checkpoint: int = 0,
+        resume: dict[str, Any] | None = None,
+    ) -> None:
+        self.lines = lines
+        self.fmt, self.every, self.stop_on_error = fmt, every, stop_on_error
+        self.checkpoint = checkpoint
+        self.spec = (structure, inputs, outputs, method, options, initial, resume)
+        self.online: Any = None
+        self.rows = 0  # data rows read so far (resumed: on from the saved count)
+        self.extra_settings: dict[str, Any] = {}  # recorded in saved() (e.g. the start)
+
+    def _start(self) -> None:
+        """Build the learner (on the first ``next()``, as the options are checked)."""
+        structure, inputs, outputs, method, options, initial, resume = self.spec
+        options = {k: v for k, v in (options or {}).items() if v is not None}
+        if resume is not None:
+            structure, method, options = _resumed(resume, structure, method, options)
+            inputs, outputs = resume["inputs"], resume["outputs"]
+        self.structure = structure
+        self.method = recursive_method(structure, method)
+        self.options = dict(options)
+        self.inputs, self.outputs = list(inputs), list(outputs)
+        opts = dict(options)
+        if initial is not None and resume is None:
+            opts["initial"] = initial
+        self.online = online_estimator(structure, self.method, opts, inputs, outputs)
+        if resume is not None:
+            self.online.restore(resume["state"])
+            self.rows = int(resume["rows"])
+
+    def saved(self) -> tuple[Any, dict[str, Any]]:
+        """The model of the current estimate (None when it cannot be read back yet) and
+        the estimation record of its file, with the learner's state under
+        ``"learner"``."""
+        _, model, _, note = _read_back(self.online)
+        record = {
+            "method": self.method,
+            "settings": {
+                **{k: _jsonable(v) for k, v in self.options.items()},
+                **self.extra_settings,
+            },
+            "n_samples": self.online.n_samples,
+            "online": True,
+            "learner": {
+                "structure": self.structure,
+                "method": self.method,
+                "options": {k: _jsonable(v) for k, v in self.options.items()},
+                "inputs": self.inputs,
+                "outputs": self.outputs,
+                "rows": self.rows,
+                "state": self.online.state(),
+            },
+        }
+        if note is not None:
+            record["note"] = note
+        return model, record
+
+    def __iter__(self) -> Iterator[Step | Estimates | Failure | Checkpoint | Final]:
+        """The events of :func:`stream_identification`, and a :class:`Checkpoint` after
+        every ``checkpoint``-th sample learned (0: never)."""
+        every, checkpoint, stop_on_error = self.every, self.checkpoint, self.stop_on_error
+        if every < 0:
+            raise ParameterError(f"every must be >= 0, got {every}", parameter="every")
+        if checkpoint < 0:
+            raise ParameterError(
+                f"checkpoint must be >= 0, got {checkpoint}", parameter="checkpoint"
+            )
+        self._start()
+        online = self.online
+        update = online.update
+        stopped = False
+        for row in read_samples(self.lines, self.inputs, self.outputs, self.fmt):
+            k = self.rows
+            self.rows += 1
+            if row.problem is None:
+                try:
+                    pred = update(row.u, row.y).tolist()
+                except (EstimationError, DataError) as exc:
+                    message = " ".join(str(exc).split())
+                else:
+                    yield Step(k, pred, [a - b for a, b in zip(row.y, pred, strict=True)])
+                    if every and online.n_samples % every == 0:
+                        parameters, _, estimate, note = _read_back(online)
+                        yield Estimates(k, parameters, estimate, note)
+                    if checkpoint and online.n_samples % checkpoint == 0:
+                        yield Checkpoint(k, *self.saved())
+                    continue
             else:
-                yield Step(k, pred, [a - b for a, b in zip(row.y, pred, strict=True)])
-                if every and online.n_samples % every == 0:
-                    parameters, _, estimate, note = _read_back(online)
-                    yield Estimates(k, parameters, estimate, note)
-                continue
-        else:
-            message = row.problem
-        yield Failure(k, row.line, message)
-        if stop_on_error:
-            stopped = True
-            break
-    parameters, model, estimate, note = _read_back(online)
-    yield Final(online.n_samples, parameters, model, stopped, estimate, note)
+                message = row.problem
+            yield Failure(k, row.line, message)
+            if stop_on_error:
+                stopped = True
+                break
+        parameters, model, estimate, note = _read_back(online)
+        yield Final(online.n_samples, parameters, model, stopped, estimate, note)
+
+
+def _jsonable(value: Any) -> Any:
+    return value if isinstance(value, str | int | float | bool) or value is None else str(value)
+
+
+def _resumed(
+    resume: dict[str, Any], structure: str, method: str | None, options: dict[str, Any]
+) -> tuple[str, str | None, dict[str, Any]]:
+    """The saved structure, method and options, checked against those given."""
+    saved_options = dict(resume.get("options", {}))
+    if structure != resume["structure"]:
+        raise ParameterError(
+            f"the checkpoint was learned as {resume['structure']}, not {structure}: give "
+            f"--structure {resume['structure']} (or leave it out) to resume it",
+            parameter="structure",
+        )
+    if method is not None and method != resume["method"]:
+        raise ParameterError(
+            f"the checkpoint was learned by {resume['method']}, not {method}",
+            parameter="method",
+        )
+    differ = [k for k, v in options.items() if str(saved_options.get(k)) != str(v)]
+    if differ:
+        shown = ", ".join(f"{k}={saved_options.get(k)!r}" for k in differ)
+        raise ParameterError(
+            f"the checkpoint was learned with {shown}; resume it with the same options "
+            "(or none: they are read from the file)",
+            parameter=differ[0],
+        )
+    return resume["structure"], resume["method"], saved_options
 
 
 # ---------------------------------------------------------------------- writing
