@@ -575,7 +575,8 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
         r = run(f, "--range", "40:100", "--plot", where)
         (output, folder), kwargs = calls.one("run_figure")
         assert folder == where and output.mode == mode
-        assert evaluated(calls).n_samples == 60 and kwargs == {"data_label": f"{f.csv} [40:100]"}
+        assert evaluated(calls).n_samples == 60
+        assert kwargs == {"data_label": f"{f.csv} [40:100]", "overwrite": False}
         assert f"figure written to {where / f'{mode}.png'}" in r.stdout
 
     def ts(f, calls):

@@ -375,3 +375,18 @@ def test_to_frame_single_experiment_without_time():
 def test_repr_is_short():
     text = repr(two_experiments())
     assert "experiments=2" in text and "n_samples=16" in text and "array" not in text
+
+
+def test_values_too_large_to_fit_are_refused_naming_the_signal_and_sample():
+    """Issue 21: values of 1e300 ended in a LinAlgError (Hammerstein) or a model with an
+    infinite MSE written with exit 0 (ARX)."""
+    import numpy as np
+    import pytest
+
+    from blockid.data import Dataset
+    from blockid.errors import DataError
+
+    u = np.ones(50)
+    u[7] = 1e300
+    with pytest.raises(DataError, match=r"signal 'u' is 1e\+300 at sample 7.*rescale"):
+        Dataset.from_arrays(u, np.ones(50), ["u"], ["y"])

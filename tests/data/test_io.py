@@ -397,3 +397,27 @@ def test_not_a_mat_file(tmp_path):
     path.write_bytes(b"\x00\x01" * 200)
     with pytest.raises(DataError, match=rf"^{path}"):
         read_data(path, ["u"], ["y"])
+
+
+def test_a_huge_value_in_a_file_names_the_row_and_a_folder_is_not_a_type(tmp_path):
+    import pytest
+
+    from blockid.data import read_data
+    from blockid.errors import DataError
+
+    path = tmp_path / "d.csv"
+    path.write_text("u,y\n1,2\n3,1e300\n")
+    with pytest.raises(DataError, match=r"'y', data row 2 \(line 3\): 1e\+300 is too large"):
+        read_data(path, ["u"], ["y"])
+    with pytest.raises(DataError, match="is a folder, not a data file; name the files in it"):
+        read_data(tmp_path, ["u"], ["y"])
+
+
+def test_a_latin1_header_is_read_as_the_user_typed_it(tmp_path):
+    """Issue 21: a Latin-1 header gave ``did you mean 'courant_\\ufffd'``."""
+    from blockid.data import read_data
+
+    path = tmp_path / "latin.csv"
+    path.write_bytes("courant_é,vitesse\n1,2\n2,3\n3,5\n".encode("latin-1"))
+    data = read_data(path, ["courant_é"], ["vitesse"])
+    assert data.inputs == ("courant_é",) and data.n_samples == 3

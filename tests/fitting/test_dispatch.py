@@ -59,3 +59,21 @@ def test_default_centring_rules():
     assert default_centring(hammerstein, given, positive) is False  # never: given values
     assert takes_both_signs(np.r_[-np.ones(10), np.ones(90)])
     assert not takes_both_signs(np.r_[-np.ones(4), np.ones(96)])
+
+
+def test_orders_the_data_cannot_hold_are_refused_before_any_work():
+    """Issue 21: ``--na 99999999999`` asked for 745 GiB; ``--na 1000`` on 300 samples ran
+    for half a minute and then blamed NaN in the data."""
+    import time
+
+    from blockid.errors import OrderError
+
+    rng = np.random.default_rng(0)
+    data = Dataset.from_arrays(rng.standard_normal(300), rng.standard_normal(300), ["u"], ["y"])
+    for na in (99_999_999_999, 1000):
+        t0 = time.perf_counter()
+        with pytest.raises(OrderError, match=f"na={na}.*has only 300"):
+            fit_model(data, "arx", na=na, nb=1, nk=1)
+        assert time.perf_counter() - t0 < 1.0
+    with pytest.raises(OrderError, match="nx=400"):
+        fit_model(data, "state-space", nx=400)

@@ -66,3 +66,39 @@ def test_missing_file_is_named(tmp_path):
     with pytest.raises(errors.ModelFileError) as info:
         load_model(path)
     assert str(info.value) == f"model file {path} does not exist"
+
+
+def test_a_chain_file_edited_to_two_inputs_is_refused(tmp_path):
+    """Issue 21: a model file whose inputs were edited to two names for a one-input
+    chain simulated silently with the first."""
+    import json
+
+    import pytest
+
+    from blockid.blocks import LinearBlock
+    from blockid.errors import ModelFileError
+    from blockid.models import ChainModel, load_model, save_model
+
+    path = tmp_path / "m.json"
+    save_model(ChainModel("u", "y", [LinearBlock(1, 1, 1, a=[-0.5], b=[1.0])]), path)
+    doc = json.loads(path.read_text())
+    doc["model"]["inputs"] = ["u", "v"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ModelFileError, match=r"names 2 inputs \(\['u', 'v'\]\)"):
+        load_model(path)
+
+
+def test_a_model_refuses_non_finite_inputs_naming_the_sample():
+    """Issue 21: ``estimator.simulate(np.full(100, np.nan))`` returned NaNs silently."""
+    import numpy as np
+    import pytest
+
+    from blockid.blocks import LinearBlock
+    from blockid.errors import DataError
+    from blockid.models import ChainModel
+
+    model = ChainModel("u", "y", [LinearBlock(1, 1, 1, a=[-0.5], b=[1.0])])
+    u = np.ones(20)
+    u[4] = np.nan
+    with pytest.raises(DataError, match=r"input 'u' is nan at sample 4"):
+        model.simulate(u)

@@ -123,20 +123,44 @@ def _root(
     backlash, networks) from input/output data."""
 
 
-app.command()(fitting.fit)
-app.command()(fitting.compare)
-app.command("fit-network")(fitting.fit_network)
-app.command("simulate")(running.simulate)
-app.command("predict")(running.predict)
-app.command("orders")(orders.orders)
-app.command("identify")(identify.identify)
-app.command("export")(export.export)
-app.command("stream")(streaming.stream)
-app.command("fleet")(fleet_cli.fleet)
-app.command("report")(report.report)
-app.command()(examples.demo)
-app.add_typer(examples.reproduce_app, name="reproduce")
-app.command("example-data")(examples.example_data)
+#: One line per command in ``blockid -h``, whole (click would cut the docstring's first
+#: sentence at 45 characters).
+SHORT_HELP = {
+    "fit": "Identify a model and save it as a model file.",
+    "compare": "Identify several structures, score them on validation data.",
+    "fit-network": "Identify a network of subsystems connected by signal names.",
+    "simulate": "Free-run simulation of a model on data.",
+    "predict": "One-step-ahead prediction of a model on data.",
+    "orders": "Choose na, nb, nk by false nearest neighbours.",
+    "identify": "Search structures and orders; keep the best model.",
+    "export": "Export a model as a Python module or transfer functions.",
+    "stream": "Learn a model sample by sample from standard input.",
+    "fleet": "Fit one model per record, many records in parallel.",
+    "report": "Compare structures and write an HTML report.",
+    "demo": "Run the built-in example (paper B's excavator arm).",
+    "example-data": "Write a record of a built-in simulated plant.",
+}
+for _name, _command in (
+    ("fit", fitting.fit),
+    ("compare", fitting.compare),
+    ("fit-network", fitting.fit_network),
+    ("simulate", running.simulate),
+    ("predict", running.predict),
+    ("orders", orders.orders),
+    ("identify", identify.identify),
+    ("export", export.export),
+    ("stream", streaming.stream),
+    ("fleet", fleet_cli.fleet),
+    ("report", report.report),
+    ("demo", examples.demo),
+):
+    app.command(_name, short_help=SHORT_HELP[_name])(_command)
+app.add_typer(
+    examples.reproduce_app,
+    name="reproduce",
+    short_help="Reproduce the seed papers on the simulated plants.",
+)
+app.command("example-data", short_help=SHORT_HELP["example-data"])(examples.example_data)
 
 
 def main() -> None:

@@ -300,6 +300,13 @@ class Dataset:
                     f"signal '{names[col]}' is {arr[row, col]} at sample {row} (0-based); "
                     "remove or fill the gap before identification"
                 )
+            huge = np.abs(arr) > LARGEST_VALUE
+            if huge.any():
+                row, col = np.argwhere(huge)[0]
+                raise DataError(
+                    f"signal '{names[col]}' is {arr[row, col]:.6g} at sample {row} (0-based): "
+                    f"{_TOO_LARGE}"
+                )
         return cls(ins, outs, sampling_time, [Experiment(name, u2, y2)])
 
     @classmethod
@@ -627,7 +634,24 @@ def _numeric_column(df: pd.DataFrame, column: Any, name: str, where: _Where) -> 
     if not finite.all():
         row = int(np.argmin(finite))
         _raise_missing(where, name, row, infinite=float(values[row]))
+    huge = np.abs(values) > LARGEST_VALUE
+    if huge.any():
+        row = int(np.argmax(huge))
+        raise DataError(
+            f"{where.prefix}{where.label} '{name}', {where.rows(row)}: {values[row]:.6g} is "
+            f"too large: {_TOO_LARGE}"
+        )
     return values
+
+
+#: Largest magnitude a sample may have: below it the powers of the polynomial blocks (up
+#: to degree 9) and their squares in least squares stay finite in float64 (1e15^18 =
+#: 1e270); physical signals in any sensible unit are far smaller.
+LARGEST_VALUE = 1e15
+_TOO_LARGE = (
+    f"values beyond {LARGEST_VALUE:g} overflow the fits' squares and products; rescale the "
+    "signal (e.g. to SI units or by its typical size) and fit again"
+)
 
 
 def _raise_missing(where: _Where, name: str, row: int, infinite: float = np.nan) -> None:

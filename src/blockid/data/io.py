@@ -114,6 +114,10 @@ def read_data(
     sampling_time = _check_sampling_time(sampling_time)
     shown = [str(p) for p in path_list]
     for text in shown:
+        if Path(text).is_dir():
+            raise DataError(
+                f"{text} is a folder, not a data file; name the files in it (e.g. {text}/*.csv)"
+            )
         _check_suffix(Path(text))
     resolved = [os.path.realpath(p) for p in path_list]
     for i, real in enumerate(resolved):
@@ -231,10 +235,22 @@ def _sniff_delimiter(sample: str, suffix: str, truncated: bool) -> str:
     return "," if suffix == ".csv" else _WHITESPACE
 
 
-def _csv_options(delimiter: str) -> dict[str, Any]:
+def _encoding(head: bytes) -> str:
+    """UTF-8 (with or without a byte-order mark) when the file's first bytes decode as
+    it, else Windows-1252 (a superset of Latin-1 for text: ``courant_é`` written by a
+    spreadsheet on Windows), so that column names read as the user typed them."""
+    try:
+        head.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        if exc.start < len(head) - 4:  # not a character cut at the end of the sample
+            return "cp1252"
+    return "utf-8-sig"
+
+
+def _csv_options(delimiter: str, encoding: str = "utf-8-sig") -> dict[str, Any]:
     options: dict[str, Any] = {
         "sep": delimiter,
-        "encoding": "utf-8-sig",
+        "encoding": encoding,
         "encoding_errors": "replace",
         "engine": "c",
     }
@@ -255,7 +271,7 @@ def _records(lines: Iterable[str], delimiter: str) -> Iterator[tuple[int, list[s
             yield line, fields
 
 
-def _text_locator(path: Path, delimiter: str) -> Locator:
+def _text_locator(path: Path, delimiter: str, encoding: str = "utf-8-sig") -> Locator:
     """Map 0-based data rows to ``(line number, {column: raw text})`` by re-reading the file.
 
     The first non-blank record is the header, as for pandas. Used only to word an error
@@ -265,7 +281,7 @@ def _text_locator(path: Path, delimiter: str) -> Locator:
     def locate(rows: Sequence[int]) -> dict[int, tuple[int, dict[str, str]]]:
         wanted, last = set(rows), max(rows)
         found: dict[int, tuple[int, dict[str, str]]] = {}
-        with open(path, encoding="utf-8-sig", errors="replace", newline="") as handle:
+        with open(path, encoding=encoding, errors="replace", newline="") as handle:
             records = _records(handle, delimiter)
             header = [name.strip() for name in next(records, (0, []))[1]]
             for row, (line, fields) in enumerate(records):
@@ -300,18 +316,19 @@ def _read_text(
 ) -> tuple[pd.DataFrame, _Where, str]:
     with open(path, "rb") as handle:
         head = handle.read(_SNIFF_BYTES)
-    sample = head.decode("utf-8-sig", errors="replace")
+    encoding = _encoding(head)
+    sample = head.decode(encoding, errors="replace")
     if not sample.strip():
         raise DataError(f"{shown} is empty (only blank lines)")
     delimiter = _sniff_delimiter(sample, suffix, truncated=len(head) == _SNIFF_BYTES)
-    where = _Where(shown, locate=_text_locator(path, delimiter))
+    where = _Where(shown, locate=_text_locator(path, delimiter, encoding))
     try:
         # All columns are parsed (no usecols), so that pandas reports rows with more
         # fields than the header; index_col=False stops it from silently turning the
         # first column into the index when every row has one field too many.
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", pd.errors.ParserWarning)
-            frame = pd.read_csv(path, index_col=False, **_csv_options(delimiter))
+            frame = pd.read_csv(path, index_col=False, **_csv_options(delimiter, encoding))
     except pd.errors.EmptyDataError:
         raise DataError(f"{shown} is empty (no header line)") from None
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:

@@ -100,6 +100,7 @@ def fit_model(
         values are dropped (the method's default applies).
     """
     decl, method, options = resolve_options(structure, method, options)
+    _check_orders_fit(data, decl.name, options)
     uncertainty = bool(options.pop("standard_errors", False))
     refine = bool(options.pop("refine", False))
     if not decl.block_oriented:
@@ -121,6 +122,14 @@ def fit_model(
         if not result.model.ranges:  # the one place ranges are recorded for every method
             model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
             result = replace(result, model=model)
+    mse = result.estimation_metrics.get("mse", {})
+    if not all(np.isfinite(v) for v in mse.values()):
+        raise EstimationError(
+            f"the {structure} fit's error on the estimation data is not finite (MSE "
+            f"{', '.join(f'{k}: {v}' for k, v in mse.items())}): the signals or the model "
+            "overflow; rescale the signals (to SI units, or by their typical size) and fit "
+            "again"
+        )
     from blockid.fitting.checks import linear_block_notes, rest_notes
 
     notes = linear_block_notes(result.model, data) + rest_notes(result.model, data)
@@ -148,6 +157,23 @@ def run_method(decl: Structure, method: str, data: Dataset, options: dict[str, A
     extra = {"structure": decl.name, "method": chosen.name}
     extra = {k: v for k, v in extra.items() if k in chosen.passes}
     return chosen.function()(data, **extra, **options)
+
+
+def _check_orders_fit(data: Dataset, structure: str, options: dict[str, Any]) -> None:
+    """Refuse orders the data cannot hold, before any work (an ``na`` of 10^11 asked for
+    745 GiB; one of 1000 on 300 samples ran for half a minute and then blamed the
+    data): every experiment must be longer than the longest lag, and all together give
+    a regression row per coefficient."""
+    orders = {k: np.asarray(options[k]) for k in ("na", "nb", "nk") if k in options}
+    if "nx" in options:
+        orders["nx"] = np.asarray(options["nx"])
+    if not orders:
+        return
+    top = {k: int(v.max()) if v.size else 0 for k, v in orders.items()}
+    lag = max(top.get("na", 0), top.get("nb", 1) + top.get("nk", 0) - 1, top.get("nx", 0))
+    n = max(top.get("na", 0) + top.get("nb", 0), top.get("nx", 0) ** 2, 1)
+    shown = ", ".join(f"{k}={options[k]}" for k in ("na", "nb", "nk", "nx") if k in options)
+    data.check_orders(lag, n, what=f"{structure} with {shown}")
 
 
 def takes_both_signs(values: np.ndarray) -> bool:

@@ -102,6 +102,13 @@ class Model(ABC):
                 f"the model has {len(self.inputs)} input(s) {list(self.inputs)} but got an "
                 f"input array of shape {u.shape}"
             )
+        bad = ~np.isfinite(u)
+        if bad.any():
+            row, col = np.argwhere(bad)[0]
+            raise DataError(
+                f"input '{self.inputs[col]}' is {u[row, col]} at sample {row} (0-based): a "
+                "model runs on finite inputs only; remove or fill the gap"
+            )
         if y is not None:
             y = np.asarray(y, dtype=float)
             if y.ndim == 1:

@@ -578,6 +578,13 @@ class ChainModel(Model):
         else:
             blocks = cls._blocks_from_version1(data)
         offsets = data.get("offsets", {})
+        for key in ("inputs", "outputs"):
+            if len(data[key]) != 1:
+                raise ModelFileError(
+                    f"the {cls.structure} model file names {len(data[key])} {key} "
+                    f"({data[key]}); a chain of blocks has one input and one output: the "
+                    "file was edited or damaged"
+                )
         try:
             return cls._from_blocks(
                 data["inputs"][0],

@@ -524,6 +524,12 @@ class LinearFeedback(OneLinearBlock, Model):
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> LinearFeedback:
         offsets = data.get("offsets", {})
+        for key in ("inputs", "outputs"):
+            if len(data[key]) != 1:
+                raise ModelFileError(
+                    f"the feedback model file names {len(data[key])} {key} ({data[key]}); the "
+                    "model has one input and one output: the file was edited or damaged"
+                )
         try:
             return cls(
                 data["inputs"][0],
