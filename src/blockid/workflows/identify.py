@@ -37,8 +37,9 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
 4. ``finalists`` -- the best ``finalists`` candidates again with ``final_nfev``
    iterations on the whole training folds: new candidates, scored like the rest (a
    longer fit never replaces a shorter one that scored better).
-5. ``nonlinearity`` -- the best block-oriented candidate with each polynomial degree or
-   block size raised by 2, while the score falls by more than ``tie``.
+5. ``nonlinearity`` -- the best candidate with each polynomial degree or block size
+   raised by 2 (a state-space model's monomial degree by 1), while the score falls by
+   more than ``tie``.
 6. ``refit`` -- the chosen candidate (ranked by score; among near-ties, within ``tie``,
    the fewest parameters) fitted with its own options on **all** estimation data,
    and checked once more (free run from rest). If that fails, the next one.
@@ -130,6 +131,8 @@ class Effort:
     state_parameters: int = 100
     #: state dimensions carried from the linear state-space stage to the polynomial one
     state_keep: int = 1
+    #: training samples of the finalists' and later fits on a long record (None: all)
+    final_samples: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -425,7 +428,9 @@ class _Search:
         search still has a model)."""
         candidates = unique(candidates)
         new = [c for c in candidates if c.key not in self.scores]
-        limit = self.effort.screen_samples if screen and self.long else None
+        limit = None
+        if self.long:
+            limit = self.effort.screen_samples if screen else self.effort.final_samples
         tasks = [_Task(c, fold, limit, self.n_init) for c in new for fold in self.plan.folds]
         t0 = time.perf_counter()
         self.stages.append({"stage": stage, "candidates": len(new), "fits": len(tasks)})
@@ -770,7 +775,7 @@ def _stages(
     if block:
         orders = _block_structures(search, block, orders, recommended, screen, notes)
     if states:
-        _state_space(search, states, orders, screen)
+        _state_space(search, states, screen)
     iterative = block + states
     if not iterative:
         return
@@ -847,24 +852,18 @@ def _block_structures(
     return orders
 
 
-def _state_space(
-    search: _Search,
-    states: list[str],
-    orders: list[tuple[int, int, int]],
-    screen: dict[str, Any],
-) -> None:
-    """Linear state-space models at the state dimensions the data suggest (the
-    canonical-correlation rule of the subspace method, and the orders' ``na``), then
-    polynomial ones at the best of those dimensions."""
+def _state_space(search: _Search, states: list[str], screen: dict[str, Any]) -> None:
+    """Linear state-space models at every state dimension up to the effort's largest
+    order, then polynomial ones at the best ``state_keep`` of those dimensions."""
     from blockid.fitting.state_space import subspace
 
     eff = search.effort
-    nxs = sorted({max(1, min(o[0], eff.max_order)) for o in orders})
+    nxs = list(range(1, eff.max_order + 1))  # linear fits are cheap: every dimension
     try:
         with np.errstate(all="ignore"):
             nxs = sorted({*nxs, subspace(search.data, max_order=eff.max_order).nx})
     except BlockidError:
-        pass  # too short for the horizon: the orders' dimensions only
+        pass  # too short for the horizon
     search.run("state space", state_candidates(states, nxs, screen), True)
     linear = search.ranked([s for s in search.order if s.stage == "state space"])
     best = []
