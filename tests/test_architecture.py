@@ -79,6 +79,18 @@ def test_every_module_declares_all():
         assert hasattr(mod, "__all__"), f"{module} has no __all__"
 
 
+@pytest.mark.parametrize(
+    "package", ["blockid", "blockid.data", "blockid.fitting", "blockid.workflows"]
+)
+def test_every_lazily_exported_name_resolves(package):
+    """Each lazily exported name imports from the module its table names (a module
+    moved without its entry broke ``blockid.identify``)."""
+    module = importlib.import_module(package)
+    for name in module.__all__:
+        assert getattr(module, name) is not None, f"{package}.{name}"
+    assert set(module.__all__) <= set(dir(module))
+
+
 def test_the_command_line_starts_without_the_heavy_libraries():
     """``blockid --help`` must not pay for pandas, SciPy, numba or matplotlib: commands
     import them when they run (issue: every command used to spend ~1.7 s starting)."""

@@ -13,8 +13,7 @@ start without loading pandas, SciPy or numba until a command needs them.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from blockid._lazy import lazy_names
 
 __version__ = "0.1.0"
 
@@ -37,6 +36,8 @@ _WHERE = {
     "ARX": "blockid.models",
     "ChainModel": "blockid.models",
     "LinearFeedback": "blockid.models",
+    "PolynomialStateSpace": "blockid.models",
+    "StateSpace": "blockid.models",
     "load_model": "blockid.models",
     "save_model": "blockid.models",
     # estimators (regressor level)
@@ -52,7 +53,7 @@ _WHERE = {
     "HammersteinWienerEstimator": "blockid.fitting.estimator",
     "WienerEstimator": "blockid.fitting.estimator",
     "evaluate": "blockid.evaluation",
-    "identify": "blockid.fitting.identify",
+    "identify": "blockid.workflows.identify",
     "false_nearest_neighbours": "blockid.fitting.orders",
     "fit_arx": "blockid.fitting",
     "fit_model": "blockid.fitting",
@@ -69,13 +70,4 @@ _WHERE = {
 __all__ = sorted(_WHERE)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _WHERE:
-        value = getattr(importlib.import_module(_WHERE[name]), name)
-        globals()[name] = value  # later look-ups skip this function
-        return value
-    raise AttributeError(f"module 'blockid' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_WHERE])
+__getattr__, __dir__ = lazy_names(__name__, _WHERE)

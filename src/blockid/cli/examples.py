@@ -16,13 +16,14 @@ from blockid.cli._common import (
     Quiet,
     Seed,
     busy,
+    check_arguments,
     cli_errors,
     print_json,
     refuse_to_overwrite,
     stdout,
 )
 from blockid.cli._tables import print_electrohydraulic as _print_electrohydraulic
-from blockid.workflows.examples import EXAMPLES
+from blockid.workflows.examples import EXAMPLES, check_example
 
 __all__ = ["demo", "example_data", "reproduce_app"]
 
@@ -250,10 +251,12 @@ def example_data(
     velocity (estimation: the averaged multisine runs; validation: a general trajectory).
     windtunnel-*: t, u1, u2, v1, v2, y1, y2 at that operating condition.
     """
+    check_example(name)
+    refuse_to_overwrite(out, force)
+    check_arguments(table=out)
     from blockid.data import write_table
     from blockid.workflows.examples import example_record
 
-    refuse_to_overwrite(out, force)
     record = example_record(name, seed=seed)
     write_table(record.frame, out, overwrite=force)
     (a, b), (c, d) = record.estimation, record.validation

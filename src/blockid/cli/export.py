@@ -12,7 +12,15 @@ from typing import Annotated
 
 import typer
 
-from blockid.cli._common import Force, Json, cli_errors, print_json, refuse_to_overwrite, stdout
+from blockid.cli._common import (
+    Force,
+    Json,
+    check_arguments,
+    cli_errors,
+    print_json,
+    refuse_to_overwrite,
+    stdout,
+)
 
 __all__ = ["export"]
 
@@ -42,14 +50,16 @@ def export(
     json_out: Json = False,
 ) -> None:
     """Export a model: a self-contained Python module or transfer functions."""
-    from blockid.data.io import write_text_atomic
     from blockid.errors import ParameterError
-    from blockid.models import load_model
-    from blockid.models.export import export_text
 
     if to not in _FORMATS:
         raise ParameterError(f"--to must be one of {', '.join(_FORMATS)}, got {to!r}")
     refuse_to_overwrite(out, force)
+    check_arguments(model=model_path)
+    from blockid.data.io import write_text_atomic
+    from blockid.models import load_model
+    from blockid.models.export import export_text
+
     model = load_model(model_path)
     text = export_text(model, to)
     if out is not None:

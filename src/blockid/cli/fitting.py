@@ -23,6 +23,7 @@ from blockid.cli._common import (
     SamplingTime,
     TimeColumn,
     busy,
+    check_arguments,
     cli_errors,
     load_data,
     metrics_table,
@@ -92,17 +93,20 @@ def fit(
     **options: Any,
 ) -> None:
     """Identify a model from data and save it as a JSON model file."""
+    _check_output(out, json_out, force)
+    options = given(options)
+    check_arguments(
+        data_paths, structure=structure, method=method, options=options,
+        ranges={"--estimation": estimation},
+    )  # fmt: skip
+    data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
     from blockid.errors import EstimationError
     from blockid.fitting import fit_model
     from blockid.fitting.dispatch import accepted_options
     from blockid.models import model_document, save_model
-
-    _check_output(out, json_out, force)
     from blockid.plotting.figures import FIT_FIGURES
 
     refuse_figures(plot, FIT_FIGURES, force)
-    data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
-    options = given(options)
     if plot is not None and "record_history" in accepted_options(structure, method):
         options["record_history"] = True  # parameter trajectories for the figure
     try:
@@ -170,12 +174,14 @@ def compare(
     free-run simulation and of one-step prediction on the validation range. Each
     structure takes the estimator options it uses and leaves the others.
     """
-    from blockid.data import check_disjoint, parse_range
-    from blockid.workflows import compare_structures
+    from blockid.data.ranges import check_disjoint, parse_range
 
     refuse_to_overwrite(report, force)
+    check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
     check_disjoint(estimation, validation)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+    from blockid.workflows import compare_structures
+
     est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
     val = data.select(*parse_range(validation, "--validation"), what="--validation")
     names = {} if structures is None else {"structures": _names(structures)}
@@ -248,12 +254,13 @@ def fit_network(
     The network model simulates all subsystem outputs from the external inputs alone;
     use it with 'blockid simulate' and 'blockid predict' like any model.
     """
+    _check_output(out, json_out, force)
+    check_arguments(data_paths, ranges={"--estimation": estimation})
     from blockid.fitting import parse_subsystem
     from blockid.fitting.network import fit_network as fit
     from blockid.fitting.network import network_signals
     from blockid.models import model_document, save_model
 
-    _check_output(out, json_out, force)
     specs = [parse_subsystem(text) for text in subsystems]
     inputs, outputs = network_signals(specs)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)

@@ -23,6 +23,7 @@ from blockid.cli._common import (
     Quiet,
     SamplingTime,
     TimeColumn,
+    check_arguments,
     cli_errors,
     print_json,
     progress_bar,
@@ -108,9 +109,10 @@ def fleet(
     an error row; the others go on. A rerun skips records whose model file exists,
     unless --force. Exit status 1 when some record failed.
     """
+    files = _expand(patterns)
+    check_arguments(structure=structure, method=method, options=given(options))
     from blockid.workflows.fleet import fit_fleet
 
-    files = _expand(patterns)
     read = {"sampling_time": ts, "time_column": time_column}
     bar, on_result = progress_bar(quiet or json_out), None
     if bar is not None:

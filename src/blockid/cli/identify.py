@@ -23,6 +23,7 @@ from blockid.cli._common import (
     SamplingTime,
     TimeColumn,
     busy,
+    check_arguments,
     cli_errors,
     load_data,
     metrics_table,
@@ -31,6 +32,7 @@ from blockid.cli._common import (
     progress_bar,
     refuse_figures,
     refuse_to_overwrite,
+    select_range,
     stdout,
 )
 from blockid.cli.report import ReportFile, write_report_option
@@ -127,7 +129,9 @@ def identify(
 
     Validation data (--validation or --validation-data) are only reported on.
     """
+    from blockid.data.ranges import check_disjoint
     from blockid.errors import ParameterError
+    from blockid.workflows.effort import check_search
 
     if budget is not None:
         raise ParameterError(
@@ -136,29 +140,27 @@ def identify(
             "--time-limit SECONDS caps it",
             parameter="budget",
         )
-    from blockid.models import save_model
-    from blockid.workflows.identify import identify as run_identify
-
     if validation and validation_data:
         raise ParameterError("give --validation or --validation-data, not both")
     refuse_to_overwrite(out, force)
     refuse_to_overwrite(report, force)
+    names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
+    check_search(names, effort, jobs=jobs, time_limit=time_limit)
+    check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
+    if validation:
+        check_disjoint(estimation or ":", validation)
+    if validation_data:
+        check_arguments(validation_data)
+    whole = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+    est = select_range(whole, estimation, "--estimation")
+    val = select_range(whole, validation, "--validation") if validation else None
+    if validation_data:
+        val = load_data(validation_data, inputs, outputs, ts, time_column, experiment_column)
+    from blockid.models import save_model
     from blockid.plotting.figures import FIT_FIGURES
+    from blockid.workflows.identify import identify as run_identify
 
     refuse_figures(plot, FIT_FIGURES, force)
-    est = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
-    val = None
-    if validation:
-        val = load_data(
-            data_paths, inputs, outputs, ts, time_column, experiment_column, validation,
-            "--validation",
-        )  # fmt: skip
-        from blockid.data import check_disjoint
-
-        check_disjoint(estimation or ":", validation)
-    elif validation_data:
-        val = load_data(validation_data, inputs, outputs, ts, time_column, experiment_column)
-    names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
     bar, update = _progress(quiet or json_out)
     options = dict(structures=names, effort=effort, jobs=jobs, time_limit=time_limit)
     if bar is not None:
@@ -175,14 +177,11 @@ def identify(
 
         fit_figures(result.fit, est, plot, overwrite=force)
     if report is not None:
-        whole = None
-        if not validation_data:
-            whole = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
         with busy("writing the report", quiet or json_out):
             write_report_option(
                 report, data_paths=[*data_paths, *(validation_data or [])], identify=result,
-                data=whole, estimation=est, validation=val, estimation_range=estimation,
-                validation_range=validation, force=force,
+                data=None if validation_data else whole, estimation=est, validation=val,
+                estimation_range=estimation, validation_range=validation, force=force,
             )  # fmt: skip
     if json_out:
         print_json(result.to_dict())

@@ -75,8 +75,6 @@ def orders(
     at the recommended orders, and the recommendation: the smallest na + nb whose share
     is at most the threshold. Several inputs share one nb and one nk.
     """
-    from blockid.fitting.orders import false_nearest_neighbours
-
     level: float | str = noise
     if noise.strip().lower() != "auto":
         try:
@@ -89,6 +87,8 @@ def orders(
             ) from None
 
     data = load_data(data_paths, inputs, [output], ts, time_column, experiment_column, estimation)
+    from blockid.fitting.orders import false_nearest_neighbours
+
     try:
         evidence = false_nearest_neighbours(
             data, max_na=max_na, max_nb=max_nb, max_nk=max_nk, threshold=threshold, noise=level

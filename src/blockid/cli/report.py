@@ -25,6 +25,7 @@ from blockid.cli._common import (
     SamplingTime,
     TimeColumn,
     busy,
+    check_arguments,
     cli_errors,
     load_data,
     print_json,
@@ -165,11 +166,14 @@ def report(
     bands when the fit has parameter standard errors), the parameter trajectories of the
     recursive methods, and the command, data file hashes and versions that made it.
     """
-    from blockid.data import parse_range
-    from blockid.workflows import compare_structures
+    from blockid.data.ranges import check_disjoint, parse_range
 
     refuse_to_overwrite(out, force)
+    check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
+    check_disjoint(estimation, validation)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+    from blockid.workflows import compare_structures
+
     est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
     val = data.select(*parse_range(validation, "--validation"), what="--validation")
     names = {} if structures is None else {"structures": _names(structures)}

@@ -15,6 +15,7 @@ from blockid.cli._common import (
     Json,
     SamplingTime,
     TimeColumn,
+    check_arguments,
     cli_errors,
     load_data,
     metrics_table,
@@ -91,18 +92,18 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         force: Force = False,
         json_out: Json = False,
     ) -> None:
-        from blockid.data import write_table
         from blockid.errors import ParameterError
-        from blockid.evaluation import evaluate
-        from blockid.models import load_model
 
         if band is not None and mode != "simulation":
             raise ParameterError(
                 "--band applies to simulate only (a band of the free-run output)",
                 parameter="band",
             )
-
         refuse_to_overwrite(out, force)
+        check_arguments(data_paths, ranges={"--range": rng}, model=model_path, table=out)
+        from blockid.data import write_table
+        from blockid.evaluation import evaluate
+        from blockid.models import load_model
         from blockid.plotting.runs import RUN_FIGURES
 
         refuse_figures(plot, [RUN_FIGURES[mode]], force)

@@ -15,7 +15,15 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import Force, Inputs, Outputs, cli_errors, refuse_to_overwrite, stderr
+from blockid.cli._common import (
+    Force,
+    Inputs,
+    Outputs,
+    check_arguments,
+    cli_errors,
+    refuse_to_overwrite,
+    stderr,
+)
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     given,
@@ -157,6 +165,14 @@ def stream(
     import signal
 
     from blockid.errors import EstimationError, ParameterError
+    from blockid.fitting.registry import get_structure
+
+    if checkpoint and out is None:
+        raise ParameterError("--checkpoint N writes to -o FILE: give one", parameter="out")
+    refuse_to_overwrite(out, force)
+    check_arguments(model=start)
+    if structure is not None:
+        get_structure(structure)
     from blockid.models import load_model, save_model
     from blockid.workflows.stream import (
         Checkpoint,
@@ -165,9 +181,6 @@ def stream(
         recursive_method,
     )
 
-    if checkpoint and out is None:
-        raise ParameterError("--checkpoint N writes to -o FILE: give one", parameter="out")
-    refuse_to_overwrite(out, force)
     resume, initial = None, None
     if start is not None:
         initial = load_model(start)

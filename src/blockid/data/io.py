@@ -16,12 +16,10 @@ Every error names the file; errors in a cell also name the column, the data row
 from __future__ import annotations
 
 import csv
-import difflib
 import math
 import os
 import re
 import secrets
-import stat
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
@@ -41,6 +39,15 @@ from blockid.data.dataset import (
     _unknown_name_message,
     _Where,
 )
+from blockid.data.files import (
+    READ_SUFFIXES,
+    WRITE_SUFFIXES,
+    check_data_paths,
+    check_file,
+    check_suffix,
+    check_table_target,
+    is_stream,
+)
 from blockid.errors import DataError
 
 __all__ = [
@@ -52,11 +59,6 @@ __all__ = [
     "write_table",
     "write_text_atomic",
 ]
-
-#: File suffixes :func:`read_data` understands.
-READ_SUFFIXES = (".csv", ".tsv", ".txt", ".parquet", ".mat")
-#: File suffixes :func:`write_table` can write.
-WRITE_SUFFIXES = (".csv", ".tsv", ".parquet")
 
 _TEXT_SUFFIXES = (".csv", ".tsv", ".txt")
 _WHITESPACE = r"\s+"
@@ -107,22 +109,12 @@ def read_data(
         For a missing, empty, unreadable or malformed file; the message names the file,
         and for a bad cell the column, data row, file line and value.
     """
+    inputs, outputs = _check_signal_names(inputs, outputs)
+    sampling_time = _check_sampling_time(sampling_time)
     path_list = [paths] if isinstance(paths, str | os.PathLike) else list(paths)
     if not path_list:
         raise DataError("no data file given; name at least one .csv, .parquet or .mat file")
-    inputs, outputs = _check_signal_names(inputs, outputs)
-    sampling_time = _check_sampling_time(sampling_time)
-    shown = [str(p) for p in path_list]
-    for text in shown:
-        if Path(text).is_dir():
-            raise DataError(
-                f"{text} is a folder, not a data file; name the files in it (e.g. {text}/*.csv)"
-            )
-        _check_suffix(Path(text))
-    resolved = [os.path.realpath(p) for p in path_list]
-    for i, real in enumerate(resolved):
-        if real in resolved[:i]:
-            raise DataError(f"{shown[i]} is listed twice; give each data file once")
+    shown = check_data_paths(path_list)
     stems = [Path(p).stem for p in shown]
     names = [
         stem if stems.count(stem) == 1 else text for stem, text in zip(stems, shown, strict=True)
@@ -144,35 +136,9 @@ def read_data(
     return _concat(datasets, source=", ".join(shown))
 
 
-def _check_suffix(path: Path) -> str:
-    suffix = path.suffix.lower()
-    if suffix not in READ_SUFFIXES:
-        raise DataError(
-            f"{path}: unknown data file type {suffix or '(no suffix)'!r}; "
-            f"supported: {', '.join(READ_SUFFIXES)}"
-        )
-    return suffix
-
-
-def _check_file(path: Path, shown: str) -> None:
-    """Existence, type and size checks that every reader starts with."""
-    if not path.exists():
-        folder = path.parent
-        if not folder.is_dir():
-            raise DataError(f"{shown} does not exist (no folder {folder})")
-        siblings = sorted(p.name for p in folder.iterdir() if p.is_file())
-        near = difflib.get_close_matches(path.name, siblings, n=3, cutoff=0.6)
-        hint = f" (did you mean {' or '.join(repr(n) for n in near)}?)" if near else ""
-        raise DataError(f"{shown} does not exist{hint}")
-    if path.is_dir():
-        raise DataError(f"{shown} is a folder, not a data file")
-    if path.stat().st_size == 0:
-        raise DataError(f"{shown} is empty")
-
-
 def _read_one(path: Path, shown: str, name: str, several: bool, **options: Any) -> Dataset:
-    suffix = _check_suffix(path)
-    _check_file(path, shown)
+    suffix = check_suffix(path)
+    check_file(path, shown)
     try:
         if suffix == ".mat":
             return _read_mat(path, shown, name, several, **options)
@@ -548,12 +514,7 @@ def write_table(frame: pd.DataFrame, path: PathLike, overwrite: bool = False) ->
         does not exist or the file cannot be written.
     """
     target = Path(path)
-    suffix = target.suffix.lower()
-    if suffix not in WRITE_SUFFIXES:
-        raise DataError(
-            f"cannot write {target}: unknown table type {suffix or '(no suffix)'!r}; "
-            f"use one of {', '.join(WRITE_SUFFIXES)}"
-        )
+    suffix = check_table_target(target)
 
     def write(handle: IO[bytes]) -> None:
         if suffix == ".parquet":
@@ -574,17 +535,6 @@ def write_text_atomic(text: str, path: PathLike, overwrite: bool = False) -> Pat
     """
     data = text.encode("utf-8")
     return _atomic_write(Path(path), overwrite, lambda handle: handle.write(data))
-
-
-def is_stream(path: PathLike) -> bool:
-    """True for an existing path (or a link to one) that is not a regular file or a
-    folder: a device (``/dev/full``), a named pipe, ``/dev/stdout``. Such a target is
-    written through, never replaced by a file."""
-    try:
-        mode = os.stat(path).st_mode
-    except OSError:
-        return False
-    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
 
 
 def _atomic_write(target: Path, overwrite: bool, write: Callable[[IO[bytes]], Any]) -> Path:

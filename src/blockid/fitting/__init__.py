@@ -7,8 +7,7 @@ loading SciPy and numba.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from blockid._lazy import lazy_names
 
 _WHERE = {
     "ARX_METHODS": "arx",
@@ -25,8 +24,6 @@ _WHERE = {
     "ESTIMATORS": "estimator",
     "ModelEstimator": "estimator",
     "initial_estimate": "initial",
-    "IdentifyResult": "identify",
-    "identify": "identify",
     "OrderEvidence": "orders",
     "false_nearest_neighbours": "orders",
     "fit_feedback": "feedback",
@@ -46,13 +43,4 @@ _WHERE = {
 __all__ = sorted(_WHERE)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _WHERE:
-        value = getattr(importlib.import_module(f"blockid.fitting.{_WHERE[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'blockid.fitting' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_WHERE])
+__getattr__, __dir__ = lazy_names(__name__, _WHERE)

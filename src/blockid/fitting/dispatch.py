@@ -24,8 +24,13 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset, Experiment
-from blockid.errors import EstimationError, ParameterError
-from blockid.fitting.registry import OPTIONS, STRUCTURES, Structure, get_structure
+from blockid.errors import EstimationError
+from blockid.fitting.registry import (
+    STRUCTURES,
+    Structure,
+    get_structure,
+    resolve_options,
+)
 from blockid.fitting.result import FitResult
 
 __all__ = [
@@ -48,30 +53,6 @@ DEFAULT_METHOD = {s.name: s.default_method.name for s in STRUCTURES.values()}
 def accepted_options(structure: str, method: str | None) -> set[str]:
     """Options (orders and settings) that ``structure`` fitted by ``method`` uses."""
     return set(get_structure(structure).accepted(method))
-
-
-def resolve_options(
-    structure: str, method: str | None, options: dict[str, Any]
-) -> tuple[Structure, str, dict[str, Any]]:
-    """Check ``options`` against the registry and convert their values.
-
-    Returns the structure, the method name and the typed options (``None`` values
-    dropped: the method's default applies). An option the method does not use is an
-    error that lists the ones it does.
-    """
-    decl = get_structure(structure)
-    chosen = decl.method(method)
-    given = {k: v for k, v in options.items() if v is not None}
-    accepted = decl.accepted(chosen.name)
-    unused = [k for k in given if k not in accepted]
-    if unused:
-        raise ParameterError(
-            f"{', '.join(unused)} not used by {structure} with method {chosen.name}; it takes "
-            f"{', '.join(accepted)}",
-            parameter=unused[0],
-        )
-    converted = {k: OPTIONS[k].convert(v) for k, v in given.items()}
-    return decl, chosen.name, {k: v for k, v in converted.items() if v is not None}
 
 
 def fit_model(

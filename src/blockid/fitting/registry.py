@@ -59,6 +59,7 @@ __all__ = [
     "get_structure",
     "option_flag",
     "parse_orders",
+    "resolve_options",
     "searched_structures",
 ]
 
@@ -90,6 +91,8 @@ def parse_orders(value: Any, name: str) -> Any:
             f"{name}={text!r}: give a whole number, or a matrix with rows separated by ';' "
             "and entries by ',' (rows: outputs), e.g. 2 or '2,1;1,2'"
         )
+    if any(v < 0 for row in rows for v in row):
+        raise ParameterError(f"{name} must hold whole numbers >= 0; got {text!r}")
     if len(rows) == 1 and len(rows[0]) == 1:
         return rows[0][0]
     return rows
@@ -764,3 +767,37 @@ def get_structure(name: Any) -> Structure:
             f"structure={name!r} is unknown; choose one of {', '.join(STRUCTURES)}"
         )
     return STRUCTURES[name]
+
+
+#: Option kinds whose conversion imports the numerical stack (blocks, schedules);
+#: :func:`resolve_options` with ``light=True`` leaves their values to the fit.
+_HEAVY_KINDS = ("block", "forgetting")
+
+
+def resolve_options(
+    structure: str, method: str | None, options: dict[str, Any], *, light: bool = False
+) -> tuple[Structure, str, dict[str, Any]]:
+    """Check ``options`` against the registry and convert their values.
+
+    Returns the structure, the method name and the typed options (``None`` values
+    dropped: the method's default applies). An option the method does not use is an
+    error that lists the ones it does. ``light=True`` (the command line, before it
+    imports NumPy) checks everything but the block and forgetting values, which are
+    returned as given.
+    """
+    decl = get_structure(structure)
+    chosen = decl.method(method)
+    given = {k: v for k, v in options.items() if v is not None}
+    accepted = decl.accepted(chosen.name)
+    unused = [k for k in given if k not in accepted]
+    if unused:
+        raise ParameterError(
+            f"{', '.join(unused)} not used by {structure} with method {chosen.name}; it takes "
+            f"{', '.join(accepted)}",
+            parameter=unused[0],
+        )
+    converted = {
+        k: v if light and OPTIONS[k].kind in _HEAVY_KINDS else OPTIONS[k].convert(v)
+        for k, v in given.items()
+    }
+    return decl, chosen.name, {k: v for k, v in converted.items() if v is not None}

@@ -114,16 +114,7 @@ def save_model(
 
 def load_model(path: str | Path) -> Model:
     """Read a model file written by :func:`save_model`."""
-    path = Path(path)
-    if not path.is_file():
-        raise ModelFileError(f"model file {path} does not exist")
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise ModelFileError(
-            f"{path} is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg}); "
-            "the file is damaged: refit or restore it"
-        ) from None
-    except UnicodeDecodeError:
-        raise ModelFileError(f"{path} is not a text file; is it really a model file?") from None
+    from blockid.data.files import read_model_document
+
+    doc = read_model_document(path)
     return model_from_document(doc, source=str(path))

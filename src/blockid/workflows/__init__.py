@@ -6,8 +6,7 @@ Names are imported on first use (PEP 562), so that the command line starts fast.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from blockid._lazy import lazy_names
 
 _WHERE = {
     "CompareResult": "compare",
@@ -18,9 +17,4 @@ _WHERE = {
 __all__ = sorted(_WHERE)
 
 
-def __getattr__(name: str) -> Any:
-    if name in _WHERE:
-        value = getattr(importlib.import_module(f"blockid.workflows.{_WHERE[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'blockid.workflows' has no attribute {name!r}")
+__getattr__, __dir__ = lazy_names(__name__, _WHERE)

@@ -10,7 +10,7 @@ from typing import Any
 
 from blockid.errors import ParameterError
 
-__all__ = ["EXAMPLES", "ExampleRecord", "example_record"]
+__all__ = ["EXAMPLES", "ExampleRecord", "check_example", "example_record"]
 
 #: The example records, by name.
 EXAMPLES = ("electrohydraulic", "windtunnel-110kPa", "windtunnel-130kPa")
@@ -32,6 +32,14 @@ class ExampleRecord:
     validation: tuple[int, int]
 
 
+def check_example(name: str) -> None:
+    """Refuse a name that is not one of :data:`EXAMPLES` (needs no numerical library)."""
+    if name not in EXAMPLES:
+        raise ParameterError(
+            f"unknown example {name!r}; choose one of {', '.join(EXAMPLES)}", parameter="name"
+        )
+
+
 def example_record(name: str, seed: int | None = 0) -> ExampleRecord:
     """Simulate the plant of example ``name`` and join its two experiments.
 
@@ -47,10 +55,7 @@ def example_record(name: str, seed: int | None = 0) -> ExampleRecord:
     import numpy as np
     import pandas as pd
 
-    if name not in EXAMPLES:
-        raise ParameterError(
-            f"unknown example {name!r}; choose one of {', '.join(EXAMPLES)}", parameter="name"
-        )
+    check_example(name)
     if name == "electrohydraulic":
         from blockid.plants.electrohydraulic import electrohydraulic_experiment
 

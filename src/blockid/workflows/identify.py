@@ -69,6 +69,7 @@ from blockid.data.folds import Fold, FoldPlan, fold_plan, materialise
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.trust import Trust, assess
 from blockid.fitting.registry import STRUCTURES, searched_structures
+from blockid.workflows.effort import EFFORTS, LONG_RECORD, RULES, Effort, check_search
 from blockid.workflows.parallel import TaskRunner, available_cores
 from blockid.workflows.search_space import (
     LINEAR,
@@ -102,83 +103,6 @@ Progress = Callable[[str, int, int, str], None]
 
 #: A least-squares ARX pole this close to +1 suggests that the plant integrates.
 INTEGRATING_POLE = 1e-2
-#: Records of at least this many samples get fewer folds and screening on a part.
-LONG_RECORD = 20_000
-#: How fold scores are combined into a candidate's score (``docs/identify.md`` has the
-#: study that chose the first).
-RULES = ("geometric-mean", "median", "mean")
-
-
-@dataclass(frozen=True)
-class Effort:
-    """The sizes of the search's stages (module docstring)."""
-
-    name: str
-    folds: int  # folds of a record shorter than LONG_RECORD samples
-    folds_long: int  # folds of a longer one
-    max_order: int  # largest na of the ARX order grid
-    max_delay: int  # largest delay scanned
-    linear_keep: int  # ARX order sets carried to the structures
-    families: int | None  # block families per slot (None: all)
-    screen_nfev: int  # simulation-error iterations of a screening fit
-    screen_samples: int  # training samples of a screening fit (long records)
-    finalists: int  # candidates fitted again with final_nfev
-    final_nfev: int  # iterations of a finalist's fit
-    grow_steps: int  # richer-nonlinearity steps
-    #: (degree, monomials) of the polynomial state-space candidates
-    state_plans: tuple[tuple[int, str], ...] = ((3, "states"),)
-    #: largest number of parameters of a polynomial state-space candidate
-    state_parameters: int = 100
-    #: state dimensions carried from the linear state-space stage to the polynomial one
-    state_keep: int = 1
-    #: training samples of the finalists' and later fits on a long record (None: all)
-    final_samples: int | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        return dict(self.__dict__)
-
-
-#: The efforts ``identify`` offers: the same data and effort give the same model.
-EFFORTS: dict[str, Effort] = {
-    e.name: e
-    for e in (
-        Effort("quick", 3, 2, 5, 10, 1, 3, 15, 10_000, 2, 60, 1, ((3, "states"),), 60, 1),
-        Effort(
-            "standard",
-            4,
-            3,
-            8,
-            20,
-            2,
-            None,
-            30,
-            20_000,
-            3,
-            150,
-            3,
-            ((2, "full"), (3, "states"), (3, "full")),
-            300,
-            1,
-        ),  # fmt: skip
-        Effort(
-            "thorough",
-            5,
-            3,
-            10,
-            30,
-            3,
-            None,
-            60,
-            50_000,
-            5,
-            300,
-            4,
-            ((2, "full"), (3, "states"), (3, "full"), (4, "states")),
-            1200,
-            2,
-        ),  # fmt: skip
-    )
-}
 
 
 # ----------------------------------------------------------------------------- scores
@@ -599,28 +523,8 @@ def identify(
     t_start = time.perf_counter()
     if not isinstance(data, Dataset):
         raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
-    if not isinstance(effort, Effort) and effort not in EFFORTS:
-        raise ParameterError(
-            f"effort={effort!r} is unknown; choose one of {', '.join(EFFORTS)}", parameter="effort"
-        )
-    if rule not in RULES:
-        raise ParameterError(f"rule={rule!r}: choose one of {', '.join(RULES)}", parameter="rule")
-    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
-        raise ParameterError(f"jobs must be a whole number >= 1, got {jobs!r}", parameter="jobs")
-    if time_limit is not None and not time_limit > 0:
-        raise ParameterError(
-            f"time_limit must be a positive number of seconds, got {time_limit!r}",
-            parameter="time_limit",
-        )
-    eff = effort if isinstance(effort, Effort) else EFFORTS[effort]
-    asked = list(structures) if structures else None
+    eff, asked = check_search(structures, effort, rule, jobs, time_limit)
     chosen = asked or list(searched_structures())
-    unknown = [s for s in chosen if s not in STRUCTURES]
-    if unknown:
-        raise ParameterError(
-            f"structures {unknown} are unknown; choose among {', '.join(STRUCTURES)}",
-            parameter="structures",
-        )
     notes: list[str] = []
     if data.n_inputs != 1 or data.n_outputs != 1:
         block = [s for s in chosen if STRUCTURES[s].block_oriented]

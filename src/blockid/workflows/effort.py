@@ -1,0 +1,114 @@
+"""The size of ``identify``'s search, and the checks of its arguments.
+
+An :class:`Effort` counts work — folds, orders, candidates, iterations — never seconds,
+so that the same data, effort and version give the same model on any machine at any
+load (``docs/identify.md`` lists the counts). This module needs no numerical library:
+the command line checks ``--effort``, ``--structures``, ``--jobs`` and ``--time-limit``
+with :func:`check_search` before it imports NumPy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from blockid.errors import ParameterError
+from blockid.fitting.registry import STRUCTURES
+
+__all__ = ["EFFORTS", "LONG_RECORD", "RULES", "Effort", "check_search"]
+
+#: Records of at least this many samples get fewer folds and screening on a part.
+LONG_RECORD = 20_000
+#: How fold scores are combined into a candidate's score (``docs/identify.md`` has the
+#: study that chose the first).
+RULES = ("geometric-mean", "median", "mean")
+
+
+@dataclass(frozen=True)
+class Effort:
+    """The sizes of the search's stages (:mod:`blockid.workflows.identify`)."""
+
+    name: str
+    folds: int  # folds of a record shorter than LONG_RECORD samples
+    folds_long: int  # folds of a longer one
+    max_order: int  # largest na of the ARX order grid
+    max_delay: int  # largest delay scanned
+    linear_keep: int  # ARX order sets carried to the structures
+    families: int | None  # block families per slot (None: all)
+    screen_nfev: int  # simulation-error iterations of a screening fit
+    screen_samples: int  # training samples of a screening fit (long records)
+    finalists: int  # candidates fitted again with final_nfev
+    final_nfev: int  # iterations of a finalist's fit
+    grow_steps: int  # richer-nonlinearity steps
+    #: (degree, monomials) of the polynomial state-space candidates
+    state_plans: tuple[tuple[int, str], ...] = ((3, "states"),)
+    #: largest number of parameters of a polynomial state-space candidate
+    state_parameters: int = 100
+    #: state dimensions carried from the linear state-space stage to the polynomial one
+    state_keep: int = 1
+    #: training samples of the finalists' and later fits on a long record (None: all)
+    final_samples: int | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+#: The efforts ``identify`` offers: the same data and effort give the same model.
+EFFORTS: dict[str, Effort] = {
+    e.name: e
+    for e in (
+        Effort(
+            name="quick", folds=3, folds_long=2, max_order=5, max_delay=10, linear_keep=1,
+            families=3, screen_nfev=15, screen_samples=10_000, finalists=2, final_nfev=60,
+            grow_steps=1, state_plans=((3, "states"),), state_parameters=60, state_keep=1,
+            final_samples=20_000,
+        ),
+        Effort(
+            name="standard", folds=4, folds_long=3, max_order=8, max_delay=20, linear_keep=2,
+            families=None, screen_nfev=30, screen_samples=20_000, finalists=3,
+            final_nfev=150, grow_steps=3,
+            state_plans=((2, "full"), (3, "states"), (3, "full")), state_parameters=300,
+            state_keep=2, final_samples=50_000,
+        ),
+        Effort(
+            name="thorough", folds=5, folds_long=3, max_order=10, max_delay=30, linear_keep=3,
+            families=None, screen_nfev=60, screen_samples=50_000, finalists=5,
+            final_nfev=300, grow_steps=4,
+            state_plans=((2, "full"), (3, "states"), (3, "full"), (4, "states")),
+            state_parameters=1200, state_keep=3, final_samples=None,
+        ),
+    )
+}  # fmt: skip
+
+
+def check_search(
+    structures: Sequence[str] | None,
+    effort: str | Effort,
+    rule: str = RULES[0],
+    jobs: int | None = None,
+    time_limit: float | None = None,
+) -> tuple[Effort, list[str] | None]:
+    """Check ``identify``'s search arguments; return the effort and the structures asked
+    for (None: the registry's searched ones)."""
+    if not isinstance(effort, Effort) and effort not in EFFORTS:
+        raise ParameterError(
+            f"effort={effort!r} is unknown; choose one of {', '.join(EFFORTS)}", parameter="effort"
+        )
+    if rule not in RULES:
+        raise ParameterError(f"rule={rule!r}: choose one of {', '.join(RULES)}", parameter="rule")
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+        raise ParameterError(f"jobs must be a whole number >= 1, got {jobs!r}", parameter="jobs")
+    if time_limit is not None and not time_limit > 0:
+        raise ParameterError(
+            f"time_limit must be a positive number of seconds, got {time_limit!r}",
+            parameter="time_limit",
+        )
+    asked = list(structures) if structures else None
+    unknown = [s for s in asked or () if s not in STRUCTURES]
+    if unknown:
+        raise ParameterError(
+            f"structures {unknown} are unknown; choose among {', '.join(STRUCTURES)}",
+            parameter="structures",
+        )
+    return effort if isinstance(effort, Effort) else EFFORTS[effort], asked
