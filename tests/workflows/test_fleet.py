@@ -133,6 +133,26 @@ def test_the_command(records, cluster, tmp_path):
     text = runner.invoke(app, args)
     assert "20 records: 0 fitted, 1 failed, 19 skipped" in text.stdout
     assert "loop07.csv" in text.stdout and "'abc' is not a number" in text.stdout
+    (failed,) = [line for line in text.stdout.splitlines() if line.startswith("failed:")]
+    assert failed.count("loop07.csv") == 1, failed  # the path once, not twice
+
+
+def test_ctrl_c_says_how_many_model_files_were_written(tmp_path, monkeypatch):
+    import blockid.workflows.fleet as fleet_module
+
+    def interrupted(files, out, *args, on_result=None, **kwargs):
+        for name in files[:2]:  # two records done, then Ctrl-C
+            on_result({"file": name, "status": "ok"})
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fleet_module, "fit_fleet", interrupted)
+    for name in ("a.csv", "b.csv", "c.csv"):
+        (tmp_path / name).write_text("u,y\n0,0\n")
+    args = ["fleet", str(tmp_path / "*.csv"), "-u", "u", "-y", "y", "-o", str(tmp_path / "o")]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 130
+    assert "interrupted: 2 model file(s) written to" in r.stderr
+    assert "no output file was written" not in r.stderr
 
 
 def test_a_cluster_of_its_own(records, tmp_path):

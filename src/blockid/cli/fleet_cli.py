@@ -114,10 +114,17 @@ def fleet(
     from blockid.workflows.fleet import fit_fleet
 
     read = {"sampling_time": ts, "time_column": time_column}
-    bar, on_result = progress_bar(quiet or json_out), None
+    bar = progress_bar(quiet or json_out)
+    task = None if bar is None else bar.add_task("fitting records", total=len(files))
+    written: list[str] = []  # model files of this run, for the message on Ctrl-C
+
+    def on_result(row: dict[str, Any]) -> None:
+        if row["status"] == "ok":
+            written.append(row["file"])
+        if bar is not None:
+            bar.advance(task)
+
     if bar is not None:
-        task = bar.add_task("fitting records", total=len(files))
-        on_result = lambda row: bar.advance(task)  # noqa: E731
         bar.start()
     try:
         result = fit_fleet(
@@ -137,6 +144,14 @@ def fleet(
     except ImportError as exc:  # dask missing: the library says what to install
         stderr.print(f"error: {exc}", markup=False)
         raise typer.Exit(code=2) from None
+    except KeyboardInterrupt:
+        stderr.print(
+            f"interrupted: {len(written)} model file(s) written to {out}/ before it, no "
+            "summary; run the same command again to fit the rest (records with a model "
+            "file are skipped)",
+            markup=False,
+        )
+        raise typer.Exit(code=130) from None
     finally:
         if bar is not None:
             bar.stop()
@@ -162,4 +177,6 @@ def _print(result: Any) -> None:
     )
     for row in result.rows:
         if row["status"] == "error":
-            stdout.print(f"failed: {row['file']}: {row['error']}", markup=False)
+            error = row["error"]  # most errors name the file already
+            where = "" if error.startswith(row["file"]) else f"{row['file']}: "
+            stdout.print(f"failed: {where}{error}", markup=False)
