@@ -147,6 +147,13 @@ def test_short_help(args):
     assert r.exit_code == 0 and r.stdout.startswith("Usage: ")
 
 
+@pytest.mark.parametrize("command", ["fit", "simulate", "export", "example-data", "identify"])
+def test_arguments_are_shown_by_their_name_not_a_python_type(command):
+    r = runner.invoke(app, [command, "-h"], env={"COLUMNS": "100"})
+    arguments = r.stdout.split("Arguments:")[1].split("Options:")[0]
+    assert "<" not in arguments and "list[" not in arguments, arguments  # was DATA <list[Path]>
+
+
 def test_bad_option_value_is_one_line_naming_the_flag(csv):
     r = runner.invoke(
         app,

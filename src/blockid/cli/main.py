@@ -44,6 +44,10 @@ __all__ = ["app", "main"]
 _HELP_WITHOUT_ARGS = getattr(click_exceptions, "NoArgsIsHelpError", ())
 
 
+def _no_type(ctx: Any = None) -> None:
+    return None
+
+
 class _OneLineErrors(TyperGroup):
     """The root group: a usage error (missing, unknown or bad option) is one line.
 
@@ -51,6 +55,15 @@ class _OneLineErrors(TyperGroup):
     reading a log get ``error: <message> (see 'blockid fit -h')`` and exit status 2,
     the same form as the library's errors.
     """
+
+    def get_command(self, ctx: Any, name: str) -> Any:
+        """The command, its arguments shown by their metavar alone in ``-h``
+        (``DATA``, not typer's ``DATA <list[Path]>``)."""
+        command = super().get_command(ctx, name)
+        for param in getattr(command, "params", ()):
+            if param.param_type_name == "argument" and param.metavar:
+                param.display_type_rich = _no_type
+        return command
 
     def main(
         self,
