@@ -246,7 +246,8 @@ def _check_standard_errors(case, default, changed, value):
     _same(default, changed)
     assert "standard_errors" not in default.settings
     errors_ = changed.settings["standard_errors"]
-    params = changed.model.to_dict()["parameters"]
+    doc = changed.model.to_dict()  # a state-space file holds its matrices at the top
+    params = doc["parameters"] if "parameters" in doc else changed.model.parameters
     assert set(errors_) == set(params)
     for name, value_ in params.items():
         assert np.shape(errors_[name]) == np.shape(value_)

@@ -23,6 +23,18 @@ after the initial conditions. Which predictions depends on the model:
   (key-term or backlash RLS) it is the same expression at that method's estimate: the
   uncertainty the estimate would have as an output-error estimate, a lower bound for
   the less efficient recursive estimators.
+* **State-space models** (linear and polynomial): the free-run Jacobian in the
+  normalised units the fit minimises, over the matrices ``θ`` and every experiment's
+  initial state (estimated alongside, as the fit does), with the output-error noise
+  model as above. The matrices are unique only up to a change of state basis
+  ``x -> T x``: ``J^T J`` is singular in those ``nx²`` directions, so the covariance is
+  its pseudo-inverse without them (the directions whose scaled eigenvalue is below
+  ``1e-10`` of the largest; their number is in ``basis``). Standard errors are then
+  those of the fitted basis, not of a canonical form; the band on simulated output,
+  which the basis does not change, is what to read (30 records of a second-order plant
+  at 26 dB: the 95 % band held the noise-free output in 95.5 % of the samples). The
+  output offsets (normalisation constants from the estimation data) enter the band as
+  the centred offsets below.
 * **ARX**: the least-squares expression ``σ² (Φ^T Φ)^{-1}`` of every output's regression,
   ``σ²`` from that output's one-step residuals. It assumes white equation error. For
   the recursive ARX methods the final ``P`` of the recursion is not kept by the fit; the
@@ -111,6 +123,9 @@ __all__ = [
 #: Relative singular value below which a direction of the scaled Jacobian counts as
 #: unidentifiable.
 _RANK_TOL = 1e-10
+#: Eigenvalues of a state-space model's scaled ``J^T J`` below this fraction of the
+#: largest are directions of the state basis (``T``), not of the model.
+_STATE_BASIS_TOL = 1e-10
 
 #: Methods whose estimate is a least-squares fit of the one-step (ARX) regression.
 _RECURSIVE_ARX = ("rls", "aw-rls", "hierarchical-rls")
@@ -329,6 +344,64 @@ def _simulation_covariance(
     )
 
 
+def _state_space_covariance(model: Any, data: Dataset, method: str | None) -> ParameterCovariance:
+    """``σ² (J^T J)^+`` of a (polynomial) state-space model's ``θ`` with every
+    experiment's initial state estimated alongside (module docstring, state space)."""
+    from blockid.fitting.state_space import information
+
+    H, residuals, sums = information(model, data)
+    r = np.concatenate([x.reshape(-1) for x in residuals])
+    p = model.free_parameters().size
+    names = list(model.free_parameter_names())
+    fixed = np.zeros(H.shape[0], dtype=bool)
+    if not np.any(model.D):  # fitted without feedthrough: D held at zero
+        fixed[:p] = [n.startswith("D[") for n in names]
+    free = np.flatnonzero(~fixed)
+    if not (np.all(np.isfinite(H)) and np.all(np.isfinite(r))):
+        raise DataError("the model's simulation on the data is not finite: no standard errors")
+    Hf = H[np.ix_(free, free)]
+    scale = np.sqrt(np.diag(Hf))
+    scale[scale == 0] = 1.0
+    lam, V = np.linalg.eigh(Hf / np.outer(scale, scale))
+    keep = lam > _STATE_BASIS_TOL * lam.max()
+    rank = int(keep.sum())
+    dof = r.size - rank
+    if dof < 1:
+        raise DataError(
+            f"{r.size} residual sample(s) for {rank} identifiable direction(s): too few to "
+            "estimate the noise variance and the parameters' standard errors"
+        )
+    sigma2 = float(r @ r) / dof  # normalised units, pooled over the outputs
+    inner = (V[:, keep] / lam[keep]) @ V[:, keep].T / np.outer(scale, scale)
+    cov = np.zeros((H.shape[0], H.shape[0]))
+    cov[np.ix_(free, free)] = sigma2 * inner
+    scales = np.asarray(model.output_scale, dtype=float).reshape(-1)
+    offsets = {}  # the output offsets: constants taken from the data, held by the fit
+    n = sum(e.n_samples for e in data.experiments)
+    for i, name in enumerate(model.outputs):
+        own = [x[:, i] for x in residuals]
+        step = np.zeros(H.shape[0])  # w = (J^T J)^+ J^T 1_i: θ imitating a unit offset
+        step[free] = inner @ sums[i, free]
+        offsets[name] = {
+            "variance": sigma2 * scales[i] ** 2 / _effective_samples(own, n),
+            "bias": -float(np.mean(np.concatenate(own))) * scales[i],
+            "direction": step[:p],
+        }
+    return ParameterCovariance(
+        names,
+        model.free_parameters(),
+        cov[:p, :p],
+        {name: sigma2 * float(s) ** 2 for name, s in zip(model.outputs, scales, strict=True)},
+        dof,
+        "free-run simulation Jacobian with each experiment's initial state (output-error "
+        "noise model, normalised units); pseudo-inverse without the state-basis "
+        f"directions ({len(free) - rank} left out): standard errors in the fitted basis"
+        + ("" if method in (None, "simulation-error") else f", at the {method} estimate")
+        + "; output offsets: constants taken from the estimation data",
+        offsets,
+    )
+
+
 def _arx_offsets(model: Any, data: Dataset, noise: dict[str, float]) -> dict[str, dict]:
     """The output offsets' noise variance and bias of a centred ARX model: the output
     noise is ``A^{-1} e``, so its mean has covariance ``A(1)^{-1} diag(σ²) A(1)^{-T} / N``."""
@@ -443,6 +516,10 @@ def parameter_covariance(
             f"the model maps {list(model.inputs)} to {list(model.outputs)} but the data have "
             f"inputs {list(data.inputs)} and outputs {list(data.outputs)}"
         )
+    from blockid.models.state_space import PolynomialStateSpace
+
+    if isinstance(model, PolynomialStateSpace):
+        return _state_space_covariance(model, data, method)
     if centered is None:
         centered = hasattr(model, "output_offset") and _is_centered(model, data)
     if hasattr(model, "free_parameters"):
@@ -506,8 +583,12 @@ def named_standard_errors(model: Any, cov: ParameterCovariance | np.ndarray) -> 
 
     Raises :class:`~blockid.errors.ParameterError` if ``cov`` does not fit the model.
     """
+    from blockid.models.state_space import PolynomialStateSpace
+
     matrix = cov.matrix if isinstance(cov, ParameterCovariance) else np.asarray(cov, float)
     se = np.sqrt(np.abs(np.diag(matrix)))
+    if isinstance(model, PolynomialStateSpace):  # shaped like its matrices
+        return _state_space_shaped(model, se)
     template = model.to_dict()["parameters"]
     positions = _free_positions(model)
     if len(positions) != se.size:
@@ -519,6 +600,23 @@ def named_standard_errors(model: Any, cov: ParameterCovariance | np.ndarray) -> 
     for k, v in zip(positions, se, strict=True):
         values[k] = _finite_or_none(v)
     return _unflatten(template, values)
+
+
+def _state_space_shaped(model: Any, se: np.ndarray) -> dict[str, Any]:
+    mats = [getattr(model, k) for k in "ABCDEF"]
+    sizes = [m.size for m in mats]
+    if se.size != sum(sizes):
+        raise ParameterError(
+            f"a covariance of {se.size} free parameters does not fit the "
+            f"{model.structure} model's {sum(sizes)} parameters"
+        )
+    parts = np.split(se, np.cumsum(sizes)[:-1])
+    keys = "ABCDEF" if model.n_monomials else "ABCD"
+    return {
+        k: [[_finite_or_none(v) for v in row] for row in part.reshape(m.shape)]
+        for k, part, m in zip("ABCDEF", parts, mats, strict=True)
+        if k in keys
+    }
 
 
 def standard_errors(model: Any, data: Dataset, method: str | None = None) -> dict[str, Any]:
@@ -559,6 +657,12 @@ def _output_sensitivities(
     model: Any, u: Any, y_initial: Any, names: list[str]
 ) -> tuple[np.ndarray, np.ndarray]:
     """Simulated output (N, ny) and its derivative (N, ny, p) to the free parameters."""
+    from blockid.models.state_space import PolynomialStateSpace
+
+    if isinstance(model, PolynomialStateSpace):
+        from blockid.fitting.state_space import output_sensitivities
+
+        return output_sensitivities(model, u, y_initial)
     if hasattr(model, "free_parameters"):
         from blockid.fitting.simulation_error import simulate_with_sensitivities
 

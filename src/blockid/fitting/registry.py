@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -56,6 +56,7 @@ __all__ = [
     "Method",
     "Option",
     "Structure",
+    "check_compared",
     "get_structure",
     "option_flag",
     "parse_orders",
@@ -176,7 +177,20 @@ def _block(value: Any, name: str) -> Any:
     try:
         return block_template(text, output=name == "output_block")
     except ParameterError as exc:
-        raise ParameterError(f"{name}: {exc}") from None
+        raise ParameterError(f"{name}: {exc}{_block_hint(text)}") from None
+
+
+def _block_hint(spec: str) -> str:
+    """`` (did you mean 'polynomial'?)`` for a misspelt block kind, else nothing."""
+    import difflib
+
+    from blockid.blocks.base import BLOCK_TYPES
+
+    kind = spec.partition(":")[0].strip().lower()
+    if kind in BLOCK_TYPES:
+        return ""
+    near = difflib.get_close_matches(kind, [k for k in BLOCK_TYPES if k != "linear"], n=1)
+    return f" (did you mean {near[0]!r}?)" if near else ""
 
 
 def _numbers(value: Any, name: str) -> Any:
@@ -567,7 +581,7 @@ def _key_term(blocks: tuple[str, ...]) -> Method:
 
 
 _CHECK = ("convergence_check", "max_mse_ratio")
-_STATE_SPACE = ("nx", "max_order", "horizon", "weighting", "feedthrough")
+_STATE_SPACE = ("nx", "max_order", "horizon", "weighting", "feedthrough", "standard_errors")
 _REFINEMENT = ("max_nfev", "ftol", "xtol", "gtol")
 
 #: The structures, in the order the command line lists them.
@@ -767,6 +781,27 @@ def get_structure(name: Any) -> Structure:
             f"structure={name!r} is unknown; choose one of {', '.join(STRUCTURES)}"
         )
     return STRUCTURES[name]
+
+
+def check_compared(structures: Sequence[str], method: str | None) -> None:
+    """Refuse what a comparison of ``structures`` would drop or fail on late: no or an
+    unknown structure, a shared ``method`` none of them offers (each structure takes the
+    method where it offers it, else its default)."""
+    if not structures:
+        raise ParameterError(
+            "no structure to compare; name at least one, e.g. arx,hammerstein",
+            parameter="structures",
+        )
+    unknown = [s for s in structures if s not in STRUCTURES]
+    if unknown:
+        raise ParameterError(
+            f"structures {unknown} are unknown; choose among {', '.join(STRUCTURES)}",
+            parameter="structures",
+        )
+    if method is not None and not any(method in STRUCTURES[s].method_names for s in structures):
+        raise ParameterError(
+            f"method={method!r} is offered by none of {', '.join(structures)}", parameter="method"
+        )
 
 
 #: Option kinds whose conversion imports the numerical stack (blocks, schedules);
