@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 DEMO_DIR ?= demo-output
 
-.PHONY: demo test lint bench convergence clean
+.PHONY: demo test test-slow lint bench convergence clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -16,8 +16,13 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/blockid demo --plot $(DEMO_DIR) --force
 
+# The tests on every core (pytest-xdist), without the long studies (marked slow)...
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4 -m "not slow"
+
+# ...which CI runs too (.ci/run): reproductions over many seeds, convergence runs.
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4 -m slow
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks

@@ -47,6 +47,7 @@ def test_key_term_hw_converges_on_white_noise_to_the_fast_plant(cs):
     assert result["default"]["err"] < 1e-10
 
 
+@pytest.mark.slow  # a convergence run of three 20-pass fits
 def test_key_term_hw_never_converges_on_paper_b_multisine(cs):
     plant, data, _ = _kt(cs, input="multisine")
     _, _, near = _kt(cs, input="multisine", init="truth ±5 %")

@@ -185,3 +185,23 @@ def test_a_linear_degree_gives_the_linear_model_and_bad_options_are_named():
         fit_polynomial_state_space(data, nx=2, degree=7)
     with pytest.raises(ParameterError, match="weighting"):
         subspace(data, weighting="pca")
+
+
+def test_a_fitted_model_measures_extrapolation_against_the_range_it_covered():
+    """The monomials' clipping range comes from the linear start; the refinement moves
+    the states, which may then cover another range. Measured against the clipping
+    range, a model was "extrapolating" by 50 % on its own estimation input, and
+    identify's trust check rejected the right model; the fit now records the range its
+    states cover, and a free run on that input stays within it."""
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 1500)
+    x, y = np.zeros(2), np.zeros(1500)
+    for k in range(1500):
+        y[k] = x[0]
+        x = np.array([0.6 * x[0] + 0.3 * x[1] + u[k], -0.2 * x[0] + 0.5 * x[1] + 0.3 * x[0] ** 2])
+    data = Dataset.from_arrays(u, y + 0.01 * rng.standard_normal(1500), ["u"], ["y"])
+    model = fit_model(data, "polynomial-state-space", nx=2, degree=2, max_nfev=15).model
+    assert max(model.range_excursion(u).values()) < 0.05
+    assert max(model.range_excursion(1.3 * u).values()) > 0.05
+    again = type(model).from_dict(model.to_dict())
+    np.testing.assert_array_equal(again.observed_lower, model.observed_lower)

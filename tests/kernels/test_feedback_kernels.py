@@ -164,6 +164,13 @@ def test_table_value_is_the_piecewise_linear_map(xs, ys, left, right):
 
 
 @pytest.mark.parametrize("xs, ys, left, right", TABLES)
+def test_a_nan_argument_gives_nan_not_a_division_by_zero(xs, ys, left, right):
+    """An exploding run (NaN) through a dead zone of zero width raised
+    ZeroDivisionError from the kernel (seen in identify on WH 2009)."""
+    assert np.isnan(table_value(np.array(xs), np.array(ys), left, right, np.nan))
+
+
+@pytest.mark.parametrize("xs, ys, left, right", TABLES)
 @pytest.mark.parametrize("n0", [0, 2])
 def test_table_loop_matches_the_textbook_recursion(xs, ys, left, right, n0):
     xs, ys = np.array(xs), np.array(ys)

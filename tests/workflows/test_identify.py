@@ -223,3 +223,30 @@ def test_cli_refuses_overlapping_ranges_and_the_old_budget_and_writes_the_model(
     assert doc["selected"]["scored_on"] == "validation"
     assert doc["search"]["effort"] == "quick" and doc["search"]["jobs"] == 1
     assert json.loads(out.read_text())["model"]["structure"] == "arx"
+
+
+def test_a_state_nonlinearity_gets_a_polynomial_state_space_model():
+    """A plant whose nonlinearity acts on its state (a squared state fed back): the
+    polynomial state-space model is chosen and beats the linear one by far; the
+    polynomial stage tries the best linear dimension and the largest tied with it."""
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 1500)
+    x, y = np.zeros(2), np.zeros(1500)
+    for k in range(1500):
+        y[k] = x[0]
+        x = np.array([0.6 * x[0] + 0.3 * x[1] + u[k], -0.2 * x[0] + 0.5 * x[1] + 0.3 * x[0] ** 2])
+    y += 0.01 * rng.standard_normal(1500)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    effort = Effort("ss", 3, 2, 3, 2, 1, 1, 15, 10_000, 1, 40, 0, ((2, "full"),), 60, 2)
+    result = identify(
+        data, structures=["state-space", "polynomial-state-space"], effort=effort, jobs=1
+    )
+    assert result.selected.candidate.structure == "polynomial-state-space"
+    linear = min(s.rmse for s in result.ranked if s.candidate.structure == "state-space")
+    assert result.selected.rmse < 0.2 * linear
+    tried = {s.candidate.options["nx"] for s in result.ranked + result.rejected
+             if s.stage == "nonlinear state space"}  # fmt: skip
+    ranked = [s for s in result.ranked if s.stage == "state space"]
+    tied = {s.candidate.options["nx"] for s in ranked if s.rmse <= ranked[0].rmse * 1.02}
+    assert ranked[0].candidate.options["nx"] in tried
+    assert max(tied) in tried or len(tried) == 2

@@ -154,6 +154,8 @@ def table_value(xs, ys, slope_left, slope_right, x):
     """The piecewise-linear map through ``(xs, ys)`` at ``x`` (``xs`` non-decreasing),
     continued beyond the end breakpoints with the given end slopes."""
     n = xs.shape[0]
+    if x != x:  # NaN (an exploding run): stays NaN, never a division by zero below
+        return x
     if x <= xs[0]:
         return ys[0] + slope_left * (x - xs[0])
     if x >= xs[n - 1]:
@@ -165,7 +167,10 @@ def table_value(xs, ys, slope_left, slope_right, x):
             lo = mid
         else:
             hi = mid
-    return ys[lo] + (x - xs[lo]) * (ys[hi] - ys[lo]) / (xs[hi] - xs[lo])
+    width = xs[hi] - xs[lo]
+    if width <= 0.0:  # coincident breakpoints: a jump, taken at its left value
+        return ys[lo]
+    return ys[lo] + (x - xs[lo]) * (ys[hi] - ys[lo]) / width
 
 
 @njit(cache=True)

@@ -666,6 +666,17 @@ def fit_subspace(
     )  # fmt: skip
 
 
+def with_observed_range(model: PolynomialStateSpace, data: Dataset) -> PolynomialStateSpace:
+    """``model`` with the range its ``z = [x; u_n]`` covers on ``data`` (each experiment
+    from the state its first outputs give) recorded for the extrapolation checks."""
+    z = []
+    for e in data.experiments:
+        x0 = model.initial_state(e.u, e.y[: 4 * model.nx])
+        z.append(np.hstack((model.states(e.u, x0), model.normalised_input(e.u))))
+    zz = np.vstack(z)
+    return model.replace(observed_lower=zz.min(axis=0), observed_upper=zz.max(axis=0))
+
+
 def fit_polynomial_state_space(
     data: Dataset,
     *,
@@ -733,6 +744,7 @@ def fit_polynomial_state_space(
         template, data, feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol,
         gtol=gtol,
     )  # fmt: skip
+    model = with_observed_range(model, data)
     method = "subspace+polynomial-state-space"
     metrics = _check(model, data, method)
     settings = {

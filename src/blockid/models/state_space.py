@@ -117,6 +117,10 @@ class PolynomialStateSpace(Model):
         (nm, nx + nu): the monomials (:func:`monomial_exponents`); none by default.
     lower, upper : array_like, optional
         Clipping range of ``z = [x; u_n]`` for the monomials (default unbounded).
+    observed_lower, observed_upper : array_like, optional
+        The range ``z`` covered on the estimation data with the fitted parameters (the
+        fit records it), against which :meth:`range_excursion` measures new data;
+        default the clipping range.
     input_offset, input_scale, output_offset, output_scale : array_like, optional
         Normalisation of the signals (default 0 and 1).
     K : array_like, optional
@@ -147,6 +151,8 @@ class PolynomialStateSpace(Model):
         *,
         lower: Any = None,
         upper: Any = None,
+        observed_lower: Any = None,
+        observed_upper: Any = None,
         input_offset: Any = None,
         input_scale: Any = None,
         output_offset: Any = None,
@@ -178,6 +184,10 @@ class PolynomialStateSpace(Model):
         self.upper = _vector(upper, nx + nu, "upper", np.inf)
         if (self.lower > self.upper).any():
             raise OrderError("every lower bound of the monomials' range must be <= its upper")
+        self.observed_lower = _vector(observed_lower, nx + nu, "observed_lower", -np.inf)
+        self.observed_upper = _vector(observed_upper, nx + nu, "observed_upper", np.inf)
+        if observed_lower is None or observed_upper is None:
+            self.observed_lower, self.observed_upper = self.lower, self.upper
         self.input_offset = _vector(input_offset, nu, "input_offset", 0.0)
         self.input_scale = _vector(input_scale, nu, "input_scale", 1.0)
         self.output_offset = _vector(output_offset, ny, "output_offset", 0.0)
@@ -270,14 +280,28 @@ class PolynomialStateSpace(Model):
         """A copy with some constructor arguments changed."""
         kwargs = dict(
             A=self.A, B=self.B, C=self.C, D=self.D, E=self.E, F=self.F, exponents=self.exponents,
-            lower=self.lower, upper=self.upper, input_offset=self.input_offset,
+            lower=self.lower, upper=self.upper, observed_lower=self.observed_lower,
+            observed_upper=self.observed_upper, input_offset=self.input_offset,
             input_scale=self.input_scale, output_offset=self.output_offset,
             output_scale=self.output_scale, K=self.K, sampling_time=self.sampling_time,
         )  # fmt: skip
+        defaulted = np.array_equal(self.observed_lower, self.lower) and np.array_equal(
+            self.observed_upper, self.upper
+        )
+        if defaulted and {"lower", "upper"} & set(changes) and "observed_lower" not in changes:
+            kwargs.update(observed_lower=None, observed_upper=None)  # follow the new range
         kwargs.update(changes)
         cls = PolynomialStateSpace if np.asarray(kwargs["exponents"]).size else type(self)
         if cls is StateSpace:
-            for key in ("E", "F", "exponents", "lower", "upper"):
+            for key in (
+                "E",
+                "F",
+                "exponents",
+                "lower",
+                "upper",
+                "observed_lower",
+                "observed_upper",
+            ):
                 kwargs.pop(key)
         return cls(self.inputs, self.outputs, **kwargs)
 
@@ -318,6 +342,16 @@ class PolynomialStateSpace(Model):
             out[k] = x
             pnlss_simulate(*self._arrays(), np.ascontiguousarray(un[k : k + 1]), x, one)
         return out
+
+    def settled_state(self, un0: np.ndarray, samples: int = 1000) -> np.ndarray:
+        """The state the model settles in under the constant normalised input ``un0``
+        (one row) from ``x = 0``: rest at the record's first input, where a free run
+        "from rest" starts (``x = 0`` is rest only at the estimation data's mean)."""
+        x = np.zeros(self.nx)
+        y = np.zeros((samples, len(self.outputs)))
+        with np.errstate(all="ignore"):
+            pnlss_simulate(*self._arrays(), np.repeat(np.atleast_2d(un0), samples, 0), x, y)
+        return x if np.all(np.isfinite(x)) else np.zeros(self.nx)
 
     def initial_state(self, u: Any, y_initial: Any) -> np.ndarray:
         """``x(0)`` fitted to the measured outputs ``y_initial`` (their number ``n``; the
@@ -390,18 +424,21 @@ class PolynomialStateSpace(Model):
         return pred
 
     def range_excursion(self, u: Any) -> dict[str, float]:
-        """How far a free run from rest on ``u`` drives ``z = [x; u_n]`` beyond the range
-        its monomials are clipped to (fractions of each range's width); empty for a
-        linear model or an unbounded range."""
+        """How far a free run on ``u`` from rest at its first sample
+        (:meth:`settled_state`) drives ``z = [x; u_n]`` beyond the range it covered on
+        the estimation data (``observed_lower``/``observed_upper``; fractions of each
+        range's width); empty for a linear model or an unbounded range."""
         if not self.n_monomials:
             return {}
-        z = np.hstack([self.states(u), self.normalised_input(u)])
+        un = self.normalised_input(u)
+        z = np.hstack([self.states(u, self.settled_state(un[:1])), un])
         inputs = ["u" if i == 0 else f"u{i + 1}" for i in range(len(self.inputs))]
         names = [f"x{i + 1}" for i in range(self.nx)] + inputs
         out = {}
+        lo, hi = self.observed_lower, self.observed_upper
         for i, name in enumerate(names):
-            if np.isfinite(self.lower[i]) and np.isfinite(self.upper[i]):
-                out[name] = excursion((self.lower[i], self.upper[i]), z[:, i])
+            if np.isfinite(lo[i]) and np.isfinite(hi[i]):
+                out[name] = excursion((lo[i], hi[i]), z[:, i])
         return out
 
     def extrapolation(self, u: Any) -> list[str]:
@@ -411,7 +448,7 @@ class PolynomialStateSpace(Model):
             if value > 0.02:
                 what = f"state {name}" if name.startswith("x") else f"input {name}"
                 notes.append(
-                    f"the {what} leaves the range the monomials were fitted on by up to "
+                    f"the {what} leaves the range it covered in the estimation data by up to "
                     f"{100 * value:.0f} % of it: the nonlinear terms hold their boundary "
                     "values there"
                 )
@@ -444,6 +481,8 @@ class PolynomialStateSpace(Model):
             out.update(
                 exponents=self.exponents.tolist(), E=self.E.tolist(), F=self.F.tolist(),
                 lower=finite(self.lower), upper=finite(self.upper),
+                observed_lower=finite(self.observed_lower),
+                observed_upper=finite(self.observed_upper),
             )  # fmt: skip
         return out
 
@@ -466,7 +505,8 @@ class PolynomialStateSpace(Model):
                 return StateSpace(*args, **kwargs)
             return PolynomialStateSpace(
                 *args, data["E"], data["F"], data["exponents"], lower=bound("lower", -np.inf),
-                upper=bound("upper", np.inf), **kwargs,
+                upper=bound("upper", np.inf), observed_lower=bound("observed_lower", -np.inf),
+                observed_upper=bound("observed_upper", np.inf), **kwargs,
             )  # fmt: skip
         except OrderError as exc:
             raise ModelFileError(f"the state-space model description is invalid: {exc}") from None

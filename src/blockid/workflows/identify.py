@@ -758,26 +758,36 @@ def _block_structures(
 
 def _state_space(search: _Search, states: list[str], screen: dict[str, Any]) -> None:
     """Linear state-space models at every state dimension up to the effort's largest
-    order, then polynomial ones at the best ``state_keep`` of those dimensions."""
-    from blockid.fitting.state_space import subspace
-
+    order, then polynomial ones at ``state_keep`` of those dimensions: the best (the
+    smallest among near-ties), then the largest dimension tied with it whose polynomial
+    candidates fit the parameter budget, then the next best. A linear model's free-run
+    error cannot tell the dynamic order apart when the nonlinear distortion dominates
+    it (Wiener-Hammerstein 2009: every dimension from 4 to 8 within 0.3 %), and the
+    polynomial terms need the states the dynamics have: both ends of the tie are tried.
+    """
     eff = search.effort
     nxs = list(range(1, eff.max_order + 1))  # linear fits are cheap: every dimension
-    try:
-        with np.errstate(all="ignore"):
-            nxs = sorted({*nxs, subspace(search.data, max_order=eff.max_order).nx})
-    except BlockidError:
-        pass  # too short for the horizon
     search.run("state space", state_candidates(states, nxs, screen), True)
     linear = search.ranked([s for s in search.order if s.stage == "state space"])
-    best = []
-    for s in linear:
-        if s.candidate.options["nx"] not in best:
-            best.append(s.candidate.options["nx"])
-    best = best[: eff.state_keep] or nxs[:1]
+    if not linear:
+        return
     signals = (search.data.n_inputs, search.data.n_outputs)
-    candidates = polynomial_state_candidates(
-        states, best, eff.state_plans, signals, screen, eff.state_parameters
-    )
-    if candidates:
-        search.run("nonlinear state space", candidates, True)
+
+    def candidates(dims: list[int]) -> list[Candidate]:
+        return polynomial_state_candidates(
+            states, dims, eff.state_plans, signals, screen, eff.state_parameters
+        )
+
+    ranked = list(dict.fromkeys(s.candidate.options["nx"] for s in linear))
+    chosen = ranked[:1]
+    tied = [
+        s.candidate.options["nx"] for s in linear if s.rmse <= linear[0].rmse * (1 + search.tie)
+    ]
+    for nx in sorted(set(tied), reverse=True):
+        if len(chosen) < eff.state_keep and nx not in chosen and candidates([nx]):
+            chosen.append(nx)
+            break
+    chosen += [nx for nx in ranked if nx not in chosen][: max(0, eff.state_keep - len(chosen))]
+    found = candidates(chosen)
+    if found:
+        search.run("nonlinear state space", found, True)
