@@ -53,16 +53,28 @@ ARGUMENT_ERRORS = [
     (["fit", "data.csv", "-u", "u", "-y", "y", "--json", "--estimation", "5"], "START:STOP"),
     (["fit", "data.xlsx", "-u", "u", "-y", "y", "--json"], "unknown data file type"),
     (
-        ["fit", "data.csv", "-u", "u", "-y", "y", "--json", "--structure", "hammerstein",
-         "--forgetting", "0.99", "--method", "nope"],
+        [
+            "fit",
+            "data.csv",
+            "-u",
+            "u",
+            "-y",
+            "y",
+            "--json",
+            "--structure",
+            "hammerstein",
+            "--forgetting",
+            "0.99",
+            "--method",
+            "nope",
+        ],
         "nope",
     ),  # fmt: skip
     (["identify", "data.csv", "-u", "u", "-y", "y", "--effort", "huge"], "effort='huge'"),
     (["identify", "data.csv", "-u", "u", "-y", "y", "--jobs", "0"], "jobs must be"),
     (["identify", "data.csv", "-u", "u", "-y", "y", "--structures", "nope"], "nope"),
     (
-        ["compare", "data.csv", "-u", "u", "-y", "y", "--estimation", "0:2",
-         "--validation", "1:3"],
+        ["compare", "data.csv", "-u", "u", "-y", "y", "--estimation", "0:2", "--validation", "1:3"],
         "overlap",
     ),  # fmt: skip
     (["simulate", "missing.json", "data.csv"], "missing.json does not exist"),

@@ -49,10 +49,17 @@ __all__ = [
 ]
 
 # rich falls back to 80 columns when writing to a pipe or file, which truncates numbers
-# in tables; use a wide console there (a terminal keeps its own width).
-stdout = Console(highlight=False, soft_wrap=True, width=None if sys.stdout.isatty() else 160)
+# in tables; use a wide console there (a terminal keeps its own width). No emoji codes:
+# a range such as 0:100:2 in a message stays as typed.
+stdout = Console(
+    highlight=False, emoji=False, soft_wrap=True, width=None if sys.stdout.isatty() else 160
+)
 stderr = Console(
-    stderr=True, highlight=False, soft_wrap=True, width=None if sys.stderr.isatty() else 400
+    stderr=True,
+    highlight=False,
+    emoji=False,
+    soft_wrap=True,
+    width=None if sys.stderr.isatty() else 400,
 )
 
 #: Flags of the library parameters that are not estimator options (those are
@@ -71,6 +78,9 @@ FLAGS = {
     "method": "--method",
     "validation_bandwidth": "--validation-bandwidth",
     "initial_samples": "--initial-samples",
+    "effort": "--effort",
+    "jobs": "--jobs",
+    "time_limit": "--time-limit",
 }
 
 
@@ -195,8 +205,12 @@ def refuse_to_overwrite(out: Path | None, force: bool) -> None:
 
 def refuse_figures(folder: Path | None, names: Sequence[str], force: bool) -> None:
     """Stop before any work when ``--plot DIR`` holds a figure the command would write
-    and ``--force`` was not given."""
-    if folder is None or force:
+    and ``--force`` was not given; refuse a DIR that is a file."""
+    if folder is None:
+        return
+    if folder.exists() and not folder.is_dir():
+        raise ParameterError(f"{folder} is a file, not a folder; give another --plot DIR")
+    if force:
         return
     existing = [folder / n for n in names if (folder / n).exists()]
     if existing:

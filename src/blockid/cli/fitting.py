@@ -175,16 +175,18 @@ def compare(
     structure takes the estimator options it uses and leaves the others.
     """
     from blockid.data.ranges import check_disjoint, parse_range
+    from blockid.fitting.registry import COMPARED_BY_DEFAULT, check_compared
 
     refuse_to_overwrite(report, force)
     check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
     check_disjoint(estimation, validation)
+    names = {} if structures is None else {"structures": _names(structures)}
+    check_compared(names.get("structures", COMPARED_BY_DEFAULT), method)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
     from blockid.workflows import compare_structures
 
     est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
     val = data.select(*parse_range(validation, "--validation"), what="--validation")
-    names = {} if structures is None else {"structures": _names(structures)}
     opts = given(options)
     if report is not None:  # trajectories and standard errors for the report's figures
         opts = {"record_history": True, "standard_errors": True, **opts}

@@ -111,7 +111,10 @@ def fleet(
     """
     files = _expand(patterns)
     check_arguments(structure=structure, method=method, options=given(options))
+    from blockid.data.dataset import _check_sampling_time
     from blockid.workflows.fleet import fit_fleet
+
+    _check_sampling_time(ts)  # every record would fail on it: refuse before the cluster starts
 
     read = {"sampling_time": ts, "time_column": time_column}
     bar = progress_bar(quiet or json_out)

@@ -99,6 +99,11 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
                 "--band applies to simulate only (a band of the free-run output)",
                 parameter="band",
             )
+        if band is not None and not 0.0 < band < 1.0:
+            raise ParameterError(
+                f"--band must be a confidence level between 0 and 1 (e.g. 0.95), got {band:g}",
+                parameter="band",
+            )
         refuse_to_overwrite(out, force)
         check_arguments(data_paths, ranges={"--range": rng}, model=model_path, table=out)
         from blockid.data import write_table
@@ -112,7 +117,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             data_paths,
             list(model.inputs),
             list(model.outputs),
-            ts or model.sampling_time,
+            ts if ts is not None else model.sampling_time,  # --ts 0 is refused, not dropped
             time_column,
             experiment_column,
             rng,

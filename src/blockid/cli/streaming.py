@@ -169,6 +169,11 @@ def stream(
 
     if checkpoint and out is None:
         raise ParameterError("--checkpoint N writes to -o FILE: give one", parameter="out")
+    for name, scale in (("--input-scale", input_scale), ("--output-scale", output_scale)):
+        if scale is not None and not 0.0 < scale < float("inf"):
+            raise ParameterError(
+                f"{name} must be a positive number (the signal's expected spread), got {scale:g}"
+            )
     refuse_to_overwrite(out, force)
     check_arguments(model=start)
     if structure is not None:

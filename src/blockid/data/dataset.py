@@ -139,10 +139,14 @@ def _check_sampling_time(sampling_time: float | None) -> float | None:
         value = float(sampling_time)
     except (TypeError, ValueError):
         raise ParameterError(
-            f"sampling_time must be a positive number of seconds, got {sampling_time!r}"
+            f"sampling_time must be a positive number of seconds, got {sampling_time!r}",
+            parameter="sampling_time",
         ) from None
     if not np.isfinite(value) or value <= 0.0:
-        raise ParameterError(f"sampling_time must be a positive number of seconds, got {value!r}")
+        raise ParameterError(
+            f"sampling_time must be a positive number of seconds, got {value!r}",
+            parameter="sampling_time",
+        )
     return value
 
 

@@ -107,12 +107,17 @@ def is_stream(path: PathLike) -> bool:
 
 def read_model_document(path: PathLike) -> Any:
     """The JSON document of a model file, or a :class:`~blockid.errors.ModelFileError`
-    that says what is wrong with the file (missing, not text, not JSON)."""
+    that says what is wrong with the file (missing, a folder, empty, not text, not JSON)."""
     path = Path(path)
+    if path.is_dir():
+        raise ModelFileError(f"{path} is a folder, not a model file; name the .json file in it")
     if not path.is_file():
         raise ModelFileError(f"model file {path} does not exist")
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
+        if not text.strip():
+            raise ModelFileError(f"model file {path} is empty; refit the model or restore the file")
+        return json.loads(text)
     except json.JSONDecodeError as exc:
         raise ModelFileError(
             f"{path} is not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg}); "

@@ -282,6 +282,11 @@ def _read_text(
 ) -> tuple[pd.DataFrame, _Where, str]:
     with open(path, "rb") as handle:
         head = handle.read(_SNIFF_BYTES)
+    if b"\x00" in head:  # text in UTF-8 or a Windows code page never holds a NUL byte
+        raise DataError(
+            f"{shown} is not a text file: it holds NUL bytes (binary or compressed data, or "
+            "UTF-16 text); save the data as delimited text in UTF-8, or as .parquet or .mat"
+        )
     encoding = _encoding(head)
     sample = head.decode(encoding, errors="replace")
     if not sample.strip():

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from blockid._kernels.arx import arx_simulate
-from blockid.errors import OrderError
+from blockid.errors import ModelFileError, OrderError
 from blockid.models.base import Model
 
 __all__ = ["ARX", "order_matrix"]
@@ -320,6 +320,14 @@ class ARX(Model):
     def from_dict(cls, data: dict[str, Any]) -> ARX:
         params = data["parameters"]
         offsets = data.get("offsets", {})
+        for yi in data["outputs"]:
+            for what in ("a", "b"):
+                for name, coeffs in params[yi][what].items():
+                    if not isinstance(coeffs, list) or not all(_is_number(c) for c in coeffs):
+                        raise ModelFileError(
+                            f"parameters.{yi}.{what}.{name} must be a list of numbers, got "
+                            f"{coeffs!r}: the file was edited or damaged, refit or restore it"
+                        )
         return cls(
             data["inputs"],
             data["outputs"],
@@ -332,3 +340,8 @@ class ARX(Model):
             input_offset=[offsets.get("inputs", {}).get(n, 0.0) for n in data["inputs"]],
             output_offset=[offsets.get("outputs", {}).get(n, 0.0) for n in data["outputs"]],
         )
+
+
+def _is_number(value: Any) -> bool:
+    """A JSON number (not a boolean, a string or null)."""
+    return isinstance(value, int | float) and not isinstance(value, bool)

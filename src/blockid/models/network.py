@@ -42,7 +42,8 @@ def check_wiring(connections: Sequence[tuple[str, Sequence[str], Sequence[str]]]
     OrderError
         Naming the cycle (``'S1' -> v1 -> 'S2' -> v2 -> 'S1'``): every signal in it is
         made inside the network, so none is an external input and the loop has no
-        start; or naming a signal two subsystems make.
+        start; naming a signal two subsystems make, a name two subsystems share, or a
+        subsystem that reads or makes no signal.
 
     Examples
     --------
@@ -53,6 +54,15 @@ def check_wiring(connections: Sequence[tuple[str, Sequence[str], Sequence[str]]]
     ...     print(str(exc).split(";")[0])
     the subsystems form a cycle: 'S1' -> v1 -> 'S2' -> v2 -> 'S1'
     """
+    names = [name for name, _, _ in connections]
+    for name, inputs, outputs in connections:
+        if names.count(name) > 1:
+            raise OrderError(
+                f"{names.count(name)} subsystems are named {name!r}; give each its own name"
+            )
+        for what, signals in (("reads", inputs), ("makes", outputs)):
+            if not signals:
+                raise OrderError(f"subsystem {name!r} {what} no signal; name at least one")
     maker: dict[str, str] = {}
     for name, _, outputs in connections:
         for sig in outputs:
@@ -218,7 +228,10 @@ class Network(Model):
         subs = data["subsystems"]
         if not isinstance(subs, list):
             raise ModelFileError("a network's 'subsystems' must be a list")
-        return cls(
-            [(s["name"], model_from_dict(s["model"])) for s in subs],
-            sampling_time=data.get("sampling_time"),
-        )
+        subsystems = []
+        for s in subs:
+            try:
+                subsystems.append((s["name"], model_from_dict(s["model"])))
+            except ModelFileError as exc:  # say which subsystem is damaged
+                raise ModelFileError(f"subsystem {s['name']!r}: {exc}") from None
+        return cls(subsystems, sampling_time=data.get("sampling_time"))

@@ -91,6 +91,12 @@ def model_from_document(doc: Any, source: str = "the model document") -> Model:
     if "model" not in doc:
         raise ModelFileError(f'{source} has no "model" entry; the file is damaged')
     check_finite(doc["model"], source)
+    ts = doc["model"].get("sampling_time") if isinstance(doc["model"], dict) else None
+    if ts is not None and (isinstance(ts, bool) or not isinstance(ts, int | float) or ts <= 0):
+        raise ModelFileError(
+            f"{source} has sampling_time {ts!r}; a model's sampling time is a positive number "
+            "of seconds (or null): the file was edited or damaged, refit or restore it"
+        )
     try:
         return model_from_dict(doc["model"])
     except ModelFileError as exc:
