@@ -219,7 +219,7 @@ def test_static_block_plot_draws_the_block_over_the_given_range():
         (line,) = ax.get_lines()
         np.testing.assert_array_equal(line.get_xdata(), [-1.0, -0.5, 0.0, 0.5, 1.0])
         np.testing.assert_array_equal(line.get_ydata(), [-1.0, 0.0, 0.0, 0.0, 0.5])
-        assert line.get_label() == "DeadZone"
+        assert line.get_label() == "dead zone"  # readable, not the class name
     finally:
         plt.close(ax.figure)
 

@@ -106,7 +106,7 @@ def test_the_blocks_figure_of_a_feedback_model_draws_the_fed_back_block():
     np.testing.assert_allclose(v, u - model.feedback(y))
     fig = plot_blocks(model, u=u)
     (ax,) = fig.axes
-    assert ax.get_title() == "feedback block: dead-zone"
+    assert ax.get_title() == "feedback block: dead zone"  # the kind in words
     grid = ax.lines[0].get_xdata()
     assert grid.min() == pytest.approx(y.min()) and grid.max() == pytest.approx(y.max())
     plt.close(fig)

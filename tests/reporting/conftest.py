@@ -64,3 +64,33 @@ def example_report(tmp_path_factory: pytest.TempPathFactory) -> ExampleReport:
     result = CliRunner().invoke(cli_app(), ["report", str(data), *ARGS, "-o", str(path)])
     assert result.exit_code == 0, result.output
     return ExampleReport(folder, data, path, path.read_text(encoding="utf-8"), result.output)
+
+
+# ------------------------------------------------------------------ library level
+@dataclass
+class Compared:
+    data: object
+    est: object
+    val: object
+    result: object
+    html: str
+
+
+@pytest.fixture(scope="session")
+def compared() -> Compared:
+    """ARX and Hammerstein models of the example, fitted with standard errors, and the
+    report of them (library level, no provenance)."""
+    from blockid.data import Dataset
+    from blockid.reporting import build_report
+    from blockid.workflows import compare_structures
+    from blockid.workflows.examples import example_record
+
+    record = example_record("electrohydraulic")
+    data = Dataset.from_frame(record.frame, ["current"], ["velocity"], time_column="t")
+    est, val = data.select(0, 1100), data.select(1100, 2200)
+    options = dict(na=3, nb=3, nk=8, standard_errors=True)
+    result = compare_structures(est, val, ["arx", "hammerstein"], options=options)
+    assert all(m.fit is not None for m in result.models)
+    html = build_report(compare=result, data=data, estimation=est, validation=val,
+                        estimation_range="0:1100", validation_range="1100:2200")  # fmt: skip
+    return Compared(data, est, val, result, html)

@@ -142,7 +142,7 @@ def test_confidence_bands_are_drawn_from_standard_errors(hammerstein):
 
 
 def test_standard_errors_in_the_shape_of_the_parameters_are_matched(hammerstein):
-    from blockid.reporting.uncertainty import free_standard_errors
+    from blockid.plotting.uncertainty import free_standard_errors
 
     fit = hammerstein[3].models[0].fit
     model = fit.model
@@ -187,7 +187,10 @@ def test_report_of_an_identify_result(hammerstein):
     assert "<td>unstable</td>" in html
     assert "effort quick" in html and "The time limit cut the search" in html
     assert "free-run simulation on the validation range 1100:2200" in html
-    assert len(IMG.findall(html)) == 3  # data, output, blocks (one model: no bar chart)
+    # data, output, linear dynamics, blocks (one model and no ARX in the search: no bar
+    # chart, no search figure, no linear baseline)
+    assert len(IMG.findall(html)) == 4
+    assert "Linear baseline: none, the search scored no ARX model" in html
     apart = build_report(identify=identified, estimation=est, validation=val)  # no record
     assert "Measured estimation data" in apart and "Measured validation data" in apart
     assert "free-run simulation on the validation data" in apart

@@ -95,3 +95,88 @@ def test_the_screenshot_is_not_blank(example_report, tmp_path):
     levels = (pixels * 31).astype(int)  # 32 levels per channel
     colours = np.unique(levels[..., 0] * 1024 + levels[..., 1] * 32 + levels[..., 2])
     assert colours.size > 50  # figures in colour, not only black text
+
+
+# ------------------------------------------------------------------ layout, new sections
+LAYOUT = """<script>
+window.addEventListener("load", function () {
+  var broken = [];
+  document.querySelectorAll("td:not(.wrap), th, p, figcaption, h3").forEach(function (el) {
+    var walker = document.createTreeWalker(el, NodeFilter.SHOW_TEXT);
+    var node;
+    while ((node = walker.nextNode())) {
+      var words = /[^\\s\\-]+/g, m;
+      while ((m = words.exec(node.data))) {
+        var range = document.createRange();
+        range.setStart(node, m.index);
+        range.setEnd(node, m.index + m[0].length);
+        var tops = new Set(Array.prototype.filter.call(range.getClientRects(), function (r) {
+          return r.width > 0;
+        }).map(function (r) { return Math.round(r.top); }));
+        if (tops.size > 1) { broken.push(m[0]); }
+      }
+    }
+  });
+  var scrolled = [];
+  document.querySelectorAll("table").forEach(function (t) {
+    if (t.scrollWidth > t.clientWidth + 1) { scrolled.push(t.rows[0].innerText); }
+  });
+  var out = document.createElement("pre");
+  out.id = "blockid-layout";
+  out.textContent = JSON.stringify({broken: broken, scrolled: scrolled,
+    page: document.documentElement.scrollWidth, window: window.innerWidth});
+  document.body.appendChild(out);
+});
+</script>
+"""
+
+
+def _layout(page: str, tmp_path, width: int) -> dict:
+    probe = tmp_path / f"layout{width}.html"
+    probe.write_text(page.replace("</body>", LAYOUT + "</body>"), encoding="utf-8")
+    run = _chromium(tmp_path, "--virtual-time-budget=10000", f"--window-size={width},2000",
+                    "--dump-dom", probe.as_uri())  # fmt: skip
+    found = re.search(r'<pre id="blockid-layout">(.*?)</pre>', run.stdout, re.S)
+    assert found, f"no result from the page; chromium said: {run.stderr[-2000:]}"
+    return json.loads(html.unescape(found.group(1)))
+
+
+def test_no_word_is_broken_and_nothing_overflows(example_report, tmp_path):
+    """At a desktop width every word stays whole and every table fits the column; in a
+    narrow window the page still does not overflow (a wide table scrolls in its box)."""
+    wide = _layout(example_report.html, tmp_path, 1280)
+    assert wide["broken"] == [] and wide["scrolled"] == []
+    assert wide["page"] <= wide["window"]
+    narrow = _layout(example_report.html, tmp_path, 640)
+    assert narrow["broken"] == []  # a table too wide scrolls: its words are not split
+    assert narrow["page"] <= narrow["window"]
+
+
+def _only(page: str, anchors: tuple[str, ...]) -> str:
+    """The report with only the sections ``anchors`` (same head and style sheet)."""
+    head = page[: page.index("<body>") + len("<body>")]
+    parts = [re.search(rf'<section id="{a}">.*?</section>', page, re.S).group(0) for a in anchors]
+    return head + "\n" + "\n".join(parts) + "\n</body>\n</html>\n"
+
+
+@pytest.mark.parametrize(
+    "anchors, figures",
+    [(("parameters",), False), (("linear",), True), (("outputs", "blocks"), True)],
+)
+def test_the_new_sections_are_drawn(example_report, tmp_path, anchors, figures):
+    """Screenshots of the parameter tables, the linear dynamics, and the outputs (zoom
+    and all) with the blocks: not blank, and in colour where they hold figures."""
+    from matplotlib.image import imread
+
+    view = tmp_path / f"{'-'.join(anchors)}.html"
+    view.write_text(_only(example_report.html, anchors), encoding="utf-8")
+    shot = tmp_path / f"{'-'.join(anchors)}.png"
+    run = _chromium(tmp_path, "--hide-scrollbars", "--window-size=1200,1800",
+                    f"--screenshot={shot}", view.as_uri())  # fmt: skip
+    assert shot.exists(), run.stderr[-2000:]
+    pixels = imread(shot)[..., :3]
+    assert np.any(pixels < 0.9, axis=-1).mean() > 0.02  # tables or figures, not blank
+    if figures:
+        levels = (pixels * 31).astype(int)
+        colours = np.unique(levels[..., 0] * 1024 + levels[..., 1] * 32 + levels[..., 2])
+        assert colours.size > 50

@@ -35,6 +35,20 @@ class FitResult:
     history: dict[str, Any] = field(default_factory=dict)
     metrics_mode: str = "one-step"
 
+    def _repr_html_(self) -> str:
+        """The notebook display: :func:`blockid.plotting.notebook.fit_html`."""
+        from blockid.plotting.notebook import fit_html
+
+        return fit_html(self)
+
+    def plot(self, data: Any = None, *, which: str | None = None) -> Any:
+        """The report's figures of the fit (with bands from its standard errors, and a
+        recursive estimator's parameter trajectories): a dict of matplotlib figures, or
+        the one ``which`` names; see :func:`blockid.plotting.notebook.model_figures`."""
+        from blockid.plotting.notebook import model_figures
+
+        return model_figures(self.model, data, fit=self, which=which)
+
     def estimation_record(self) -> dict[str, Any]:
         """The ``"estimation"`` entry of the model file."""
         return {

@@ -59,6 +59,20 @@ class Model(ABC):
     def from_dict(cls, data: dict[str, Any]) -> Model:
         """Inverse of :meth:`to_dict`."""
 
+    def _repr_html_(self) -> str:
+        """The notebook display: :func:`blockid.plotting.notebook.model_html`."""
+        from blockid.plotting.notebook import model_html
+
+        return model_html(self)
+
+    def plot(self, data: Any = None, *, which: str | None = None) -> Any:
+        """The report's figures of the model (free run on ``data``, blocks, linear
+        dynamics): a dict of matplotlib figures, or the one ``which`` names; see
+        :func:`blockid.plotting.notebook.model_figures`."""
+        from blockid.plotting.notebook import model_figures
+
+        return model_figures(self, data, which=which)
+
     def parameter_table(self) -> list[tuple[str, str]]:
         """``(name, values)`` rows for a printed table of the model's parameters: its
         named ``parameters``, each list of values on one row."""

@@ -17,10 +17,34 @@ from blockid.errors import ParameterError
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-__all__ = ["plot_block"]
+__all__ = ["block_name", "default_range", "plot_block"]
+
+#: Kinds whose name reads better than its hyphens replaced by spaces.
+_READABLE = {
+    "two-segment-polynomial": "two-segment polynomial",
+    "piecewise-linear-free": "piecewise-linear (free knots)",
+}
 
 
-def _default_range(block: StaticBlock) -> tuple[float, float]:
+def block_name(block: Any) -> str:
+    """How figures and tables name a block: its ``label`` if it has one, else its kind
+    in words (never the class name).
+
+    >>> from blockid.blocks.polynomial import TwoSegmentPolynomial
+    >>> block_name(TwoSegmentPolynomial.from_segments([0.0, 1.0], [0.0, 0.5]))
+    'two-segment polynomial'
+    >>> from blockid.blocks.static import DeadZone
+    >>> block_name(DeadZone(-0.5, 0.5))
+    'dead zone'
+    """
+    label = getattr(block, "label", None)
+    if isinstance(label, str) and label:
+        return label
+    kind = str(getattr(block, "kind", "") or type(block).__name__)
+    return _READABLE.get(kind, kind.replace("-", " "))
+
+
+def default_range(block: Any) -> tuple[float, float]:
     """The block's own plotting range, or ``(-1, 1)`` if it does not offer one."""
     default = getattr(block, "default_u_range", None)
     return default() if callable(default) else (-1.0, 1.0)
@@ -72,7 +96,7 @@ def plot_block(
     if int(n_points) < 2:
         raise ParameterError(f"n_points must be at least 2, got {n_points}")
     if u_range is None:
-        ranges = [_default_range(b) for b in (block, truth) if b is not None]
+        ranges = [default_range(b) for b in (block, truth) if b is not None]
         u_range = (min(r[0] for r in ranges), max(r[1] for r in ranges))
     low, high = _check_range("u_range", u_range)
 
@@ -81,7 +105,7 @@ def plot_block(
     if ax is None:
         _, ax = plt.subplots()
     u = np.linspace(low, high, int(n_points))
-    kwargs.setdefault("label", "estimate" if truth is not None else type(block).__name__)
+    kwargs.setdefault("label", "estimate" if truth is not None else block_name(block))
     ax.plot(u, block(u), **kwargs)
     if truth is not None:
         ax.plot(u, truth(u), linestyle="--", color="black", label="true")

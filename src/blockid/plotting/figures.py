@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "block_roles",
     "plot_model_output",
     "plot_blocks",
     "plot_parameter_history",
@@ -77,17 +78,42 @@ def plot_model_output(
     return fig
 
 
+def block_roles(model: Any) -> list[tuple[int, Any, str, str, str]]:
+    """``(index, block, which, x label, y label)`` of every nonlinear block of a
+    block-oriented model: what the block is in the chain ("input block", "output
+    block", "feedback block") and what its input and output are."""
+    out = []
+    for i, block in enumerate(model.blocks):
+        if block.role == "linear":
+            continue
+        if i == 0:
+            labels = ("input block", f"u = {model.inputs[0]} (relative to the input offset)",
+                      "w = N1(u)")  # fmt: skip
+        elif block is getattr(model, "feedback", None):
+            labels = ("feedback block", f"y = {model.outputs[0]} (relative to the output offset)",
+                      "N(y), fed back to the input")  # fmt: skip
+        elif block is model.output_block:
+            labels = ("output block", "x (output of the linear block)",
+                      "y = N2(x) (relative to the output offset)")  # fmt: skip
+        else:
+            labels = (f"block {i}", f"input of block {i}", f"output of block {i}")
+        out.append((i, block, *labels))
+    return out
+
+
 def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> Any:
     """Identified nonlinear blocks of a block-oriented model, truth dashed if given.
 
     ``u`` (the input data) sets each block's input range: the range of the signal that
     enters it when ``u`` is simulated.
     """
-    panels = [(i, b) for i, b in enumerate(model.blocks) if b.role != "linear"]
+    from blockid.plotting.blocks import block_name
+
+    panels = block_roles(model)
     fig, axes = _figure(max(len(panels), 1), width=5.0, height=3.6)
     inputs = None if u is None else model.block_inputs(np.asarray(u, float).reshape(-1, 1))
     ref_blocks = getattr(truth, "blocks", None)
-    for ax, (i, block) in zip(axes, panels, strict=False):
+    for ax, (i, block, which, xlabel, ylabel) in zip(axes, panels, strict=False):
         ref = None
         if ref_blocks is not None and len(ref_blocks) == len(model.blocks):
             ref = ref_blocks[i] if type(ref_blocks[i]) is type(block) else None
@@ -100,24 +126,10 @@ def plot_blocks(model: Any, truth: Any = None, u: np.ndarray | None = None) -> A
                 block.plot(ax=ax, u_range=rng, truth=ref)
             else:
                 grid = np.linspace(*(rng or (-1.0, 1.0)), 400)
-                ax.plot(grid, block(grid), label="identified")
-        if i == 0:
-            ax.set_xlabel(f"u = {model.inputs[0]} (relative to the input offset)")
-            ax.set_ylabel("w = N1(u)")
-            which = "input block"
-        elif block is getattr(model, "feedback", None):
-            ax.set_xlabel(f"y = {model.outputs[0]} (relative to the output offset)")
-            ax.set_ylabel("N(y), fed back to the input")
-            which = "feedback block"
-        elif block is model.output_block:
-            ax.set_xlabel("x (output of the linear block)")
-            ax.set_ylabel("y = N2(x) (relative to the output offset)")
-            which = "output block"
-        else:
-            ax.set_xlabel(f"input of block {i}")
-            ax.set_ylabel(f"output of block {i}")
-            which = f"block {i}"
-        ax.set_title(f"{which}: {block.kind}", fontsize=9)
+                ax.plot(grid, block(grid), label=block_name(block))
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"{which}: {block_name(block)}", fontsize=9)
     fig.tight_layout()
     return fig
 

@@ -1,7 +1,7 @@
 """One self-contained HTML report of an identification: data, scores, figures, provenance.
 
 :func:`build_report` turns a :class:`~blockid.workflows.compare.CompareResult` and/or an
-:class:`~blockid.fitting.identify.IdentifyResult` with the data they came from into one
+:class:`~blockid.workflows.identify.IdentifyResult` with the data they came from into one
 HTML page: figures are embedded PNGs, CSS is inline, there are no scripts and no
 references to anything outside the file, so it opens anywhere without a network.
 
@@ -17,7 +17,6 @@ free-run simulation or a one-step prediction.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -26,46 +25,29 @@ import numpy as np
 from blockid.data.dataset import Dataset
 from blockid.data.io import write_text_atomic
 from blockid.data.ranges import parse_range
-from blockid.reporting import figures
+from blockid.plotting import report_figures as figures
+from blockid.plotting.html import encode_png
+from blockid.plotting.report_figures import zoom_title
+from blockid.plotting.uncertainty import fit_draws, output_bands
+from blockid.reporting.entries import Entry, heading
 from blockid.reporting.html import figure, page, paragraph, section, table
-from blockid.reporting.provenance import Provenance
-from blockid.reporting.uncertainty import (
-    free_covariance,
-    free_standard_errors,
-    sampled_band,
-    sampled_models,
+from blockid.reporting.model_sections import (
+    blocks_section,
+    histories_section,
+    linear_section,
+    parameters_section,
 )
+from blockid.reporting.provenance import Provenance
+from blockid.reporting.search import LinearBaseline, baseline_entry, linear_baseline, search_section
 
 __all__ = ["build_report", "write_report"]
 
-_MODE = {"simulation": "free-run simulation", "one-step": "one-step prediction"}
-_BAND_DRAWS = 200
-_NO_UNCERTAINTY = (
-    "No uncertainty available: the fit carries no parameter standard errors, so no "
-    "confidence band is drawn."
-)
 
-
-@dataclass
-class _Entry:
-    """One model of the report, whichever workflow produced it."""
-
-    label: str
-    method: str
-    fit: Any
-    simulation: Any
-    one_step: Any
-    error: str | None = None
-    one_step_error: str | None = None
-    on: str = "validation"
-    notes: list[str] = field(default_factory=list)
-
-
-def _entries(compare: Any, identify: Any) -> list[_Entry]:
+def _entries(compare: Any, identify: Any, baseline: LinearBaseline | None) -> list[Entry]:
     out = []
     if identify is not None:
         out.append(
-            _Entry(
+            Entry(
                 f"identify: {identify.selected.candidate.label}",
                 identify.fit.method,
                 identify.fit,
@@ -76,9 +58,12 @@ def _entries(compare: Any, identify: Any) -> list[_Entry]:
                 identify.on,
             )
         )
+        extra = None if baseline is None else baseline_entry(baseline, identify.on)
+        if extra is not None:
+            out.append(extra)
     for m in [] if compare is None else compare.models:
         out.append(
-            _Entry(
+            Entry(
                 f"{m.structure} ({m.method})",
                 m.method,
                 m.fit,
@@ -159,7 +144,7 @@ def _overview(
         fig = figures.overview_figure(data, est_rng, val_rng)
         parts.append(
             figure(
-                figures.encode_png(fig),
+                encode_png(fig),
                 "the measured records",
                 "Measured records (inputs blue, outputs red), the estimation range shaded "
                 "green and the validation range orange.",
@@ -172,7 +157,7 @@ def _overview(
             fig = figures.overview_figure(d, None, None)
             parts.append(
                 figure(
-                    figures.encode_png(fig),
+                    encode_png(fig),
                     f"the {what} data",
                     f"Measured {what} data (range {_range_text(ranges[what], d)}).",
                 )
@@ -180,7 +165,7 @@ def _overview(
     return section("data", "Data overview", parts)
 
 
-def _metrics_rows(entries: list[_Entry], outputs: tuple[str, ...]) -> tuple[list, list]:
+def _metrics_rows(entries: list[Entry], outputs: tuple[str, ...]) -> tuple[list, list]:
     rows, classes = [], []
     for output in outputs:
         scored = [e for e in entries if e.simulation is not None]
@@ -205,11 +190,11 @@ def _metrics_rows(entries: list[_Entry], outputs: tuple[str, ...]) -> tuple[list
                     one["fit_percent"][output] if one else "n/a",
                 ]
             )
-            classes.append("best" if e is best and len(scored) > 1 else None)
+            classes.append("best" if e is best and len(scored) > 1 else e.row)
     return rows, classes
 
 
-def _comparison(entries: list[_Entry], outputs: tuple[str, ...], where: str) -> str:
+def _comparison(entries: list[Entry], outputs: tuple[str, ...], where: str) -> str:
     header = [
         "model",
         "output",
@@ -228,7 +213,8 @@ def _comparison(entries: list[_Entry], outputs: tuple[str, ...], where: str) -> 
             "alone, its own past outputs fed back (initial conditions: the first measured "
             "samples, left out of the scores). One-step prediction: from measured past "
             "outputs. Fit % = 100 (1 - |y - y_model| / |y - mean(y)|). Shaded green: the "
-            "highest free-run fit % of an output; red: a model whose estimator failed."
+            "highest free-run fit % of an output; red: a model whose estimator failed"
+            + ("; blue: the linear baseline." if any(e.row == "baseline" for e in entries) else ".")
         ),
         table(header, rows, classes),
     ]
@@ -252,7 +238,7 @@ def _comparison(entries: list[_Entry], outputs: tuple[str, ...], where: str) -> 
             ]
             parts.append(
                 figure(
-                    figures.encode_png(figures.comparison_figure(bars, output)),
+                    encode_png(figures.comparison_figure(bars, output, where)),
                     f"fit % of {output} per model",
                     f"Fit % of {output} on the {where}, free-run simulation (orange) and "
                     "one-step prediction (blue), per model.",
@@ -261,97 +247,28 @@ def _comparison(entries: list[_Entry], outputs: tuple[str, ...], where: str) -> 
     return section("comparison", "Comparison of the models", parts)
 
 
-def _identify_search(identify: Any) -> str:
-    sel = identify.selected
-    search = getattr(identify, "search", {}) or {}
-    cut = (
-        " The time limit cut the search: candidates not fitted by then were left out, "
-        "and another run may choose differently."
-        if search.get("cut_by_time_limit")
-        else ""
-    )
-    parts = [
-        paragraph(
-            f"identify() chose {sel.candidate.label} by its cross-validated free-run RMSE "
-            f"on the estimation data ({identify.holdout}; folds combined by their "
-            f"{search.get('rule', 'geometric-mean').replace('-', ' ')}); "
-            f"among near-ties the model with the fewest parameters wins. "
-            f"{len(identify.ranked)} candidates scored, {len(identify.rejected)} rejected, "
-            f"in {identify.seconds:.1f} s (effort {search.get('effort', '?')}). The chosen "
-            "model was refitted on all estimation data; validation data were not used to "
-            f"choose.{cut}"
-        )
-    ]
-    for flag in sel.flags:
-        parts.append(paragraph(f"Flag on the chosen model: {flag}", "note"))
-    rows = [
-        [s.candidate.label, s.stage, s.n_parameters, s.rmse, s.fit_percent, s.seconds]
-        for s in identify.ranked[:20]
-    ]
-    parts.append(
-        table(
-            [
-                "candidate (best first)",
-                "stage",
-                "parameters",
-                "CV RMSE",
-                "CV fit %",
-                "seconds",
-            ],
-            rows,
-            ["best"] + [None] * (len(rows) - 1),
-        )  # fmt: skip
-    )
-    if len(identify.ranked) > 20:
-        parts.append(paragraph(f"... and {len(identify.ranked) - 20} more candidates."))
-    if identify.rejected:
-        parts.append("<h3>Rejected candidates</h3>")
-        parts.append(
-            table(
-                ["candidate", "stage", "reason"],
-                [[s.candidate.label, s.stage, s.reason] for s in identify.rejected],
-                ["failed"] * len(identify.rejected),
-            )
-        )
-    for note in identify.notes:
-        parts.append(paragraph(note, "note"))
-    return section("search", "Search of identify()", parts)
-
-
-def _output_bands(e: _Entry, draws: list[Any]) -> tuple[list[Any], str]:
-    """95 % bands of the free-run simulation per experiment, and what they are."""
+def _zoom_text(e: Entry, first: int) -> str:
+    """The caption's sentence on the zoom (empty when the record is short)."""
     output = e.simulation
-    record = (getattr(e.fit, "settings", None) or {}).get("covariance")
-    if record is not None:
-        from blockid.errors import BlockidError
-        from blockid.evaluation.uncertainty import ParameterCovariance, simulation_band
-
-        try:
-            cov = ParameterCovariance.from_dict(record)
-            bands = [
-                simulation_band(e.fit.model, cov, x.u, x.y[: output.skip])
-                for x in output.data.experiments
-            ]
-            return [(b.lower, b.upper) for b in bands], (
-                " Shaded: 95 % confidence band of the noise-free output, from the parameter "
-                "covariance linearised along the simulation (as 'blockid simulate --band')."
-            )
-        except (BlockidError, ValueError, KeyError, TypeError, np.linalg.LinAlgError):
-            pass
-    if draws:
-        bands = [
-            sampled_band(draws[:100], lambda m, x=x: m.simulate(x.u, x.y[: output.skip]))
-            for x in output.data.experiments
-        ]
-        if any(b is not None for b in bands):
-            return bands, (
-                f" Shaded: 95 % band of the simulated output over {min(len(draws), 100)} "
-                "parameter draws from the standard errors."
-            )
-    return [], " No uncertainty available for this model (no parameter standard errors)."
+    exps = output.data.experiments
+    shown = [
+        zoom_title(w, first, output.data.sampling_time)
+        + (f" in experiment {x.name!r}" if len(exps) > 1 else "")
+        for x in exps
+        if (w := figures.zoom_window(x.y, output.skip)) is not None
+    ]
+    if not shown:
+        return ""
+    return (
+        f" The record is longer than {figures.MAX_POINTS} samples, so the full view draws "
+        "each pixel column's minimum to maximum, and the third panel zooms on "
+        f"{', '.join(shown)} (shaded grey above): about four periods of the output's "
+        "dominant frequency, where it varies most, so that measured (dark) and simulated "
+        "output can be told apart."
+    )
 
 
-def _outputs(entries: list[_Entry], ranges: dict[str, str | None], draws: dict[int, list]) -> str:
+def _outputs(entries: list[Entry], ranges: dict[str, str | None], draws: dict[int, list]) -> str:
     parts = []
     for e in entries:
         if e.simulation is None:
@@ -359,94 +276,23 @@ def _outputs(entries: list[_Entry], ranges: dict[str, str | None], draws: dict[i
         rng = ranges[e.on]
         first = 0 if rng is None else parse_range(rng, f"--{e.on}")[0]
         where = f"{e.on} range {rng}" if rng is not None else f"{e.on} data"
-        bands, band = _output_bands(e, draws.get(id(e), []))
+        bands, band = output_bands(e.fit, e.simulation, draws.get(id(e), []))
         fig = figures.validation_figure(e.simulation, first, bands, where)
-        parts.append(f"<h3>{_h(e.label)}</h3>")
+        parts.append(heading(e))
         parts.append(
             figure(
-                figures.encode_png(fig),
+                encode_png(fig),
                 f"{e.label}: measured and simulated output",
                 f"{e.label}: free-run simulation on the {where} — measured output (grey) "
                 f"and model output (orange) above, residual (measured minus simulated) "
                 f"below; all {e.simulation.data.n_samples} samples drawn, the first "
                 f"{e.simulation.skip} of each experiment are initial conditions copied from "
-                f"the measurement.{band}",
+                f"the measurement.{band}{_zoom_text(e, first)}",
             )
         )
     if not parts:
         parts.append(paragraph("No model was identified."))
     return section("outputs", "Measured and simulated output", parts)
-
-
-def _blocks(
-    entries: list[_Entry], estimation: Dataset, est_text: str, draws: dict[int, list]
-) -> str:
-    parts = []
-    for e in entries:
-        model = getattr(e.fit, "model", None)
-        blocks = getattr(model, "blocks", None)
-        if blocks is None or all(b.role == "linear" for b in blocks):
-            continue
-        if len(model.inputs) != 1 or tuple(model.inputs) != tuple(estimation.inputs):
-            continue
-        u = np.concatenate([x.u[:, 0] for x in estimation.experiments])
-        models = draws.get(id(e), [])
-        fig, notes = figures.blocks_figure(model, u, models)
-        source = (
-            "the parameter covariance"
-            if free_covariance(e.fit) is not None
-            else "the standard errors (independent normals)"
-        )
-        band = (
-            f"Shaded: 95 % band over {len(models)} parameter draws from {source}."
-            if models
-            else _NO_UNCERTAINTY
-        )
-        parts.append(f"<h3>{_h(e.label)}</h3>")
-        parts.append(
-            figure(
-                figures.encode_png(fig),
-                f"{e.label}: identified nonlinear blocks",
-                f"{e.label}: identified nonlinear blocks, estimated on the estimation range "
-                f"{est_text}; each curve is drawn over the range its input takes when the "
-                f"estimation input is simulated. {band}",
-            )
-        )
-        parts += [paragraph(n, "note") for n in notes]
-    if not parts:
-        parts.append(paragraph("No model with a nonlinear block was identified."))
-    return section("blocks", "Identified nonlinearities", parts)
-
-
-def _histories(entries: list[_Entry], est_text: str) -> str:
-    parts = []
-    for e in entries:
-        history = getattr(e.fit, "history", None) or {}
-        theta = history.get("theta")
-        if theta is None or not len(theta) or "names" not in history:
-            continue
-        n = np.asarray(theta).shape
-        fig = figures.history_figure(history)
-        parts.append(f"<h3>{_h(e.label)}</h3>")
-        parts.append(
-            figure(
-                figures.encode_png(fig),
-                f"{e.label}: parameter trajectories",
-                f"{e.label}: parameter estimates of the recursive estimator {e.method}, "
-                f"recorded at {n[0]} updates over all passes through the estimation range "
-                f"{est_text} (one-step regressions); one panel per group of parameters, "
-                "the y axes fitted to the estimates after the first 5 % of the updates "
-                "(the start-up transient may leave the frame).",
-            )
-        )
-    if not parts:
-        parts.append(
-            paragraph(
-                "No recursive estimator recorded parameter trajectories (they are drawn "
-                "for the recursive methods, such as key-term-rls and aw-rls)."
-            )
-        )
-    return section("trajectories", "Parameter trajectories of recursive estimators", parts)
 
 
 def _provenance(provenance: Provenance | None) -> str:
@@ -462,6 +308,7 @@ def _provenance(provenance: Provenance | None) -> str:
             table(
                 ["data file", "bytes", "SHA-256"],
                 [[f.path, f.size, f.sha256] for f in provenance.files],
+                wrap=(0, 2),
             )
         )
     else:
@@ -476,12 +323,12 @@ def _h(text: str) -> str:
     return escape(text)
 
 
-def _summary(entries: list[_Entry], outputs: tuple[str, ...]) -> str:
+def _summary(entries: list[Entry], outputs: tuple[str, ...]) -> str:
     scored = [e for e in entries if e.simulation is not None]
     if not scored:
         return paragraph("No model was identified: see the failures below.", "note")
 
-    def mean_fit(e: _Entry) -> float:
+    def mean_fit(e: Entry) -> float:
         return float(np.mean([e.simulation.metrics["fit_percent"][o] for o in outputs]))
 
     best = max(scored, key=mean_fit)
@@ -537,7 +384,11 @@ def build_report(
 
         raise ParameterError("build_report needs a compare or an identify result")
     ranges = {"estimation": estimation_range, "validation": validation_range}
-    entries = _entries(compare, identify)
+    baseline = None
+    if identify is not None:
+        identify = _with_standard_errors(identify, estimation)
+        baseline = linear_baseline(identify, estimation)
+    entries = _entries(compare, identify, baseline)
     outputs = tuple(estimation.outputs)
     where = (
         f"validation range {validation_range}"
@@ -546,25 +397,21 @@ def build_report(
     )
     if identify is not None and identify.on != "validation":
         where = "estimation data (no validation data were given)"
-    draws = {}
-    for e in entries:
-        if e.fit is None:
-            continue
-        cov = free_covariance(e.fit)
-        se = None if cov is not None else free_standard_errors(e.fit)
-        if cov is not None or se is not None:
-            draws[id(e)] = sampled_models(e.fit.model, se, n=_BAND_DRAWS, covariance=cov)
+    draws = {id(e): fit_draws(e.fit) for e in entries if e.fit is not None}
+    est_text = _range_text(estimation_range, None)
     import matplotlib
 
     with matplotlib.rc_context({"font.size": 8}):
         sections = [_overview(data, estimation, validation, ranges)]
         if identify is not None:
-            sections.append(_identify_search(identify))
+            sections.append(search_section(identify, baseline))
         sections += [
             _comparison(entries, outputs, where),
             _outputs(entries, ranges, draws),
-            _blocks(entries, estimation, _range_text(estimation_range, None), draws),
-            _histories(entries, _range_text(estimation_range, None)),
+            parameters_section(entries),
+            linear_section(entries),
+            blocks_section(entries, estimation, est_text, draws),
+            histories_section(entries, est_text),
             _provenance(provenance),
         ]
     nav = [("data", "Data overview")]
@@ -573,6 +420,8 @@ def build_report(
     nav += [
         ("comparison", "Comparison of the models"),
         ("outputs", "Measured and simulated output"),
+        ("parameters", "Parameters"),
+        ("linear", "Linear dynamics"),
         ("blocks", "Identified nonlinearities"),
         ("trajectories", "Parameter trajectories"),
         ("provenance", "Provenance"),
@@ -589,6 +438,26 @@ def build_report(
         + "</ol></nav>",
     ]
     return page(title, header + sections)
+
+
+def _with_standard_errors(identify: Any, estimation: Dataset) -> Any:
+    """``identify`` with standard errors on its fit (computed on the estimation data it
+    was refitted on, :func:`~blockid.evaluation.uncertainty.with_standard_errors`) when
+    it carries none, for the report's parameter table and bands; unchanged when they
+    cannot be computed."""
+    from dataclasses import replace
+
+    from blockid.errors import BlockidError
+    from blockid.evaluation.uncertainty import with_standard_errors
+
+    fit = identify.fit
+    if "covariance" in (getattr(fit, "settings", None) or {}):
+        return identify
+    try:
+        with np.errstate(all="ignore"):
+            return replace(identify, fit=with_standard_errors(fit, estimation))
+    except (BlockidError, ValueError, np.linalg.LinAlgError):
+        return identify
 
 
 def write_report(html: str, path: str | Path, overwrite: bool = False) -> Path:

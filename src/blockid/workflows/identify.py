@@ -209,6 +209,20 @@ class IdentifyResult:
     def cut_by_time_limit(self) -> bool:
         return bool(self.search.get("cut_by_time_limit", False))
 
+    def _repr_html_(self) -> str:
+        """The notebook display: :func:`blockid.reporting.notebook.identify_html`."""
+        from blockid.reporting.notebook import identify_html
+
+        return identify_html(self)
+
+    def plot(self, *, which: str | None = None) -> Any:
+        """The report's figures of the result (search, output, blocks, linear dynamics):
+        a dict of matplotlib figures, or the one ``which`` names; see
+        :func:`blockid.reporting.notebook.identify_figures`."""
+        from blockid.reporting.notebook import identify_figures
+
+        return identify_figures(self, which)
+
     def to_dict(self) -> dict[str, Any]:
         sel = self.selected.candidate
         orders = sel.orders()
@@ -261,10 +275,14 @@ class _Task:
 
 
 def _reason(exc: BaseException) -> str:
-    if isinstance(exc, BlockidError):
-        text = str(exc).split(". ")[0]
-        return text[:300] or type(exc).__name__
-    return f"{type(exc).__name__}: {exc}"[:300]
+    """Why a fit failed: a blockid error's first sentence, another error's type and
+    message, shortened at a word (never cut mid-word) beyond 600 characters."""
+    import textwrap
+
+    text = str(exc).split(". ")[0] if isinstance(exc, BlockidError) else f"{exc}"
+    if not isinstance(exc, BlockidError) or not text:
+        text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return textwrap.shorten(text, 600, placeholder=" [...]")
 
 
 def _fit_and_score(data: Dataset, task: _Task) -> FoldScore:

@@ -1,5 +1,7 @@
 """Confidence bands from parameter standard errors, by sampling the parameters.
 
+On the plotting floor so that a fit's ``.plot()`` draws the bands the report draws.
+
 A fit made with ``standard_errors=True`` carries the covariance of its free parameters
 in ``settings["covariance"]`` (:func:`blockid.evaluation.uncertainty.with_standard_errors`)
 and their standard errors in ``settings["standard_errors"]``. Parameter vectors are drawn
@@ -18,15 +20,20 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "BAND_DRAWS",
     "BAND_PERCENTILES",
+    "fit_draws",
     "free_covariance",
     "free_standard_errors",
+    "output_bands",
     "sampled_band",
     "sampled_models",
 ]
 
 #: The percentiles of a 95 % band.
 BAND_PERCENTILES = (2.5, 97.5)
+#: Parameter vectors drawn for the bands on block curves.
+BAND_DRAWS = 200
 
 
 def _raw_standard_errors(fit: Any) -> Any:
@@ -150,3 +157,54 @@ def sampled_band(
         return None
     lo, hi = np.percentile(np.stack(values), BAND_PERCENTILES, axis=0)
     return lo, hi
+
+
+def fit_draws(fit: Any, n: int = BAND_DRAWS) -> list[Any]:
+    """Models drawn from the uncertainty ``fit`` carries (:func:`sampled_models` with
+    its covariance, or its standard errors), or an empty list when it carries none."""
+    if fit is None or not hasattr(getattr(fit, "model", None), "free_parameters"):
+        return []
+    cov = free_covariance(fit)
+    se = None if cov is not None else free_standard_errors(fit)
+    if cov is None and se is None:
+        return []
+    return sampled_models(fit.model, se, n=n, covariance=cov)
+
+
+def output_bands(fit: Any, output: Any, draws: Sequence[Any] = ()) -> tuple[list[Any], str]:
+    """95 % bands of a free-run simulation (a :class:`~blockid.evaluation.ModelOutput`
+    of ``fit.model``) per experiment, and a sentence that says what they are.
+
+    With the covariance the fit carries: the band of the noise-free output, linearised
+    along the simulation (:func:`blockid.evaluation.uncertainty.simulation_band`, as
+    ``blockid simulate --band``); otherwise the band of the simulated output over up to
+    100 of the drawn models; otherwise none.
+    """
+    record = (getattr(fit, "settings", None) or {}).get("covariance")
+    if record is not None:
+        from blockid.errors import BlockidError
+        from blockid.evaluation.uncertainty import ParameterCovariance, simulation_band
+
+        try:
+            cov = ParameterCovariance.from_dict(record)
+            bands = [
+                simulation_band(fit.model, cov, x.u, x.y[: output.skip])
+                for x in output.data.experiments
+            ]
+            return [(b.lower, b.upper) for b in bands], (
+                " Shaded: 95 % confidence band of the noise-free output, from the parameter "
+                "covariance linearised along the simulation (as 'blockid simulate --band')."
+            )
+        except (BlockidError, ValueError, KeyError, TypeError, np.linalg.LinAlgError):
+            pass
+    if draws:
+        bands = [
+            sampled_band(draws[:100], lambda m, x=x: m.simulate(x.u, x.y[: output.skip]))
+            for x in output.data.experiments
+        ]
+        if any(b is not None for b in bands):
+            return bands, (
+                f" Shaded: 95 % band of the simulated output over {min(len(draws), 100)} "
+                "parameter draws from the standard errors."
+            )
+    return [], " No uncertainty available for this model (no parameter standard errors)."

@@ -1,0 +1,247 @@
+"""What models and fits show in a notebook, and the figures their ``.plot()`` returns.
+
+``Model._repr_html_`` and ``FitResult._repr_html_`` hand off to :func:`model_html` and
+:func:`fit_html`: a compact summary in the manner of scikit-learn's estimators and
+pandas' frames (the structure and its blocks, the parameters with their standard errors,
+the scores on the estimation data, the linear dynamics in a line each, and the static
+curves as a small embedded PNG). ``Model.plot`` and ``FitResult.plot`` hand off to
+:func:`model_figures`: the report's figures of that model, as
+:class:`matplotlib.figure.Figure` objects (no pyplot: nothing is shown twice, nothing
+is kept open). matplotlib is imported only when a figure is drawn.
+"""
+
+from __future__ import annotations
+
+from html import escape
+from typing import Any
+
+import numpy as np
+
+from blockid.plotting.blocks import block_name
+from blockid.plotting.html import encode_png, image, table
+from blockid.plotting.linear import linear_dynamics
+from blockid.plotting.parameters import parameter_table
+
+__all__ = [
+    "FIGURES",
+    "STYLE",
+    "blocks_thumbnail",
+    "describe_structure",
+    "fit_html",
+    "linear_summary",
+    "model_figures",
+    "model_html",
+]
+
+#: The figures :func:`model_figures` can draw, in the order it draws them.
+FIGURES = ("output", "blocks", "linear", "parameters")
+
+#: Parameter tables longer than this are folded (``<details>``) in a summary.
+_FOLD = 20
+
+#: The style of a summary's ``<div>`` (inline: a notebook may drop style sheets).
+STYLE = (
+    "font-family: sans-serif; font-size: 13px; line-height: 1.35; max-width: 52em; "
+    "overflow-wrap: anywhere"
+)
+
+
+# ----------------------------------------------------------------------------- text
+def describe_structure(model: Any) -> str:
+    """The chain of a model in words: ``"two-segment polynomial -> linear (na=3, nb=3,
+    nk=8) -> polynomial"``; the orders of an ARX or state-space model otherwise."""
+    blocks = getattr(model, "blocks", None)
+    if blocks is not None:
+        parts = []
+        for b in blocks:
+            if b.role == "linear":
+                parts.append(f"linear (na={b.na}, nb={b.nb}, nk={b.nk})")
+            elif b is getattr(model, "feedback", None):
+                parts.append(f"fed back: {block_name(b)}")
+            else:
+                parts.append(block_name(b))
+        return " \u2192 ".join(parts)
+    if hasattr(model, "nx"):
+        extra = getattr(model, "n_monomials", 0)
+        return f"{model.nx} states" + (f", {extra} monomials" if extra else "")
+    if hasattr(model, "na") and hasattr(model, "nk"):
+        na, nb, nk = (np.asarray(getattr(model, k)) for k in ("na", "nb", "nk"))
+        if na.size == 1 and nb.size == 1:
+            return f"na={int(na.flat[0])}, nb={int(nb.flat[0])}, nk={int(nk.flat[0])}"
+        return f"orders na {na.tolist()}, nb {nb.tolist()}, nk {nk.tolist()}"
+    return ""
+
+
+def _signals(model: Any) -> str:
+    inputs = ", ".join(getattr(model, "inputs", ()))
+    outputs = ", ".join(getattr(model, "outputs", ()))
+    ts = getattr(model, "sampling_time", None)
+    sampling = f"sampling time {ts:g} s" if ts else "no sampling time (samples)"
+    return f"{inputs} \u2192 {outputs}; {sampling}"
+
+
+def linear_summary(model: Any) -> list[str]:
+    """One sentence per linear transfer function: static gain, delay, stability and
+    the slowest pole with its time constant."""
+    out = []
+    for g in linear_dynamics(model):
+        p = g.poles()
+        moving = p[np.abs(p) > 1e-12]
+        text = f"{g.name}: static gain {g.static_gain():.4g}, delay {g.describe_delay()}"
+        if moving.size:
+            slow = moving[np.argmax(np.abs(moving))]
+            r = float(abs(slow))
+            if r < 1.0:
+                tau = -(g.dt or 1.0) / np.log(r)
+                unit = "s" if g.dt else "samples"
+                text += f", stable, slowest pole |p| = {r:.4g} (time constant {tau:.4g} {unit})"
+            else:
+                text += f", NOT stable: a pole at |p| = {r:.4g}"
+        out.append(text + ".")
+    return out
+
+
+def _parameters_html(model: Any, fit: Any) -> str:
+    t = parameter_table(model, fit)
+    if not t.names:
+        return ""
+    body = table(t.HEADER, t.rows(), digits=6)
+    notes = "".join(f"<p style='margin:.2em 0'>{escape(n)}</p>" for n in t.notes())
+    summary = f"{len(t.names)} estimated parameters"
+    if len(t.names) > _FOLD:
+        return f"<details><summary>{summary}</summary>{body}{notes}</details>"
+    return f"<p style='margin:.4em 0 .1em'><b>{summary}</b></p>{body}{notes}"
+
+
+def blocks_thumbnail(model: Any, fit: Any = None, dpi: int = 80) -> Any | None:
+    """The static blocks' curves side by side, small (the 95 % band where the fit
+    carries standard errors and the band is meaningful), or None without such blocks."""
+    from matplotlib.figure import Figure
+
+    from blockid.plotting.blocks import default_range
+    from blockid.plotting.figures import block_roles
+    from blockid.plotting.report_figures import block_signal, static_curve
+    from blockid.plotting.uncertainty import fit_draws
+
+    if getattr(model, "blocks", None) is None:
+        return None
+    panels = [p for p in block_roles(model) if p[1].role == "static"]
+    if not panels:
+        return None
+    draws = fit_draws(fit, n=100)
+    from matplotlib.ticker import MaxNLocator
+
+    fig = Figure(figsize=(3.0 * len(panels), 2.2), dpi=dpi, layout="constrained")
+    for ax, (i, block, which, xlabel, _) in zip(
+        fig.subplots(1, len(panels), squeeze=False)[0], panels, strict=True
+    ):
+        s = block_signal(model, i, None)
+        lo, hi = (float(np.min(s)), float(np.max(s))) if s is not None else default_range(block)
+        grid = np.linspace(lo, hi if hi > lo else lo + 1.0, 200)
+        c = static_curve(block, grid, draws, i)
+        if c["band"] is not None:
+            ax.fill_between(grid, c["band"][0], c["band"][1], color="C0", alpha=0.2, lw=0)
+        ax.plot(grid, c["w"], color="C0", lw=1.4)
+        ax.set_title(f"{which}: {block_name(block)}", fontsize=8)
+        ax.set_xlabel(xlabel.split(" (")[0], fontsize=7)
+        ax.tick_params(labelsize=7)
+        ax.xaxis.set_major_locator(MaxNLocator(4))
+        ax.yaxis.set_major_locator(MaxNLocator(5))
+    return fig
+
+
+def model_html(model: Any, fit: Any = None) -> str:
+    """A compact HTML summary of a model (and of the fit that made it)."""
+    parts = [
+        f"<p style='margin:.2em 0'><b>{escape(getattr(model, 'structure', '') or 'model')} "
+        f"model</b>: {escape(_signals(model))}</p>"
+    ]
+    chain = describe_structure(model)
+    if chain:
+        parts.append(f"<p style='margin:.2em 0'>{escape(chain)}</p>")
+    if fit is not None:
+        parts.append(f"<p style='margin:.2em 0'>{escape(_fit_line(fit))}</p>")
+    parts.append(_parameters_html(model, fit))
+    lines = linear_summary(model)
+    if lines:
+        items = "".join(f"<li>{escape(x)}</li>" for x in lines)
+        parts.append(f"<ul style='margin:.3em 0; padding-left:1.2em'>{items}</ul>")
+    thumb = blocks_thumbnail(model, fit)
+    if thumb is not None:
+        parts.append(
+            image(encode_png(thumb, dpi=80), "the static blocks' curves", "max-width:100%")
+        )
+    return f'<div class="blockid-summary" style="{STYLE}">' + "\n".join(parts) + "</div>"
+
+
+def _fit_line(fit: Any) -> str:
+    mode = "free-run simulation" if fit.metrics_mode == "simulation" else "one-step prediction"
+    scores = []
+    metrics = fit.estimation_metrics or {}
+    for output in metrics.get("fit_percent", {}):
+        fit_pct = metrics["fit_percent"][output]
+        rmse = metrics.get("rmse", {}).get(output, float("nan"))
+        scores.append(f"{output}: fit {fit_pct:.1f} %, RMSE {rmse:.4g}")
+    shown = "; ".join(scores) if scores else "no scores recorded"
+    return (
+        f"Fitted by {fit.method} on {fit.n_samples} samples; {mode} on the estimation "
+        f"data: {shown}."
+    )
+
+
+def fit_html(fit: Any) -> str:
+    """A compact HTML summary of a :class:`~blockid.fitting.result.FitResult`."""
+    return model_html(fit.model, fit)
+
+
+# ----------------------------------------------------------------------------- figures
+def model_figures(
+    model: Any, data: Any = None, *, fit: Any = None, which: str | None = None
+) -> Any:
+    """The report's figures of ``model``: a dict ``name -> Figure`` of those that apply,
+    or the one named by ``which``.
+
+    ``"output"`` (with ``data``): measured against free-run simulated output on
+    ``data`` and the residual, a zoom on long records, the 95 % band when ``fit``
+    carries standard errors; ``"blocks"``: the nonlinear blocks over the range their
+    input takes on ``data`` (without it: the range recorded in estimation), with their
+    deviation from a straight line; ``"linear"``: poles and zeros, step response and
+    Bode plot of every linear transfer function; ``"parameters"``: the trajectories a
+    recursive estimator recorded in ``fit.history``.
+    """
+    from blockid.errors import ParameterError
+    from blockid.plotting import report_figures as rf
+    from blockid.plotting.linear import linear_figure
+    from blockid.plotting.uncertainty import fit_draws, output_bands
+
+    if which is not None and which not in FIGURES:
+        raise ParameterError(
+            f"which={which!r}: choose one of {', '.join(FIGURES)}", parameter="which"
+        )
+    wanted = FIGURES if which is None else (which,)
+    draws = fit_draws(fit) if {"output", "blocks"} & set(wanted) else []
+    out: dict[str, Any] = {}
+    if "output" in wanted and data is not None:
+        from blockid.evaluation.validate import evaluate
+
+        simulated = evaluate(model, data, "simulation")
+        bands, _ = output_bands(fit, simulated, draws) if fit is not None else ([], "")
+        out["output"] = rf.validation_figure(simulated, 0, bands, "given data")
+    blocks = getattr(model, "blocks", None)
+    if "blocks" in wanted and blocks and any(b.role != "linear" for b in blocks):
+        u = None
+        if data is not None and len(getattr(model, "inputs", ())) == 1:
+            u = np.concatenate([x.u[:, 0] for x in data.experiments])
+        out["blocks"] = rf.blocks_figure(model, u, draws)[0]
+    systems = linear_dynamics(model) if "linear" in wanted else []
+    if systems:
+        out["linear"] = linear_figure(systems)
+    history = getattr(fit, "history", None) or {}
+    if "parameters" in wanted and len(history.get("theta", ())) and "names" in history:
+        out["parameters"] = rf.history_figure(history)
+    if which is None:
+        return out
+    if which not in out:
+        reason = "no data were given" if which == "output" else "the model has none"
+        raise ParameterError(f"no {which!r} figure: {reason}", parameter="which")
+    return out[which]

@@ -1,0 +1,124 @@
+"""Tests of blockid.plotting.notebook through the models' and fits' hooks: the HTML a
+notebook shows (parsed, not matched as text) and the figures ``.plot()`` returns."""
+
+import base64
+import subprocess
+import sys
+from html.parser import HTMLParser
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from blockid.errors import ParameterError
+from blockid.fitting import fit_model
+
+
+class Page(HTMLParser):
+    """Text, tables (rows of cell texts) and image sources of an HTML fragment."""
+
+    def __init__(self, html: str) -> None:
+        super().__init__()
+        self.text: list[str] = []
+        self.tables: list[list[list[str]]] = []
+        self.images: list[str] = []
+        self._cell: list[str] | None = None
+        self.feed(html)
+        self.close()
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "table":
+            self.tables.append([])
+        elif tag == "tr":
+            self.tables[-1].append([])
+        elif tag in ("td", "th"):
+            self._cell = []
+        elif tag == "img":
+            self.images.append(dict(attrs)["src"])
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th"):
+            self.tables[-1][-1].append("".join(self._cell).strip())
+            self._cell = None
+
+    def handle_data(self, data):
+        self.text.append(data)
+        if self._cell is not None:
+            self._cell.append(data)
+
+    @property
+    def all_text(self) -> str:
+        return " ".join(" ".join(self.text).split())
+
+
+def _png(src: str) -> bytes:
+    head = "data:image/png;base64,"
+    assert src.startswith(head)
+    raw = base64.b64decode(src[len(head) :], validate=True)
+    assert raw[:8] == b"\x89PNG\r\n\x1a\n" and raw[-8:-4] == b"IEND"
+    return raw
+
+
+def test_a_fit_shows_its_structure_parameters_errors_scores_and_curves(hammerstein_fit):
+    fit, _, _ = hammerstein_fit
+    page = Page(fit._repr_html_())
+    text = page.all_text
+    assert "hammerstein model" in text and "u → y; sampling time 0.1 s" in text
+    assert "two-segment polynomial → linear (na=2, nb=2, nk=1)" in text
+    mode = fit.estimation_metrics["fit_percent"]["y"]
+    assert f"Fitted by {fit.method} on {fit.n_samples} samples" in text
+    assert f"fit {mode:.1f} %" in text
+    (params,) = page.tables
+    assert params[0] == ["parameter", "value", "standard error", "relative SE [%]"]
+    names = [row[0] for row in params[1:]]
+    assert names == fit.model.free_parameter_names()
+    values = np.array([float(row[1]) for row in params[1:]])
+    np.testing.assert_allclose(values, fit.model.free_parameters(), rtol=1e-5, atol=1e-12)
+    errors = np.array([float(row[2]) for row in params[1:]])
+    cov = np.array(fit.settings["covariance"]["matrix"], float)
+    np.testing.assert_allclose(errors, np.sqrt(np.diag(cov)), rtol=1e-5)
+    assert "linear block: static gain" in text
+    gain = fit.model.linear.static_gain()
+    assert f"static gain {gain:.4g}" in text
+    (thumb,) = page.images
+    assert len(_png(thumb)) > 3000
+    assert "…" not in text and "TwoSegmentPolynomial" not in text
+
+
+def test_a_model_shows_itself_without_errors(hammerstein_fit):
+    model = hammerstein_fit[0].model
+    page = Page(model._repr_html_())
+    assert "No standard errors" in page.all_text
+    assert [row[2] for row in page.tables[0][1:]] == ["n/a"] * model.free_parameters().size
+
+
+def test_plot_returns_the_report_figures(hammerstein_fit):
+    fit, _, val = hammerstein_fit
+    figures = fit.plot(val)
+    assert list(figures) == ["output", "blocks", "linear"]
+    assert all(isinstance(f, Figure) for f in figures.values())
+    assert "95 % band" in [t.get_text() for t in figures["output"].legends[0].get_texts()]
+    assert list(fit.model.plot()) == ["blocks", "linear"]  # no data: no output figure
+    linear = fit.plot(which="linear")
+    assert isinstance(linear, Figure) and len(linear.axes) == 4
+    with pytest.raises(ParameterError, match="no 'output' figure: no data were given"):
+        fit.plot(which="output")
+    with pytest.raises(ParameterError, match="choose one of output, blocks"):
+        fit.plot(which="bode")
+
+
+def test_an_arx_fit_has_no_blocks_but_its_dynamics(hammerstein_fit):
+    _, est, val = hammerstein_fit
+    fit = fit_model(est, "arx", na=2, nb=2, nk=1)
+    assert list(fit.plot(val)) == ["output", "linear"]
+    page = Page(fit._repr_html_())
+    assert page.images == []
+    assert "y / u: static gain" in page.all_text
+
+
+def test_importing_the_displays_does_not_import_matplotlib():
+    code = (
+        "import sys, blockid.plotting.notebook, blockid.reporting.notebook\n"
+        "assert 'matplotlib' not in sys.modules, 'matplotlib imported eagerly'\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
