@@ -347,9 +347,7 @@ def _simulation_covariance(
 def _state_space_covariance(model: Any, data: Dataset, method: str | None) -> ParameterCovariance:
     """``σ² (J^T J)^+`` of a (polynomial) state-space model's ``θ`` with every
     experiment's initial state estimated alongside (module docstring, state space)."""
-    from blockid.fitting.state_space import information
-
-    H, residuals, sums = information(model, data)
+    H, residuals, sums = model.information([(e.u, e.y) for e in data.experiments])
     r = np.concatenate([x.reshape(-1) for x in residuals])
     p = model.free_parameters().size
     names = list(model.free_parameter_names())
@@ -660,9 +658,7 @@ def _output_sensitivities(
     from blockid.models.state_space import PolynomialStateSpace
 
     if isinstance(model, PolynomialStateSpace):
-        from blockid.fitting.state_space import output_sensitivities
-
-        return output_sensitivities(model, u, y_initial)
+        return model.output_sensitivities(u, y_initial)
     if hasattr(model, "free_parameters"):
         from blockid.fitting.simulation_error import simulate_with_sensitivities
 

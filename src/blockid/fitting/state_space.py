@@ -70,8 +70,6 @@ __all__ = [
     "fit_polynomial_state_space",
     "fit_state_space",
     "fit_subspace",
-    "information",
-    "output_sensitivities",
     "refine_state_space",
     "subspace",
 ]
@@ -402,93 +400,6 @@ class _Problem:
         self.tracker.njev += 1
         self.tracker.cost.append(cost / self.size)
         return H, g
-
-
-def _walk(
-    model: PolynomialStateSpace, u: np.ndarray, y: np.ndarray, x0: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``J^T J``, ``J^T r``, the residuals ``r`` and each output's column sums of ``J``
-    (rows: outputs) of one experiment's free run from ``x0`` (normalised units), over
-    ``[θ, x(0)]``, walked in pieces of ``CHUNK`` samples."""
-    arrays = model._arrays()
-    nx, P, ny = model.nx, model.free_parameters().size + model.nx, y.shape[1]
-    x = np.array(x0, dtype=float)
-    S = np.zeros((nx, P))
-    S[:, P - nx :] = np.eye(nx)
-    H, g, sums, parts = np.zeros((P, P)), np.zeros(P), np.zeros((ny, P)), []
-    for k0 in range(0, u.shape[0], CHUNK):
-        uk = np.ascontiguousarray(u[k0 : k0 + CHUNK])
-        out = np.zeros((uk.shape[0], ny))
-        J = np.zeros((uk.shape[0] * ny, P))
-        pnlss_jacobian(*arrays, uk, x, S, out, J)
-        r = (y[k0 : k0 + CHUNK] - out).reshape(-1)
-        H += J.T @ J
-        g += J.T @ r
-        sums += J.reshape(uk.shape[0], ny, P).sum(axis=0)
-        parts.append(r)
-    return H, g, np.concatenate(parts), sums
-
-
-def information(
-    model: PolynomialStateSpace, data: Dataset
-) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
-    """The Gauss-Newton information ``J^T J`` of the free-run simulation error (in the
-    normalised units the fit minimises) over the model's parameters ``θ`` and every
-    experiment's initial state, each experiment's residuals (N, ny), and ``J^T 1_i`` per
-    output ``i`` (rows; ``1_i``: a unit step of output ``i``'s offset).
-
-    Rows and columns: ``θ`` (:meth:`~PolynomialStateSpace.free_parameters`), then ``nx``
-    per experiment. The initial states are those that best fit the whole record at this
-    ``θ`` (one Gauss-Newton step from the state the first samples give: exact for a
-    linear model), as the fit estimated them.
-    """
-    p, nx, n_exp = model.free_parameters().size, model.nx, len(data.experiments)
-    H = np.zeros((p + nx * n_exp, p + nx * n_exp))
-    sums = np.zeros((len(model.outputs), H.shape[0]))
-    residuals = []
-    for e, exp in enumerate(data.experiments):
-        u = model.normalised_input(exp.u)
-        y = np.ascontiguousarray(model.normalised_output(exp.y))
-        x0 = model.initial_state(exp.u, exp.y[: min(exp.n_samples, max(50, 10 * nx))])
-        with np.errstate(all="ignore"):
-            He, ge, _, _ = _walk(model, u, y, x0)
-            step = np.linalg.lstsq(He[p:, p:], ge[p:], rcond=None)[0]
-            He, _, r, se = _walk(model, u, y, x0 + step)
-        cols = np.r_[np.arange(p), p + e * nx + np.arange(nx)]
-        H[np.ix_(cols, cols)] += He
-        sums[:, cols] += se
-        residuals.append(r.reshape(-1, y.shape[1]))
-    return H, residuals, sums
-
-
-def output_sensitivities(
-    model: PolynomialStateSpace, u: Any, y_initial: Any = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """The free run (N, ny) and its derivative (N, ny, p) to the parameters ``θ``, in
-    the data's units, from the initial state that ``y_initial`` gives (held fixed)."""
-    un = model.normalised_input(u)
-    x0, n = np.zeros(model.nx), 0
-    if y_initial is not None and len(np.atleast_1d(y_initial)):
-        n = min(len(y_initial), un.shape[0])
-        x0 = model.initial_state(u, np.asarray(y_initial, dtype=float)[:n])
-    arrays, p, nx, ny = model._arrays(), model.free_parameters().size, model.nx, len(model.outputs)
-    x, S = x0.copy(), np.zeros((nx, p + nx))
-    S[:, p:] = np.eye(nx)
-    y = np.zeros((un.shape[0], ny))
-    dy = np.zeros((un.shape[0], ny, p))
-    for k0 in range(0, un.shape[0], CHUNK):
-        uk = np.ascontiguousarray(un[k0 : k0 + CHUNK])
-        out = np.zeros((uk.shape[0], ny))
-        J = np.zeros((uk.shape[0] * ny, p + nx))
-        pnlss_jacobian(*arrays, uk, x, S, out, J)
-        y[k0 : k0 + uk.shape[0]] = out
-        dy[k0 : k0 + uk.shape[0]] = J[:, :p].reshape(uk.shape[0], ny, p)
-    scale = np.asarray(model.output_scale, dtype=float).reshape(-1)
-    y, dy = y * scale + model.output_offset, dy * scale[None, :, None]
-    k = min(n, model.max_lag)  # measured, as model.simulate copies them
-    y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, ny)[:k]
-    dy[:k] = 0.0
-    return y, dy
 
 
 def refine_state_space(

@@ -32,6 +32,7 @@ single-output model.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from itertools import combinations_with_replacement
 from typing import Any, ClassVar
 
@@ -40,6 +41,9 @@ import numpy as np
 from blockid._kernels.state_space import pnlss_jacobian, pnlss_simulate
 from blockid.errors import DataError, ModelFileError, OrderError
 from blockid.models.base import Model, excursion
+
+#: Samples per piece of the Jacobian walks (:meth:`PolynomialStateSpace.information`).
+JACOBIAN_CHUNK = 4096
 
 __all__ = ["PolynomialStateSpace", "StateSpace", "monomial_exponents"]
 
@@ -381,6 +385,91 @@ class PolynomialStateSpace(Model):
             if self.n_monomials == 0:
                 break  # exact in one step
         return x0
+
+    # ------------------------------------------------------------------ derivatives
+    def _walk(
+        self, un: np.ndarray, yn: np.ndarray, x0: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``J^T J``, ``J^T r``, the residuals ``r`` and each output's column sums of
+        ``J`` (rows: outputs) of a free run from ``x0`` on normalised signals, over
+        ``[θ, x(0)]``, walked in pieces of ``JACOBIAN_CHUNK`` samples."""
+        arrays = self._arrays()
+        nx, P, ny = self.nx, self.free_parameters().size + self.nx, yn.shape[1]
+        x = np.array(x0, dtype=float)
+        S = np.zeros((nx, P))
+        S[:, P - nx :] = np.eye(nx)
+        H, g, sums, parts = np.zeros((P, P)), np.zeros(P), np.zeros((ny, P)), []
+        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
+            uk = np.ascontiguousarray(un[k0 : k0 + JACOBIAN_CHUNK])
+            out = np.zeros((uk.shape[0], ny))
+            J = np.zeros((uk.shape[0] * ny, P))
+            pnlss_jacobian(*arrays, uk, x, S, out, J)
+            r = (yn[k0 : k0 + JACOBIAN_CHUNK] - out).reshape(-1)
+            H += J.T @ J
+            g += J.T @ r
+            sums += J.reshape(uk.shape[0], ny, P).sum(axis=0)
+            parts.append(r)
+        return H, g, np.concatenate(parts), sums
+
+    def information(
+        self, records: Sequence[tuple[Any, Any]]
+    ) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
+        """The Gauss-Newton information ``J^T J`` of the free-run simulation error (in
+        the normalised units a fit minimises) over ``θ`` (:meth:`free_parameters`) and
+        every record's initial state, each record's residuals (N, ny), and ``J^T 1_i``
+        per output ``i`` (rows; ``1_i``: a unit step of output ``i``'s offset).
+
+        ``records``: ``(u, y)`` pairs. Rows and columns: ``θ``, then ``nx`` per record.
+        The initial states are those that best fit each whole record at this ``θ`` (one
+        Gauss-Newton step from the state its first samples give: exact for a linear
+        model), as a fit estimates them.
+        """
+        p, nx = self.free_parameters().size, self.nx
+        H = np.zeros((p + nx * len(records), p + nx * len(records)))
+        sums = np.zeros((len(self.outputs), H.shape[0]))
+        residuals = []
+        for e, (u, y) in enumerate(records):
+            un = self.normalised_input(u)
+            yn = np.ascontiguousarray(self.normalised_output(y))
+            x0 = self.initial_state(u, np.asarray(y)[: min(len(yn), max(50, 10 * nx))])
+            with np.errstate(all="ignore"):
+                He, ge, _, _ = self._walk(un, yn, x0)
+                step = np.linalg.lstsq(He[p:, p:], ge[p:], rcond=None)[0]
+                He, _, r, se = self._walk(un, yn, x0 + step)
+            cols = np.r_[np.arange(p), p + e * nx + np.arange(nx)]
+            H[np.ix_(cols, cols)] += He
+            sums[:, cols] += se
+            residuals.append(r.reshape(-1, yn.shape[1]))
+        return H, residuals, sums
+
+    def output_sensitivities(self, u: Any, y_initial: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """The free run (N, ny) and its derivative (N, ny, p) to the parameters ``θ``, in
+        the data's units, from the initial state that ``y_initial`` gives (held fixed);
+        the first ``min(n, max_lag)`` outputs are the measured ones, as :meth:`simulate`
+        gives them."""
+        un = self.normalised_input(u)
+        x0, n = np.zeros(self.nx), 0
+        if y_initial is not None and len(np.atleast_1d(y_initial)):
+            n = min(len(y_initial), un.shape[0])
+            x0 = self.initial_state(u, np.asarray(y_initial, dtype=float)[:n])
+        arrays, p, nx, ny = self._arrays(), self.free_parameters().size, self.nx, len(self.outputs)
+        x, S = x0.copy(), np.zeros((nx, p + nx))
+        S[:, p:] = np.eye(nx)
+        y = np.zeros((un.shape[0], ny))
+        dy = np.zeros((un.shape[0], ny, p))
+        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
+            uk = np.ascontiguousarray(un[k0 : k0 + JACOBIAN_CHUNK])
+            out = np.zeros((uk.shape[0], ny))
+            J = np.zeros((uk.shape[0] * ny, p + nx))
+            pnlss_jacobian(*arrays, uk, x, S, out, J)
+            y[k0 : k0 + uk.shape[0]] = out
+            dy[k0 : k0 + uk.shape[0]] = J[:, :p].reshape(uk.shape[0], ny, p)
+        scale = np.asarray(self.output_scale, dtype=float).reshape(-1)
+        y, dy = y * scale + self.output_offset, dy * scale[None, :, None]
+        k = min(n, self.max_lag)
+        y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, ny)[:k]
+        dy[:k] = 0.0
+        return y, dy
 
     # ------------------------------------------------------------------ Model
     def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
