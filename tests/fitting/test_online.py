@@ -388,3 +388,23 @@ def test_arx_with_lags_of_three_or_more_learns_from_the_first_sample(method):
 
 def _dataset_siso(u, y):
     return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+
+@pytest.mark.parametrize(
+    ("structure", "method", "start", "given"),
+    [
+        ("arx", "rls", ARX(["u"], ["y"], 2, 2, 1, a={"y": {"y": [-1.2, 0.35]}},
+                           b={"y": {"u": [1.0, 0.4]}}), {"na": 3, "nb": 1}),
+        ("arx", "rls", ARX(["u"], ["y"], 2, 2, 1), {"na": 1}),
+        ("hammerstein-wiener", "key-term-rls", PLANTS["hammerstein-wiener"], {"nk": 2}),
+        ("hammerstein-wiener", "key-term-rls", PLANTS["hammerstein-wiener"], {"r2": 2}),
+    ],
+)  # fmt: skip
+def test_orders_given_beside_a_starting_model_must_be_its_own(structure, method, start, given):
+    """The starting model's parameters were laid out by the orders given instead of its
+    own: taken silently (ARX na=3, nb=1 read the 2+2 numbers as 3+1) or failing deep in
+    NumPy ("operands could not be broadcast")."""
+    with pytest.raises(ParameterError, match="differs from the starting model's"):
+        online_estimator(structure, method, {**given, "initial": start}, ["u"], ["y"])
+    own = {k: getattr(start, k) for k in ("na", "nb", "nk")}
+    online_estimator(structure, method, {**own, "initial": start}, ["u"], ["y"])  # its own: fine

@@ -116,6 +116,8 @@ def test_no_candidate_is_fitted_twice():
     assert len(keys) == len(set(keys))
     fits = sum(stage["fits"] for stage in result.search["stages"])
     assert fits == len(keys) * len(result.search["folds"])
+    # the answer is refitted on all the estimation data, not a fold's training part
+    assert result.fit.n_samples == data.experiments[0].n_samples
 
 
 def test_structures_asked_for_are_what_comes_back():

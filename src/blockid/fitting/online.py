@@ -160,6 +160,7 @@ def online_estimator(
             )
         if "initial_parameters" in opts:
             raise ParameterError("give initial (a model) or initial_parameters, not both")
+        _check_orders_against(initial, opts)
     scales = _scales(extra, opts)
     # the backend of the offline fitter the registry names for this method
     backend = {
@@ -168,6 +169,31 @@ def online_estimator(
         fit_backlash_aw_rls: _OnlineBacklash,
     }[decl.method(method).function()]
     return backend(structure, method, opts, names, scales, initial)
+
+
+def _check_orders_against(initial: Any, opts: dict[str, Any]) -> None:
+    """Orders given beside a starting model must be its own: the model's parameters are
+    the start, laid out by its orders (other orders took them silently, or failed deep
+    in NumPy)."""
+    blocks = {
+        "r1": getattr(getattr(initial, "input_block", None), "order", None),
+        "r2": getattr(getattr(initial, "output_block", None), "degree", None),
+    }
+    for key in ("na", "nb", "nk", "r1", "r2"):
+        value = blocks[key] if key in blocks else getattr(initial, key, None)
+        if key not in opts or value is None:
+            continue
+        own = np.asarray(value)
+        given = np.asarray(opts[key])
+        if given.shape != own.shape and given.size == 1:
+            given = np.broadcast_to(given.reshape(-1)[0], own.shape)
+        if given.shape != own.shape or not np.array_equal(given, own):
+            raise ParameterError(
+                f"{key}={opts[key]!r} differs from the starting model's {key} "
+                f"({own.tolist()}); its parameters are the start, so leave {key} out or "
+                "start from a model of those orders",
+                parameter=key,
+            )
 
 
 def _refuse_whole_record(opts: dict[str, Any]) -> None:
