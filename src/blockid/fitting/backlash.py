@@ -253,7 +253,8 @@ def fit_backlash_aw_rls(
         Linear block orders, MATLAB convention with ``b_0 = 1`` fixed; ``nk >= 1``.
         Paper A: ``na = 2, nb = 1, nk = 1``.
     eps1, eps2 : float
-        AW-RLS weight ``lambda(t) = eps1 s(t) + eps2`` (A8), both ``> 0``. Paper A
+        AW-RLS weight ``lambda(t) = eps1 s(t) + eps2`` (A8), ``eps1 >= 0`` and ``eps2 > 0``
+        (the weight's floor once ``s`` vanishes). Paper A
         gives no values, only that a large ``eps1`` helps from bad initial conditions
         and a small ``eps2`` keeps convergence fast. With ``eps1 = 1`` the first
         samples, processed while the internal signals are still wrong, can throw the

@@ -372,8 +372,20 @@ OPTIONS: dict[str, Option] = _options(
         "bool",
         "Run a paper's recursion on signals divided by their spread (mapped back exactly).",
     ),
-    Option("eps1", "real", "AW-RLS weight eps1 (A8).", low=0.0, open_low=True),
-    Option("eps2", "real", "AW-RLS weight eps2 (A8).", low=0.0),
+    Option(
+        "eps1",
+        "real",
+        "AW-RLS weight lambda = eps1 s + eps2 (A8): eps1 >= 0 (default 1 for arx aw-rls, "
+        "10 for backlash).",
+        low=0.0,
+    ),
+    Option(
+        "eps2",
+        "real",
+        "AW-RLS weight (A8): eps2 > 0, the weight's floor as P shrinks (default 0.1).",
+        low=0.0,
+        open_low=True,
+    ),
     Option(
         "record_history",
         "bool",
