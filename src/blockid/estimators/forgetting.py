@@ -87,6 +87,11 @@ class ForgettingSchedule:
         """True when every factor is 1 (no forgetting)."""
         return all(v == 1.0 for v in self.values)
 
+    @property
+    def settled_after(self) -> int:
+        """Samples after which every factor is the last value."""
+        return int(sum(self.durations))
+
     def factors(self, start: int, n: int) -> np.ndarray:
         """Factors for samples ``start .. start + n - 1`` (sample count since the start)."""
         out = np.full(n, self.values[-1])

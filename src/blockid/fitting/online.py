@@ -738,6 +738,7 @@ class _OnlineARX(OnlineEstimator):
         opts = _defaults(fit_arx, opts, keys)
         self.method = method
         self.schedule = ForgettingSchedule.parse(opts["forgetting"])
+        self._last_factor = np.full(1, self.schedule.values[-1])
         inputs, outputs = names
         self.template = ARX(inputs, outputs, opts["na"], opts["nb"], opts["nk"])
         model = self.template
@@ -847,7 +848,7 @@ class _OnlineARX(OnlineEstimator):
             theta, P = out["theta"].copy(), out["P"].copy()
             E = np.empty(1)
             status = self._kernel(out, Phi, target, theta, P, E)
-            if status != _kr.OK or not np.all(np.isfinite(theta)):
+            if status != _kr.OK or not np.isfinite(theta).all():
                 raise self._diverged(
                     f"{_ARX_NAMES[self.method]} of output {self.template.outputs[i]!r}",
                     0,
@@ -871,7 +872,10 @@ class _OnlineARX(OnlineEstimator):
         if self.method == "aw-rls":
             eps1, eps2 = out["eps"]
             return _kr.aw_rls_run(theta, P, Phi, target, eps1, eps2, np.empty(m), E)
-        lam = self.schedule.factors(out["updates"], m)
+        if m == 1 and out["updates"] >= self.schedule.settled_after:  # the per-sample path
+            lam = self._last_factor
+        else:
+            lam = self.schedule.factors(out["updates"], m)
         if self.method == "rls":
             return _kr.rls_run(theta, P, Phi, target, lam, out["trace"], E)
         return _kr.hierarchical_rls_run(theta, P, Phi, target, out["bounds"], lam, out["trace"], E)
