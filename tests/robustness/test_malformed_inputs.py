@@ -1499,9 +1499,9 @@ CASES = [
         ["tol must be > 0, got -1", "--tol"],
     ),
     Case(
-        "option eps1 zero",
-        ["fit", *G, "--structure", "arx", "--method", "aw-rls", "--eps1", "0", "--json"],
-        ["eps1 must be > 0, got 0", "--eps1"],
+        "option eps2 zero",  # the weight's floor (eps1 = 0 is a constant weight: valid)
+        ["fit", *G, "--structure", "arx", "--method", "aw-rls", "--eps2", "0", "--json"],
+        ["eps2 must be > 0, got 0", "--eps2"],
     ),
     Case(
         "option max-nfev zero",
