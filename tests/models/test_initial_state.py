@@ -154,15 +154,21 @@ def test_wiener_output_that_cannot_be_inverted_is_estimated_much_better_than_res
     assert _relative(new[50:], y[50:], scale) < 1e-6 * rest_error
 
 
-def test_integrator_chain_estimates_the_fitted_block_before_it():
-    # the integrator is the last linear block (started from y); the block before it was
-    # started at rest, which an integrator never forgets
-    model, u, y = _record(_integrating())
-    scale = np.max(np.abs(y))
-    old = model.simulate(u, y[: model.max_lag])[:, 0]
+def test_an_integrating_chain_estimates_the_integrators_level_only():
+    """The start of a block before an integrator, fitted to the window, is summed by the
+    integrator into a lasting offset: with any model error it drifts (an EMPS
+    Wiener-Hammerstein model with an integrator, simulated on the test record from 20
+    measured samples: 207 mm RMSE on a 0.25 m stroke, against 4.4 mm from one). Such a
+    chain estimates the integrator's start (the measured level, over the whole window)
+    and starts the blocks before it at rest."""
+    from blockid.models.initial_state import _layout
+
+    model, u, y = _record(_integrating(), cut=0)  # a record from rest
+    assert [i for i, _, _ in _layout(model, 50)] == [1]  # the integrator only
     new = model.simulate(u, y[:50])[:, 0]
-    assert _relative(old[-100:], y[-100:], scale) > 1e-3  # a drift that stays
-    assert _relative(new[50:], y[50:], scale) < 1e-8
+    assert _relative(new, y, np.max(np.abs(y))) < 1e-8
+    shifted = model.simulate(u, y[:50] + 0.1)[:, 0]  # a level the window shows: followed
+    np.testing.assert_allclose(shifted[50:] - new[50:], 0.1, atol=1e-9)
 
 
 def test_backlash_starts_at_rest_but_the_linear_block_is_estimated():
