@@ -252,3 +252,19 @@ def test_a_state_nonlinearity_gets_a_polynomial_state_space_model():
     tied = {s.candidate.options["nx"] for s in ranked if s.rmse <= ranked[0].rmse * 1.02}
     assert ranked[0].candidate.options["nx"] in tried
     assert max(tied) in tried or len(tried) == 2
+
+
+def test_the_nonlinearity_stage_keeps_a_state_space_degree_within_the_effort():
+    """The folds lie inside the estimation range, so they cannot show how a higher
+    monomial degree extrapolates beyond it: growth stops at the effort's largest planned
+    degree (and within its parameter budget)."""
+    from blockid.workflows.identify import _affordable
+    from blockid.workflows.search_space import Candidate
+
+    standard = EFFORTS["standard"]  # plans degrees 2 and 3, 300 parameters
+    pnlss = Candidate("polynomial-state-space", {"nx": 2, "degree": 3, "monomials": "full"})
+    assert _affordable(pnlss, (1, 1), standard)
+    assert not _affordable(pnlss.with_options(degree=4), (1, 1), standard)
+    assert _affordable(pnlss.with_options(degree=4), (1, 1), EFFORTS["thorough"])
+    assert not _affordable(pnlss.with_options(nx=8), (1, 1), standard)  # 494 > 300
+    assert _affordable(Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1}), (1, 1), standard)
