@@ -137,3 +137,19 @@ def test_shapes_are_checked_with_their_names():
         StateSpace(["u"], ["y"], [[0.5]], [[1.0]], [[1.0]], [[0.0]], E=[[1.0]])
     with pytest.raises(OrderError, match="monomials"):
         monomial_exponents(2, 1, 3, "some")
+
+
+def test_the_initial_state_search_never_returns_a_worse_state_than_it_has_seen():
+    """Gauss-Newton from x = 0 on an output strongly curved in the state overshoots: the
+    first full step (slope 1 at 0, y(0) = 6) lands near x = 6, where the squared term
+    makes the cost far larger. The search returned that rejected state (a PNLSS model
+    of the Silverbox scored 1.56 mV instead of 0.22 on a fold started from 50 samples);
+    it now halves the step and keeps the best state."""
+    expo = monomial_exponents(1, 1, 2, "states")
+    model = PolynomialStateSpace(
+        ["u"], ["y"], [[0.9]], [[1.0]], [[1.0]], [[0.0]], [[0.0]], [[5.0]], expo
+    )  # fmt: skip  y = x + 5 x^2
+    u = np.random.default_rng(0).standard_normal(100) * 0.1
+    y, _ = model.run(u[:, None], np.array([1.0]))
+    x0 = model.initial_state(u, y[:10])
+    np.testing.assert_allclose(x0, [1.0], atol=1e-8)

@@ -365,9 +365,8 @@ class PolynomialStateSpace(Model):
         n = yn.shape[0]
         un = self.normalised_input(u)[:n]
         nx, P = self.nx, self.free_parameters().size + self.nx
-        x0 = np.zeros(nx)
-        best = np.inf
-        for _ in range(INITIAL_ITERATIONS):
+
+        def linearised(x0: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
             x = x0.copy()
             S = np.zeros((nx, P))
             S[:, P - nx :] = np.eye(nx)
@@ -376,15 +375,27 @@ class PolynomialStateSpace(Model):
             with np.errstate(all="ignore"):
                 pnlss_jacobian(*self._arrays(), un, x, S, y, J)
             r = (yn - y).reshape(-1)
-            cost = float(r @ r)
-            if not np.isfinite(cost) or cost >= best * (1 - 1e-12):
-                break
-            best = cost
-            step = np.linalg.lstsq(J[:, P - nx :], r, rcond=None)[0]
-            x0 = x0 + step
-            if self.n_monomials == 0:
-                break  # exact in one step
-        return x0
+            return float(r @ r), r, J[:, P - nx :]
+
+        best_x = np.zeros(nx)
+        best, r, J = linearised(best_x)
+        if not np.isfinite(best):
+            return best_x
+        for _ in range(INITIAL_ITERATIONS):
+            step = np.linalg.lstsq(J, r, rcond=None)[0]
+            for _halving in range(10):  # Gauss-Newton, the step halved until it helps
+                trial = best_x + step
+                cost, r_new, J_new = linearised(trial)
+                if np.isfinite(cost) and cost < best:
+                    break
+                step = step / 2
+            else:
+                break  # no step lowers the cost: the best state so far
+            gain = (best - cost) / max(best, 1e-300)
+            best_x, best, r, J = trial, cost, r_new, J_new
+            if self.n_monomials == 0 or gain < 1e-12:
+                break  # exact in one step for a linear model; converged otherwise
+        return best_x
 
     # ------------------------------------------------------------------ derivatives
     def _walk(
