@@ -266,6 +266,20 @@ def test_to_control_when_installed():
     np.testing.assert_allclose(np.ravel(step), block.simulate(np.ones(40)), atol=1e-10)
 
 
+def test_state_space_to_control_gives_each_input_output_pair():
+    control = pytest.importorskip("control")
+    model = _models()["state-space-mimo"]
+    zero = model.simulate(np.tile(model.input_offset, (40, 1)))  # the offsets' response
+    for k, tf in enumerate(transfer_functions(model)):
+        i, j = model.inputs.index(tf["input"]), model.outputs.index(tf["output"])
+        u = np.tile(model.input_offset, (40, 1))
+        u[:, i] += 1.0
+        _, step = control.step_response(to_control(model, index=k), T=np.arange(40))
+        np.testing.assert_allclose(
+            np.ravel(step), model.simulate(u)[:, j] - zero[:, j], atol=1e-10
+        )
+
+
 # ----------------------------------------------------------------------------- command
 def _app() -> typer.Typer:
     app = typer.Typer()

@@ -152,14 +152,16 @@ def test_orders_at_the_edge_of_the_grid_are_flagged():
 
 def test_noisy_data_without_a_pass_fall_back_to_the_knee():
     data, _ = plant_data("arx(2,2,1)", n=2000, snr_db=10, seed=2)
-    ev = false_nearest_neighbours(data, max_na=3, max_nb=3, max_nk=2, threshold=0.1)
-    if ev.passed:  # pragma: no cover - depends on the draw; the draw below does not pass
-        pytest.skip("passed at 10 dB")
+    # without a noise allowance no order passes at 10 dB (seeds 1-5 checked)
+    ev = false_nearest_neighbours(data, max_na=3, max_nb=3, max_nk=2, threshold=0.1, noise=0.0)
+    assert not ev.passed
     assert ev.pass_mark == pytest.approx(ev.percent.min() + 0.1)
     assert "knee" in ev.evidence()["notes"][0]
     # the noise allowance of Rhodes & Morari lowers the shares
     loose = false_nearest_neighbours(data, max_na=3, max_nb=3, max_nk=2, noise=0.3)
     assert loose.percent.sum() < ev.percent.sum()
+    # ...and the estimated allowance (the default) finds a passing order
+    assert false_nearest_neighbours(data, max_na=3, max_nb=3, max_nk=2, threshold=0.1).passed
 
 
 @pytest.mark.parametrize(

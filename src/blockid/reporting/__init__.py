@@ -1,6 +1,6 @@
 """Reports people can show: one self-contained HTML file per identification.
 
->>> from blockid.reporting import build_report, collect_provenance  # doctest: +SKIP
+>>> from blockid.reporting import build_report, collect_provenance
 """
 
 from blockid.reporting.provenance import DataFile, Provenance, collect_provenance, file_sha256
