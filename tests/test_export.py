@@ -275,9 +275,7 @@ def test_state_space_to_control_gives_each_input_output_pair():
         u = np.tile(model.input_offset, (40, 1))
         u[:, i] += 1.0
         _, step = control.step_response(to_control(model, index=k), T=np.arange(40))
-        np.testing.assert_allclose(
-            np.ravel(step), model.simulate(u)[:, j] - zero[:, j], atol=1e-10
-        )
+        np.testing.assert_allclose(np.ravel(step), model.simulate(u)[:, j] - zero[:, j], atol=1e-10)
 
 
 # ----------------------------------------------------------------------------- command
