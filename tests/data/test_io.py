@@ -139,6 +139,23 @@ def test_semicolon_delimiter_is_sniffed(tmp_path):
     np.testing.assert_array_equal(read_data(path, ["u"], ["y"]).signal("u")[0], [1.5, 2.5])
 
 
+def test_delimiter_of_wide_rows_when_the_sniffed_bytes_end_inside_a_row(tmp_path):
+    """Rows so wide that the sniffed first 64 KiB end one field into a row: the cut line
+    holds no delimiter and must not outvote the whole ones (it did: a tab-separated
+    ``.csv`` was read as one comma-separated column)."""
+    from blockid.data.io import _SNIFF_BYTES
+
+    values = "\t".join(["0.25"] * 300)
+    row = "1.5\t" + values + "\n"  # first field '1.5', then the tab
+    for pad in range(len(row)):
+        header = "u\ty\t" + "\t".join(f"c{k}" for k in range(299)) + "x" * pad + "\n"
+        if 1 <= (_SNIFF_BYTES - len(header)) % len(row) <= 3:  # the cut falls in '1.5'
+            break
+    path = write(tmp_path / "wide.csv", header + row * (2 * _SNIFF_BYTES // len(row)))
+    data = read_data(path, ["u"], ["y"])
+    np.testing.assert_array_equal(data.signal("y")[0][:3], [0.25, 0.25, 0.25])
+
+
 def test_decimal_comma_gets_a_hint(tmp_path):
     path = write(tmp_path / "eu.csv", "u;y\n1,5;2\n2,5;3\n")
     with pytest.raises(DataError) as info:

@@ -67,3 +67,9 @@ def test_fit_chunks_with_normalised_columns_matches_least_squares_and_scales_the
     dependent = np.column_stack([Phi, 2.0 * Phi[:, 2]])
     with pytest.raises(EstimationError, match=r"column\(s\) \[4\]"):
         BatchLeastSquares().fit_chunks([(dependent, y)], normalise=True)
+    # an all-zero column (an input that never moved) is named, not divided by zero
+    dead = np.column_stack([Phi[:, :2], np.zeros(600), Phi[:, 2:]])
+    with pytest.raises(EstimationError, match=r"column\(s\) \[2\] \(constant"):
+        BatchLeastSquares().fit_chunks(
+            [(dead[:300], y[:300]), (dead[300:], y[300:])], normalise=True
+        )

@@ -7,33 +7,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import blockid.fitting.simulation_error as simulation_error
 from blockid import errors
 from blockid.blocks import DeadZone, PiecewiseLinear, Polynomial, Saturation
 from blockid.blocks.linear import LinearBlock
 from blockid.data import Dataset
 from blockid.fitting import fit_model
 from blockid.fitting.feedback import fit_feedback, initial_feedback
-from blockid.models import ChainModel
 from blockid.models.feedback import LinearFeedback
 
 from reference import TanhSpring
 
 SILVERBOX = Path(__file__).parents[2] / ".." / "shared" / "data" / "silverbox" / "SNLS80mV.csv"
-
-
-@pytest.fixture(autouse=True)
-def own_jacobian(monkeypatch):
-    """Let ``refine`` use a model's own ``simulate_with_sensitivities`` (the change to
-    fitting/simulation_error.py that LinearFeedback needs; harmless once it is made)."""
-    chain = simulation_error.simulate_with_sensitivities
-
-    def dispatch(model, u, y_initial=None):
-        own = getattr(model, "simulate_with_sensitivities", None)
-        return own(u, y_initial) if own is not None else chain(model, u, y_initial)
-
-    monkeypatch.setattr(simulation_error, "simulate_with_sensitivities", dispatch)
-    monkeypatch.setattr(simulation_error, "ChainModel", (ChainModel, LinearFeedback))
 
 
 def duffing(c=(0.0, 0.0, 1.0)):
