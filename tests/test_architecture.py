@@ -22,12 +22,12 @@ LAYERS = {
     "plants": 3,
     "models": 3,
     "estimators": 4,
-    "fitting": 5,
-    "evaluation": 5,
-    "plotting": 6,
-    "workflows": 7,
-    "reporting": 7,
-    "cli": 8,
+    "evaluation": 5,  # scores and standard errors read models, never fitters
+    "fitting": 6,
+    "plotting": 7,
+    "workflows": 8,
+    "reporting": 8,
+    "cli": 9,
 }
 
 

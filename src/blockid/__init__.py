@@ -2,7 +2,7 @@
 
 Data flows one way::
 
-    data -> blocks -> models -> estimators -> fitting -> evaluation -> plotting -> cli
+    data -> blocks -> models -> estimators -> evaluation -> fitting -> plotting -> cli
                           \\-> _kernels (numba, NumPy only) <-/
 
 The top level re-exports a small, deliberate API; everything else lives in its

@@ -10,24 +10,10 @@ from blockid.blocks import Backlash, DeadZone, PiecewiseLinear, Polynomial, Satu
 from blockid.blocks.free_pwl import FreePiecewiseLinear
 from blockid.blocks.linear import LinearBlock
 from blockid.data import Dataset
-from blockid.models import ChainModel, load_model, model_from_dict, save_model
+from blockid.models import load_model, model_from_dict, save_model
 from blockid.models.feedback import LinearFeedback
 
 from reference import TanhSpring
-
-
-@pytest.fixture
-def own_jacobian(monkeypatch):
-    """Let ``refine`` use a model's own ``simulate_with_sensitivities`` (the change to
-    fitting/simulation_error.py that LinearFeedback needs; harmless once it is made)."""
-    chain = simulation_error.simulate_with_sensitivities
-
-    def dispatch(model, u, y_initial=None):
-        own = getattr(model, "simulate_with_sensitivities", None)
-        return own(u, y_initial) if own is not None else chain(model, u, y_initial)
-
-    monkeypatch.setattr(simulation_error, "simulate_with_sensitivities", dispatch)
-    monkeypatch.setattr(simulation_error, "ChainModel", (ChainModel, LinearFeedback))
 
 
 def duffing(**kwargs):
@@ -205,7 +191,7 @@ def test_models_that_make_no_sense_are_refused():
         model_from_dict(data)
 
 
-def test_refine_recovers_the_plant_from_a_perturbed_start(own_jacobian):
+def test_refine_recovers_the_plant_from_a_perturbed_start():
     truth = duffing(input_offset=0.2, output_offset=0.4)
     u = _input(3000, seed=5) + 0.2
     data = Dataset.from_arrays(u, truth.simulate(u), ["u"], ["y"])

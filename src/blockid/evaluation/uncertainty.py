@@ -14,7 +14,7 @@ after the initial conditions. Which predictions depends on the model:
 
 * **Block-oriented models** (any chain of blocks, and the feedback model): the free-run
   simulation and its analytic sensitivities
-  (:func:`~blockid.fitting.simulation_error.simulate_with_sensitivities`), started from
+  (:meth:`simulate_with_sensitivities` of the model), started from
   the first ``max_lag`` measured outputs of each experiment, which are skipped, as the
   simulation-error fit does. This is the covariance of the output-error estimate, and it
   **assumes the output-error noise model**: white measurement noise added to ``y``. With
@@ -300,15 +300,13 @@ def _effective_samples(residuals: list[np.ndarray], n: int) -> float:
 def _simulation_covariance(
     model: Any, data: Dataset, method: str | None, tail_fraction: float, centered: bool
 ) -> ParameterCovariance:
-    from blockid.fitting.simulation_error import simulate_with_sensitivities
-
     n0 = model.max_lag
     p = model.free_parameters().size
     rows, residuals, whole = [], [], []
     for e in data.experiments:
         stop = _fitted_rows(e.n_samples, n0, p, tail_fraction)
         # causal: the fitted rows are a prefix of the whole run
-        y_hat, dy = simulate_with_sensitivities(model, e.u, e.y[:n0])
+        y_hat, dy = model.simulate_with_sensitivities(e.u, e.y[:n0])
         residuals.append(e.y[n0:stop, 0] - y_hat[n0:stop])
         rows.append(dy[n0:stop])
         whole.append(e.y[n0:, 0] - y_hat[n0:])
@@ -660,9 +658,7 @@ def _output_sensitivities(
     if isinstance(model, PolynomialStateSpace):
         return model.output_sensitivities(u, y_initial)
     if hasattr(model, "free_parameters"):
-        from blockid.fitting.simulation_error import simulate_with_sensitivities
-
-        y, dy = simulate_with_sensitivities(model, u, y_initial)
+        y, dy = model.simulate_with_sensitivities(u, y_initial)
         return np.asarray(y, float)[:, None], np.asarray(dy, float)[:, None, :]
     # ARX: central differences, one parameter at a time
     y = model.simulate(u, y_initial)

@@ -416,6 +416,16 @@ class ChainModel(Model):
             highs.append(hi[mask])
         return np.concatenate(lows), np.concatenate(highs)
 
+    def simulate_with_sensitivities(
+        self, u: Any, y_initial: Any = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Free-run simulation ``y`` (N,) and its derivative ``dy`` (N, n_free) with
+        respect to :meth:`free_parameters`, started from the first ``max_lag`` of
+        ``y_initial`` (:func:`blockid.models.sensitivities.chain_sensitivities`)."""
+        from blockid.models.sensitivities import chain_sensitivities
+
+        return chain_sensitivities(self, u, y_initial)
+
     def block_columns(self) -> list[np.ndarray]:
         """For every block, the column of :meth:`free_parameters` of each entry of its
         vector (-1 for a fixed entry)."""
