@@ -42,7 +42,10 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
    more than ``tie``.
 6. ``refit`` -- the chosen candidate (ranked by score; among near-ties, within ``tie``,
    the fewest parameters) fitted with its own options on **all** estimation data,
-   and checked once more (free run from rest). If that fails, the next one.
+   and checked once more (free run from rest). If that fails, the next one. A refit
+   stopped by its evaluation limit more than ``REFIT_SLACK`` worse on its own data than
+   the candidate's cross-validated score is fitted again with ``REFIT_MORE`` times the
+   evaluations, and the better kept.
 
 **Deterministic.** The search is a fixed amount of work: no stage depends on the
 clock, so the same data, options and version give the same model, bit for bit, on a
@@ -103,6 +106,12 @@ Progress = Callable[[str, int, int, str], None]
 
 #: A least-squares ARX pole this close to +1 suggests that the plant integrates.
 INTEGRATING_POLE = 1e-2
+#: A refit on all estimation data that stopped at its evaluation limit and simulates its
+#: own data more than this factor worse than its candidate's cross-validated score (on
+#: data its fold fits never saw) has not converged: it is fitted again with
+#: ``REFIT_MORE`` times the evaluations, and the better of the two kept.
+REFIT_SLACK = 1.1
+REFIT_MORE = 3
 
 
 # ----------------------------------------------------------------------------- scores
@@ -477,13 +486,41 @@ def _orders_of(score: Score) -> tuple[int, int, int]:
     return int(o["na"]), int(o["nb"]), int(o["nk"])
 
 
-def _refit(candidate: Candidate, data: Dataset) -> Any:
-    """The candidate fitted with its own options on all estimation data, and checked."""
+def _refit(
+    candidate: Candidate, data: Dataset, cv_rmse: float, n_init: int, notes: list[str]
+) -> Any:
+    """The candidate fitted with its own options on all estimation data, and checked.
+
+    A fit stopped by its evaluation limit whose free run on its own data is more than
+    ``REFIT_SLACK`` times the candidate's cross-validated RMSE is fitted again with
+    ``REFIT_MORE`` times the evaluations (the folds showed what the structure reaches;
+    a longer record can need more iterations to get there), and the better kept."""
+    from blockid.evaluation.validate import evaluate
     from blockid.fitting.dispatch import fit_model
     from blockid.workflows.parallel import _single_threaded
 
+    def own_rmse(fit: Any) -> float:
+        return _pooled(evaluate(fit.model, data, "simulation", initial_samples=n_init), data)[0]
+
     with _single_threaded(), np.errstate(all="ignore"):
         fit = fit_model(data, candidate.structure, **candidate.options)
+        nfev = candidate.options.get("max_nfev")
+        stopped = "max_nfev" in str(fit.settings.get("stop_reason", ""))
+        if stopped and nfev is not None and math.isfinite(cv_rmse):
+            first = own_rmse(fit)
+            if first > REFIT_SLACK * cv_rmse:
+                more = {**candidate.options, "max_nfev": REFIT_MORE * int(nfev)}
+                longer = fit_model(data, candidate.structure, **more)
+                second = own_rmse(longer)
+                if second < first:
+                    fit = longer
+                notes.append(
+                    f"the refit of {candidate.label} on all estimation data stopped at "
+                    f"max_nfev = {nfev} with a free-run RMSE of {first:.4g} on its own data "
+                    f"against {cv_rmse:.4g} cross-validated; fitted again with max_nfev = "
+                    f"{more['max_nfev']}: {second:.4g}"
+                    + ("" if second < first else " (not better: the first fit kept)")
+                )
         trust = assess(fit.model, data)
     if trust.reasons:
         raise EstimationError(trust.reasons[0])
@@ -587,7 +624,7 @@ def identify(
         if progress is not None:
             progress("refit", 0, 1, s.candidate.label)
         try:
-            fit = _refit(s.candidate, data)
+            fit = _refit(s.candidate, data, s.rmse, search.n_init, notes)
         except BlockidError as exc:
             notes.append(f"{s.candidate.label} failed on all estimation data ({_reason(exc)}); "
                          "the next candidate was fitted instead")  # fmt: skip
