@@ -324,7 +324,7 @@ def _summary(records: dict[str, dict[str, Any]]) -> tuple[list[str], list[tuple]
             beats = _beats(t["rmse"], lin)
             if kind == "our ARX" and r["selected"]["structure"] == "arx":
                 beats = "- (the winner is an ARX)"
-            if beats not in ("yes", "-"):
+            if beats != "yes" and not beats.startswith("-"):
                 shortfalls.append((name, r, t, lin, kind))
             lines.append(
                 f"| {r['title']} | {t['name']} | {_f(t['rmse'])} {r['unit']} | {_f(lin)} ({kind}) "
@@ -486,7 +486,55 @@ def _study_section(study: dict[str, Any]) -> list[str]:
 
 #: Explanations of shortfalls, by data set, from the evidence of the run they refer to
 #: (its ranked candidates, rejections, fold scores); check them against a new run.
-WHY: dict[str, str] = {}
+WHY: dict[str, str] = {
+    "emps": (
+        "The integrating Hammerstein model won the three folds (cross-validated 18.2 mm "
+        "against 21.3 mm for the best ARX) and drifts on the test record (47.7 mm; our ARX "
+        "8.84 mm). A model that integrates accumulates its velocity error: each fold is "
+        "8 280 samples, the test record 24 841 simulated from 20 samples, so the folds "
+        "under-state an integrating model's error at the test's horizon. Not tuned away: "
+        "a rule that favours the ARX here would have to be justified on estimation data "
+        "alone, and one was not found in this round (open in issue 20)."
+    ),
+    "daisy_ballbeam": (
+        "Same pattern as the EMPS: an output-error model with an integrator won the folds "
+        "(0.0557 against 0.0785 for the best ARX, each fold 125 samples) and drifts over "
+        "the 500-sample test half (0.232 against 0.0706)."
+    ),
+    "daisy_heating_system": (
+        "The estimation half's folds favour the 4-state linear state-space model 3.4 to 1 "
+        "over the best ARX (16.3 against 55.3), the test half favours the ARX 4 to 1 (10.6 "
+        "against 44.1): 400 estimation samples in four folds of 100, whose evidence the "
+        "second half does not bear out. Choosing by the test would be tuning on it."
+    ),
+    "daisy_flexible_robot_arm": (
+        "The Hammerstein-Wiener model (28 parameters) scored 0.0071 in the folds against "
+        "0.0080 for ARX(8, 9) and tests 0.0104 against 0.0082: with 512 estimation samples "
+        "the folds (128 each) do not separate them reliably."
+    ),
+    "box_jenkins_gas_furnace": (
+        "A tie in the folds (0.425 against 0.420 for ARX(7, 5, 2), within the 2 % near-tie "
+        "band), where the parsimony rule takes the candidate with fewer parameters; the test "
+        "half (148 samples) gives 1.27 against 1.23 (3 %): the 296-sample record cannot "
+        "support more than a linear model."
+    ),
+    "daisy_dryer": (
+        "A tie (0.117 against 0.116): the hair dryer is close to linear, and the search "
+        "found no nonlinearity worth its parameters (cross-validated 0.1105 against 0.1114)."
+    ),
+    "wh_process_noise": (
+        "Linear output-error chosen (cross-validated 87.9 mV against 88.9 for the best "
+        "ARX); it beats the ARX on the multisine test (38.7 against 46.4 mV) and loses on "
+        "the sine sweep (23.2 against 20.2 mV). With process noise inside the plant the "
+        "free-run error is dominated by the noise, and no nonlinear candidate beat the "
+        "linear ones in the folds."
+    ),
+    "daisy_evaporator": (
+        "The 6-state linear state-space model won the folds (0.537 against 0.603 for the "
+        "best ARX) and beats the ARX on outputs 2 and 3 of the test half, not on output 1 "
+        "(0.628 against 0.512). No multivariable block structure exists yet (issue 18)."
+    ),
+}
 
 
 def _shown(path: str) -> str:
