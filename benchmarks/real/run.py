@@ -440,7 +440,7 @@ def _pnlss_section(pnlss: dict[str, dict[str, Any]]) -> list[str]:
         "simulation on each test record, started from its allowed initial outputs. Fit "
         "time on one worker.",
         "",
-        "| set | test record | PNLSS | its linear part alone | target | met? | published PNLSS "
+        "| set | test record | PNLSS | its linear part alone | target | met? | best published "
         "| degree | parameters | iterations (stop) | fit s | load |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
