@@ -211,19 +211,6 @@ def test_saturation_names_a_bad_lower_limit():
         Saturation("low", 1.0)
 
 
-def test_static_block_plot_draws_the_block_over_the_given_range():
-    import matplotlib.pyplot as plt
-
-    ax = DeadZone(-0.5, 0.5, slope_left=2.0).plot(u_range=(-1.0, 1.0), n_points=5)
-    try:
-        (line,) = ax.get_lines()
-        np.testing.assert_array_equal(line.get_xdata(), [-1.0, -0.5, 0.0, 0.5, 1.0])
-        np.testing.assert_array_equal(line.get_ydata(), [-1.0, 0.0, 0.0, 0.0, 0.5])
-        assert line.get_label() == "dead zone"  # readable, not the class name
-    finally:
-        plt.close(ax.figure)
-
-
 class _QuadraticGain(StaticBlock):
     """A user block ``w = gain u^2`` with ``gain >= 0``, on the default (finite-difference)
     jacobian: at ``gain = 0`` the step down is refused by the constructor."""

@@ -110,3 +110,14 @@ def test_the_blocks_figure_of_a_feedback_model_draws_the_fed_back_block():
     grid = ax.lines[0].get_xdata()
     assert grid.min() == pytest.approx(y.min()) and grid.max() == pytest.approx(y.max())
     plt.close(fig)
+
+
+def test_static_block_plot_draws_the_block_over_the_given_range():
+    ax = DeadZone(-0.5, 0.5, slope_left=2.0).plot(u_range=(-1.0, 1.0), n_points=5)
+    try:
+        (line,) = ax.get_lines()
+        np.testing.assert_array_equal(line.get_xdata(), [-1.0, -0.5, 0.0, 0.5, 1.0])
+        np.testing.assert_array_equal(line.get_ydata(), [-1.0, 0.0, 0.0, 0.0, 0.5])
+        assert line.get_label() == "dead zone"  # readable, not the class name
+    finally:
+        plt.close(ax.figure)
