@@ -16,12 +16,12 @@ from blockid.cli._common import (
     Quiet,
     Seed,
     busy,
-    check_arguments,
     cli_errors,
     print_json,
     refuse_to_overwrite,
     stdout,
 )
+from blockid.cli._data import check_arguments
 from blockid.cli._tables import print_electrohydraulic as _print_electrohydraulic
 from blockid.workflows.examples import EXAMPLES, check_example
 

@@ -15,12 +15,12 @@ import typer
 from blockid.cli._common import (
     Force,
     Json,
-    check_arguments,
     cli_errors,
     print_json,
     refuse_to_overwrite,
     stdout,
 )
+from blockid.cli._data import check_arguments
 
 __all__ = ["export"]
 

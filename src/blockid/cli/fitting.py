@@ -23,9 +23,7 @@ from blockid.cli._common import (
     SamplingTime,
     TimeColumn,
     busy,
-    check_arguments,
     cli_errors,
-    load_data,
     metrics_table,
     print_json,
     print_model,
@@ -34,6 +32,7 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
+from blockid.cli._data import check_arguments, load_data
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     ComparedStructures,

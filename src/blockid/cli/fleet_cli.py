@@ -23,13 +23,13 @@ from blockid.cli._common import (
     Quiet,
     SamplingTime,
     TimeColumn,
-    check_arguments,
     cli_errors,
     print_json,
     progress_bar,
     stderr,
     stdout,
 )
+from blockid.cli._data import check_arguments
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     Method,

@@ -23,18 +23,16 @@ from blockid.cli._common import (
     SamplingTime,
     TimeColumn,
     busy,
-    check_arguments,
     cli_errors,
-    load_data,
     metrics_table,
     print_json,
     print_model,
     progress_bar,
     refuse_figures,
     refuse_to_overwrite,
-    select_range,
     stdout,
 )
+from blockid.cli._data import check_arguments, load_data, select_range
 from blockid.cli.report import ReportFile, write_report_option
 
 __all__ = ["identify"]

@@ -18,10 +18,10 @@ from blockid.cli._common import (
     SamplingTime,
     TimeColumn,
     cli_errors,
-    load_data,
     print_json,
     stdout,
 )
+from blockid.cli._data import load_data
 from blockid.errors import BlockidError, ParameterError
 from blockid.fitting.order_defaults import DEFAULTS
 

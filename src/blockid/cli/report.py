@@ -25,14 +25,13 @@ from blockid.cli._common import (
     SamplingTime,
     TimeColumn,
     busy,
-    check_arguments,
     cli_errors,
-    load_data,
     print_json,
     refuse_to_overwrite,
     stderr,
     stdout,
 )
+from blockid.cli._data import check_arguments, load_data
 from blockid.cli._options import (
     ComparedStructures,
     EstimationRange,

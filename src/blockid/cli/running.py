@@ -15,9 +15,7 @@ from blockid.cli._common import (
     Json,
     SamplingTime,
     TimeColumn,
-    check_arguments,
     cli_errors,
-    load_data,
     metrics_table,
     print_json,
     refuse_figures,
@@ -25,6 +23,7 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
+from blockid.cli._data import check_arguments, load_data
 
 __all__ = ["predict", "simulate"]
 

@@ -19,11 +19,11 @@ from blockid.cli._common import (
     Force,
     Inputs,
     Outputs,
-    check_arguments,
     cli_errors,
     refuse_to_overwrite,
     stderr,
 )
+from blockid.cli._data import check_arguments
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     given,

@@ -1,0 +1,84 @@
+"""The commands' data files and argument checks, before the numerical stack is imported.
+
+:func:`check_arguments` refuses bad files, ranges, structures and options with one line
+while only the standard library is loaded; :func:`load_data` reads the files once they
+pass (``tests/cli/test_startup.py`` checks both).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+__all__ = ["check_arguments", "load_data", "select_range"]
+
+
+def check_arguments(
+    paths: Sequence[Path] | None = None,
+    *,
+    structure: str | None = None,
+    method: str | None = None,
+    options: dict[str, Any] | None = None,
+    ranges: dict[str, str | None] | None = None,
+    model: Path | None = None,
+    table: Path | None = None,
+) -> None:
+    """Refuse bad arguments before the numerical stack is imported: missing, empty or
+    unknown data files, malformed sample ranges (``{flag: text}``), an unknown
+    structure or method, options the method does not take or values out of range
+    (block and forgetting values are checked by the fit), a ``model`` file that is not
+    one, a ``table`` to write of an unknown type."""
+    from blockid.data.files import check_data_paths, check_table_target, read_model_document
+    from blockid.data.ranges import parse_range
+    from blockid.fitting.registry import resolve_options
+
+    if model is not None:
+        read_model_document(model)
+    if paths is not None:
+        check_data_paths(paths)
+    if table is not None:
+        check_table_target(table)
+    for what, text in (ranges or {}).items():
+        if text:
+            parse_range(text, what)
+    if structure is not None:
+        resolve_options(structure, method, options or {}, light=True)
+
+
+def load_data(
+    paths: Sequence[Path],
+    inputs: Sequence[str],
+    outputs: Sequence[str],
+    ts: float | None,
+    time_column: str | None,
+    experiment_column: str | None,
+    rng: str | None = None,
+    what: str = "--estimation",
+) -> Any:
+    """Read the data files; keep the samples of ``rng`` (the text of flag ``what``).
+
+    The paths and the range are checked before pandas is imported
+    (:func:`check_arguments`)."""
+    check_arguments(paths, ranges={what: rng})
+    from blockid.data import read_data
+
+    data = read_data(
+        paths,
+        inputs,
+        outputs,
+        sampling_time=ts,
+        time_column=time_column,
+        experiment_column=experiment_column,
+    )
+    return select_range(data, rng, what)
+
+
+def select_range(data: Any, rng: str | None, what: str) -> Any:
+    """The samples of ``data`` in range ``rng`` (the text of flag ``what``; None: all)."""
+    from blockid.data.ranges import parse_range
+
+    if not rng:
+        return data
+    start, stop = parse_range(rng, what)
+    return data.select(start, stop, what=what)
