@@ -102,3 +102,18 @@ class TanhSpring(StaticBlock):
 
     def __call__(self, u):
         return self.k * np.tanh(np.asarray(u, dtype=float))
+
+
+def squared_state_record(n=1500, seed=0, noise=0.01):
+    """A second-order plant whose nonlinearity acts on its state (``0.3 x1^2`` fed into
+    ``x2``), driven by uniform noise, with white output noise: a record that one static
+    block around one linear block cannot model and a polynomial state-space model can."""
+    from blockid.data import Dataset
+
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1, 1, n)
+    x, y = np.zeros(2), np.zeros(n)
+    for k in range(n):
+        y[k] = x[0]
+        x = np.array([0.6 * x[0] + 0.3 * x[1] + u[k], -0.2 * x[0] + 0.5 * x[1] + 0.3 * x[0] ** 2])
+    return Dataset.from_arrays(u, y + noise * rng.standard_normal(n), ["u"], ["y"])

@@ -14,6 +14,8 @@ from blockid.fitting.state_space import (
 )
 from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
 
+from reference import squared_state_record
+
 
 def _markov(model, k):
     """``C A^k B`` (``D`` for k = -1) in the signals' own units."""
@@ -193,13 +195,8 @@ def test_a_fitted_model_measures_extrapolation_against_the_range_it_covered():
     range, a model was "extrapolating" by 50 % on its own estimation input, and
     identify's trust check rejected the right model; the fit now records the range its
     states cover, and a free run on that input stays within it."""
-    rng = np.random.default_rng(0)
-    u = rng.uniform(-1, 1, 1500)
-    x, y = np.zeros(2), np.zeros(1500)
-    for k in range(1500):
-        y[k] = x[0]
-        x = np.array([0.6 * x[0] + 0.3 * x[1] + u[k], -0.2 * x[0] + 0.5 * x[1] + 0.3 * x[0] ** 2])
-    data = Dataset.from_arrays(u, y + 0.01 * rng.standard_normal(1500), ["u"], ["y"])
+    data = squared_state_record()
+    u = data.experiments[0].u[:, 0]
     model = fit_model(data, "polynomial-state-space", nx=2, degree=2, max_nfev=15).model
     assert max(model.range_excursion(u).values()) < 0.05
     assert max(model.range_excursion(1.3 * u).values()) > 0.05

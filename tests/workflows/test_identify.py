@@ -18,6 +18,8 @@ from blockid.data import Dataset
 from blockid.models import ARX, ChainModel, Hammerstein
 from blockid.workflows.identify import EFFORTS, Effort, identify
 
+from reference import squared_state_record
+
 #: A small search for tests: 3 folds, orders up to 3, delays up to 2, 3 block families.
 SMALL = Effort("small", 3, 2, 3, 2, 1, 3, 15, 10_000, 2, 40, 1)
 
@@ -231,14 +233,7 @@ def test_a_state_nonlinearity_gets_a_polynomial_state_space_model():
     """A plant whose nonlinearity acts on its state (a squared state fed back): the
     polynomial state-space model is chosen and beats the linear one by far; the
     polynomial stage tries the best linear dimension and the largest tied with it."""
-    rng = np.random.default_rng(0)
-    u = rng.uniform(-1, 1, 1500)
-    x, y = np.zeros(2), np.zeros(1500)
-    for k in range(1500):
-        y[k] = x[0]
-        x = np.array([0.6 * x[0] + 0.3 * x[1] + u[k], -0.2 * x[0] + 0.5 * x[1] + 0.3 * x[0] ** 2])
-    y += 0.01 * rng.standard_normal(1500)
-    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    data = squared_state_record()
     effort = Effort("ss", 3, 2, 3, 2, 1, 1, 15, 10_000, 1, 40, 0, ((2, "full"),), 60, 2)
     result = identify(
         data, structures=["state-space", "polynomial-state-space"], effort=effort, jobs=1
