@@ -111,6 +111,7 @@ def _silverbox():
     return frame["V1"].to_numpy(), frame["V2"].to_numpy()
 
 
+@pytest.mark.slow  # a study on 87 000 real samples (about 8 s)
 @pytest.mark.benchdata
 @pytest.mark.skipif(not SILVERBOX.exists(), reason="Silverbox data (../shared/data) absent")
 def test_silverbox_arrow_free_run_error_is_below_one_millivolt():

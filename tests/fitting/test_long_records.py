@@ -189,6 +189,7 @@ def test_linearity_note_uses_the_closed_form_affine_fit(rng):
     assert not any("is linear" in n for n in linear_block_notes(curved, data))
 
 
+@pytest.mark.slow  # traced allocations make the fit several times slower (about 6 s)
 def test_default_fit_memory_stays_a_small_multiple_of_the_data(monkeypatch, rng):
     """With pieces scaled down to the record (the defaults are 65,536 rows and 64 MB of
     Jacobian, sized for millions of samples), the default Hammerstein fit's peak of

@@ -58,25 +58,30 @@ def test_cli_json(tmp_path):
     assert (tmp_path / "electrohydraulic_validation.png").exists()
 
 
-def test_cli_validation_bandwidth(tmp_path):
-    def run(value):
-        args = ["reproduce", "electrohydraulic", "--plot", str(tmp_path), "--force"]
-        return CliRunner().invoke(app, [*args, "--json", "--validation-bandwidth", value])
+def _run_bandwidth(tmp_path, value):
+    args = ["reproduce", "electrohydraulic", "--plot", str(tmp_path), "--force"]
+    return CliRunner().invoke(app, [*args, "--json", "--validation-bandwidth", value])
 
+
+@pytest.mark.slow  # three reproductions of paper B (about 13 s)
+def test_cli_validation_bandwidth(tmp_path):
     default = reproduce_electrohydraulic(seed=0)
     assert default.validation_bandwidth == 0.5
     for value, expected in (("none", None), ("0.3", 0.3)):
-        r = run(value)
+        r = _run_bandwidth(tmp_path, value)
         assert r.exit_code == 0, r.output
         doc = json.loads(r.stdout)
         assert doc["validation_bandwidth"] == expected
         # another validation command is another validation record: other errors
         assert doc["best"]["hammerstein"]["mse"] != default.best["hammerstein"]["mse"]
+
+
+def test_cli_validation_bandwidth_refuses_what_is_not_a_frequency(tmp_path):
     for bad, message in (
         ("abc", "--validation-bandwidth must be a frequency in Hz or 'none'"),
         ("12", "bandwidth must be a frequency from 0.0364 Hz"),  # checked by the plant
         ("0", "bandwidth must be a frequency from 0.0364 Hz"),
     ):
-        r = run(bad)
+        r = _run_bandwidth(tmp_path, bad)
         assert r.exit_code == 2 and message in r.output, r.output
         assert len(r.output.strip().splitlines()) == 1
