@@ -44,3 +44,29 @@ def test_items_not_started_by_the_deadline_give_none():
     with TaskRunner(_data(), 2) as pool:
         out = pool.map(_sum_and_share, list(range(20)), deadline=time.monotonic() + 0.12)
     assert out[0] is not None and out[-1] is None
+
+
+def _fit_cpu_share(data, item):
+    """Runs in a worker: CPU time of the whole process over that of this thread during a
+    fit (1.0 when no other thread of the worker runs)."""
+    from blockid.fitting.dispatch import fit_model
+
+    t0, c0 = time.thread_time(), time.process_time()
+    fit_model(data, "hammerstein-wiener", na=2, nb=2, nk=1, max_nfev=15)
+    return (time.process_time() - c0) / max(time.thread_time() - t0, 1e-9)
+
+
+def test_no_thread_of_a_worker_spins_beside_its_fit():
+    """Workers forked from this process kept an OpenBLAS thread spinning beside every fit
+    (process CPU 1.5-2.0 times the fitting thread's; two workers were slower than
+    one on a long record); fresh workers with one-thread pools have none."""
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1, 1, 10_000)
+    x = np.zeros_like(u)
+    for k in range(2, u.size):
+        x[k] = 1.2 * x[k - 1] - 0.5 * x[k - 2] + u[k - 1] + 0.3 * u[k - 1] ** 3
+    y = x + 0.1 * x**2 + 0.01 * rng.standard_normal(u.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    with TaskRunner(data, 2) as pool:
+        shares = pool.map(_fit_cpu_share, [0, 1, 2, 3])
+    assert max(shares) < 1.2, shares
