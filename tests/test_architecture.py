@@ -16,6 +16,7 @@ SRC = Path(blockid.__file__).parent
 # Layer of each subpackage; a module may import only from its own or lower layers.
 LAYERS = {
     "errors": 0,
+    "defaults": 0,
     "_kernels": 0,
     "data": 1,
     "blocks": 2,

@@ -24,6 +24,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from blockid._kernels import rls as _k
+from blockid.defaults import RECURSIVE
 from blockid.estimators._base import Interval
 from blockid.estimators.rls import RecursiveEstimator
 
@@ -72,9 +73,9 @@ class AdaptiveWeightedRLS(RecursiveEstimator):
     def __init__(
         self,
         *,
-        eps1: float = 1.0,
-        eps2: float = 0.1,
-        initial_covariance: float = 1e5,
+        eps1: float = RECURSIVE["aw-rls"]["eps1"],  # type: ignore[assignment]
+        eps2: float = RECURSIVE["aw-rls"]["eps2"],  # type: ignore[assignment]
+        initial_covariance: float = RECURSIVE["aw-rls"]["initial_covariance"],  # type: ignore[assignment]
         initial_parameters: Any = 0.01,
     ) -> None:
         self.eps1 = eps1

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from blockid._kernels import rls as _k
+from blockid.defaults import RECURSIVE
 from blockid.errors import ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.estimators.rls import RecursiveEstimator
@@ -79,7 +80,7 @@ class HierarchicalRLS(RecursiveEstimator):
         *,
         groups: int | Sequence[Sequence[int]] = 2,
         forgetting: float | str | ForgettingSchedule = 1.0,
-        initial_covariance: float = 1e8,
+        initial_covariance: float = RECURSIVE["hierarchical-rls"]["initial_covariance"],  # type: ignore[assignment]
         initial_parameters: Any = 0.0,
         max_covariance_trace: float | None = None,
     ) -> None:

@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from blockid._kernels import rls as _k
+from blockid.defaults import RECURSIVE
 from blockid.errors import EstimationError, ParameterError
 from blockid.estimators._base import Interval, RegressionEstimator, check_regression
 from blockid.estimators.forgetting import ForgettingSchedule
@@ -165,7 +166,7 @@ class RecursiveLeastSquares(RecursiveEstimator):
         self,
         *,
         forgetting: float | str | ForgettingSchedule = 1.0,
-        initial_covariance: float = 1e8,
+        initial_covariance: float = RECURSIVE["rls"]["initial_covariance"],  # type: ignore[assignment]
         initial_parameters: Any = 0.0,
         max_covariance_trace: float | None = None,
     ) -> None:

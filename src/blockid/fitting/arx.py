@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset
+from blockid.defaults import RECURSIVE
 from blockid.errors import EstimationError, OrderError, ParameterError
 from blockid.estimators import (
     AdaptiveWeightedRLS,
@@ -70,8 +71,8 @@ def make_estimator(
     *,
     forgetting: float | str | ForgettingSchedule = 1.0,
     initial_covariance: float | None = None,
-    eps1: float = 1.0,
-    eps2: float = 0.1,
+    eps1: float = RECURSIVE["aw-rls"]["eps1"],  # type: ignore[assignment]
+    eps2: float = RECURSIVE["aw-rls"]["eps2"],  # type: ignore[assignment]
     groups: Any = 2,
 ) -> Any:
     """Build the regressor-level estimator a method name stands for."""
@@ -79,15 +80,21 @@ def make_estimator(
         return BatchLeastSquares()
     if method == "rls":
         return RecursiveLeastSquares(
-            forgetting=forgetting, initial_covariance=initial_covariance or 1e8
+            forgetting=forgetting,
+            initial_covariance=initial_covariance or RECURSIVE["rls"]["initial_covariance"],
         )
     if method == "aw-rls":
         return AdaptiveWeightedRLS(
-            eps1=eps1, eps2=eps2, initial_covariance=initial_covariance or 1e5
+            eps1=eps1,
+            eps2=eps2,
+            initial_covariance=initial_covariance or RECURSIVE["aw-rls"]["initial_covariance"],
         )
     if method == "hierarchical-rls":
         return HierarchicalRLS(
-            groups=groups, forgetting=forgetting, initial_covariance=initial_covariance or 1e8
+            groups=groups,
+            forgetting=forgetting,
+            initial_covariance=initial_covariance
+            or RECURSIVE["hierarchical-rls"]["initial_covariance"],
         )
     raise ParameterError(
         f"unknown method {method!r} for ARX; choose one of {', '.join(ARX_METHODS)}"
@@ -286,8 +293,8 @@ def fit_arx(
     method: str = "batch",
     forgetting: float | str | ForgettingSchedule = 1.0,
     initial_covariance: float | None = None,
-    eps1: float = 1.0,
-    eps2: float = 0.1,
+    eps1: float = RECURSIVE["aw-rls"]["eps1"],  # type: ignore[assignment]
+    eps2: float = RECURSIVE["aw-rls"]["eps2"],  # type: ignore[assignment]
     center: bool = False,
     allow_unstable: bool = False,
     passes: int = 1,

@@ -36,6 +36,7 @@ import numpy as np
 from blockid._kernels import backlash_awrls as _k
 from blockid.blocks import Backlash
 from blockid.data.dataset import Dataset
+from blockid.defaults import RECURSIVE
 from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.recursive import (
     RecursiveAlgorithm,
@@ -50,6 +51,8 @@ from blockid.fitting.recursive import (
 )
 from blockid.fitting.result import FitResult
 from blockid.models.block import BacklashModel
+
+_AW = RECURSIVE["backlash-aw-rls"]
 
 __all__ = ["BacklashAWRLS", "fit_backlash_aw_rls"]
 
@@ -233,12 +236,12 @@ def fit_backlash_aw_rls(
     na: int = 2,
     nb: int = 1,
     nk: int = 1,
-    eps1: float = 10.0,
-    eps2: float = 0.1,
-    initial_covariance: float = 1e5,
+    eps1: float = _AW["eps1"],  # type: ignore[assignment]
+    eps2: float = _AW["eps2"],  # type: ignore[assignment]
+    initial_covariance: float = _AW["initial_covariance"],  # type: ignore[assignment]
     initial_parameters: Any = 0.01,
-    passes: int = 1,
-    tol: float = 1e-6,
+    passes: int = _AW["passes"],  # type: ignore[assignment]
+    tol: float = _AW["tol"],  # type: ignore[assignment]
     normalize: bool = True,
     record_history: bool = False,
     scales: tuple[float, float] | None = None,

@@ -68,6 +68,7 @@ import numpy as np
 from blockid.blocks.base import Block, LinearFamily
 from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
+from blockid.defaults import DEGREE
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
 from blockid.fitting import arx as arx_fitting
@@ -564,8 +565,8 @@ def initial_estimate(
     na: int,
     nb: int,
     nk: int,
-    r1: int = 3,
-    r2: int = 3,
+    r1: int = DEGREE,
+    r2: int = DEGREE,
     input_block: Block | None = None,
     output_block: Block | None = None,
 ) -> BlockModel:

@@ -52,6 +52,7 @@ from blockid._kernels import key_term as _k
 from blockid._kernels.rls import OK
 from blockid.blocks import Polynomial, TwoSegmentPolynomial
 from blockid.data.dataset import Dataset
+from blockid.defaults import DEGREE, RECURSIVE
 from blockid.errors import ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.fitting.recursive import (
@@ -69,6 +70,8 @@ from blockid.fitting.registry import get_structure
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
 from blockid.models.block import BlockModel
+
+_KT = RECURSIVE["key-term-rls"]
 
 __all__ = ["KEY_TERM_STRUCTURES", "KeyTermRLS", "fit_key_term_rls"]
 
@@ -257,12 +260,12 @@ def fit_key_term_rls(
     na: int = 3,
     nb: int = 3,
     nk: int = 8,
-    r1: int = 3,
-    r2: int = 3,
-    forgetting: float | str | ForgettingSchedule = "0.98:200,1",
-    passes: int = 20,
-    tol: float = 1e-6,
-    initial_covariance: float = 1e6,
+    r1: int = DEGREE,
+    r2: int = DEGREE,
+    forgetting: float | str | ForgettingSchedule = _KT["forgetting"],  # type: ignore[assignment]
+    passes: int = _KT["passes"],  # type: ignore[assignment]
+    tol: float = _KT["tol"],  # type: ignore[assignment]
+    initial_covariance: float = _KT["initial_covariance"],  # type: ignore[assignment]
     initial_parameters: Any = 0.01,
     normalize: bool = True,
     record_history: bool = False,

@@ -47,6 +47,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from blockid.defaults import RECURSIVE
 from blockid.errors import ParameterError
 
 __all__ = [
@@ -349,7 +350,13 @@ OPTIONS: dict[str, Option] = _options(
     Option(
         "initial_covariance",
         "real",
-        "P(0) scale of the recursive methods.",
+        "P(0) scale of the recursive methods (default "
+        + ", ".join(
+            f"{v['initial_covariance']:.0e} for {k}".replace("e+0", "e")
+            for k, v in RECURSIVE.items()
+            if "initial_covariance" in v
+        )
+        + ").",
         low=0.0,
         open_low=True,
     ),
@@ -375,14 +382,16 @@ OPTIONS: dict[str, Option] = _options(
     Option(
         "eps1",
         "real",
-        "AW-RLS weight lambda = eps1 s + eps2 (A8): eps1 >= 0 (default 1 for arx aw-rls, "
-        "10 for backlash).",
+        "AW-RLS weight lambda = eps1 s + eps2 (A8): eps1 >= 0 (default "
+        f"{RECURSIVE['aw-rls']['eps1']:g} for arx aw-rls, "
+        f"{RECURSIVE['backlash-aw-rls']['eps1']:g} for backlash).",
         low=0.0,
     ),
     Option(
         "eps2",
         "real",
-        "AW-RLS weight (A8): eps2 > 0, the weight's floor as P shrinks (default 0.1).",
+        "AW-RLS weight (A8): eps2 > 0, the weight's floor as P shrinks (default "
+        f"{RECURSIVE['aw-rls']['eps2']:g}).",
         low=0.0,
         open_low=True,
     ),

@@ -76,6 +76,7 @@ from scipy.optimize import least_squares
 
 from blockid.blocks.base import Block
 from blockid.data.dataset import Dataset
+from blockid.defaults import DEGREE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.fitting.checks import STABILITY_MARGIN, check_model, simulation_mse
 from blockid.fitting.initial import initial_estimate, resolve_structure
@@ -495,8 +496,8 @@ def fit_simulation_error(
     na: int | None = None,
     nb: int | None = None,
     nk: int | None = None,
-    r1: int = 3,
-    r2: int = 3,
+    r1: int = DEGREE,
+    r2: int = DEGREE,
     initial: BlockModel | None = None,
     input_block: Block | None = None,
     output_block: Block | None = None,

@@ -47,6 +47,7 @@ import numpy as np
 from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
 from blockid.blocks.base import BLOCK_TYPES, Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
+from blockid.defaults import DEGREE
 from blockid.errors import BlockidError, ModelFileError, OrderError, ParameterError
 from blockid.models.base import Model, excursion
 from blockid.models.initial_state import estimated_starts
@@ -753,7 +754,9 @@ class BlockModel(OneLinearBlock, ChainModel):
                 raise OrderError(str(exc)) from None
 
     @classmethod
-    def default_blocks(cls, r1: int = 3, r2: int = 3) -> tuple[Block | None, Block | None]:
+    def default_blocks(
+        cls, r1: int = DEGREE, r2: int = DEGREE
+    ) -> tuple[Block | None, Block | None]:
         """Templates of the blocks this structure fits by default: the two-segment
         polynomial of order ``r1`` (B1) in, the identity polynomial of degree ``r2``
         (B3) out; None for a block the structure has not."""
@@ -881,7 +884,9 @@ class BacklashModel(BlockModel):
         super().__init__(input, output, input_block=input_block, **kwargs)
 
     @classmethod
-    def default_blocks(cls, r1: int = 3, r2: int = 3) -> tuple[Block | None, Block | None]:
+    def default_blocks(
+        cls, r1: int = DEGREE, r2: int = DEGREE
+    ) -> tuple[Block | None, Block | None]:
         return Backlash.template(), None
 
     @classmethod
