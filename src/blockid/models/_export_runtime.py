@@ -1,0 +1,356 @@
+"""The runtime of a model exported by :func:`blockid.models.export.to_python_module`.
+
+Everything below the marker line is copied, as text, into every exported module after
+its header (which defines ``MODEL``, ``SPEC``, ``INPUTS``, ``OUTPUTS`` and
+``SAMPLING_TIME`` and imports ``json`` and NumPy): one rule per block kind, copied from
+blockid's blocks (and kernels) operation by operation, so that results agree to
+rounding. It is a real module so that the linter, the coverage and the mutation tools
+read it; it needs NumPy only, and nothing of blockid. The names above the marker stand
+for the header's; ``tests/test_export.py`` also runs this file's functions here.
+"""
+
+import numpy as np
+
+MODEL: dict = {}
+SPEC: dict = {}
+INPUTS: list = []
+OUTPUTS: list = []
+
+__all__ = ["simulate"]  # the exported module's header declares its own
+
+
+# --- runtime: copied from here ---
+def _offsets(kind):
+    names = MODEL[kind]
+    table = MODEL.get("offsets", {}).get(kind, {})
+    return np.array([float(table.get(n, 0.0)) for n in names])
+
+
+def _polyval(x, c):
+    """Horner's rule, lowest power first (numpy.polynomial.polynomial.polyval)."""
+    c = np.asarray(c, dtype=float)
+    value = c[-1] + x * 0
+    for i in range(2, len(c) + 1):
+        value = c[-i] + value * x
+    return value
+
+
+def _powers(p):
+    c = [float(v) for v in p["coefficients"]]
+    return np.array(c if p.get("constant", True) else [0.0] + c)
+
+
+def _static(p, s):
+    """A memoryless block on the signal ``s``."""
+    kind = p["kind"]
+    if kind == "polynomial":
+        return _polyval(s, _powers(p))
+    if kind == "two-segment-polynomial":
+        return _polyval(s, np.array(p["f"])) + (s < 0) * _polyval(s, np.array(p["p"]))
+    if kind == "dead-zone":
+        return p["slope_left"] * np.minimum(s - p["lower"], 0.0) + p["slope_right"] * np.maximum(
+            s - p["upper"], 0.0
+        )
+    if kind == "saturation":
+        return np.clip(p["slope"] * s, p["lower"], p["upper"])
+    if kind in ("piecewise-linear", "piecewise-linear-free"):
+        bp, v = np.array(p["breakpoints"]), np.array(p["values"])
+        j = np.clip(np.searchsorted(bp, s, side="right") - 1, 0, bp.size - 2)
+        t = (s - bp[j]) / (bp[j + 1] - bp[j])
+        return v[j] + t * (v[j + 1] - v[j])
+    raise ValueError("unknown block kind " + repr(kind))
+
+
+def _derivative(c):
+    """Coefficients of the derivative (numpy.polynomial.polynomial.polyder)."""
+    c = np.asarray(c, dtype=float)
+    if c.size <= 1:
+        return np.zeros(1)
+    return np.array([j * c[j] for j in range(1, c.size)])
+
+
+def _slope(p, s):
+    """dN/du of the blocks that continue along their tangent."""
+    if p["kind"] == "polynomial":
+        return _polyval(s, _derivative(_powers(p)))
+    return _polyval(s, _derivative(p["f"])) + (s < 0) * _polyval(s, _derivative(p["p"]))
+
+
+def _apply(i, p, s):
+    """Block ``i`` of the chain on ``s``, from rest; a polynomial block continues along
+    its tangent beyond the input range recorded in estimation (``SPEC["tangents"]``)."""
+    if p["kind"] == "linear":
+        return _linear(p, s)
+    if p["kind"] == "backlash":
+        return _backlash(p, s)
+    out = _static(p, s)
+    seen = SPEC["tangents"][i]
+    if seen is None:
+        return out
+    edge = np.clip(s, seen[0], seen[1])
+    outside = edge != s
+    if not outside.any():
+        return out
+    out = np.array(out, dtype=float, copy=True)
+    out[outside] = _static(p, edge[outside]) + _slope(p, edge[outside]) * (
+        s[outside] - edge[outside]
+    )
+    return out
+
+
+def _backlash(p, u):
+    """Backlash from the middle of its dead band at the first input."""
+    m_left, c_left, m_right, c_right = p["m_left"], p["c_left"], p["m_right"], p["c_right"]
+    x = np.empty(len(u))
+    if len(u) == 0:
+        return x
+    u0 = float(u[0])
+    prev = 0.5 * (m_left * (u0 + c_left) + m_right * (u0 - c_right))
+    for t, ut in enumerate(u.tolist()):
+        if ut < prev / m_left - c_left:
+            prev = m_left * (ut + c_left)
+        elif ut > prev / m_right + c_right:
+            prev = m_right * (ut - c_right)
+        x[t] = prev
+    return x
+
+
+def _arx(A, B, u, y, n0):
+    """In place: y[t, i] = -sum A[i][j][k] y[t-k, j] + sum B[i][m][l] u[t-l, m], t >= n0."""
+    N, ny = y.shape
+    nu = u.shape[1]
+    La, Lb = len(A[0][0]), len(B[0][0])
+    uu, yy = u.tolist(), y.tolist()
+    for t in range(n0, N):
+        for i in range(ny):
+            acc = 0.0
+            for j in range(ny):
+                for k in range(1, min(La, t + 1)):
+                    acc -= A[i][j][k] * yy[t - k][j]
+            for m in range(nu):
+                for lag in range(Lb):
+                    if t - lag >= 0:
+                        acc += B[i][m][lag] * uu[t - lag][m]
+            yy[t][i] = acc
+    y[:] = np.array(yy, dtype=float).reshape(y.shape)
+
+
+def _linear_lags(p):
+    na, nb, nk = int(p["na"]), int(p["nb"]), int(p["nk"])
+    lag = max(na, nk + nb - 1, 1)
+    A = [[[0.0] + [float(v) for v in p["a"]]]]
+    b = [0.0] * (lag + 1)
+    b[nk : nk + nb] = [float(v) for v in p["b"]]
+    return A, [[b]], lag
+
+
+def _linear(p, w, x0=None):
+    """The linear block; its first outputs set from ``x0`` when given."""
+    A, B, lag = _linear_lags(p)
+    N = w.shape[0]
+    x = np.zeros((N, 1))
+    n0 = 0
+    if x0 is not None:
+        n0 = min(lag, N)
+        k = min(n0, x0.size)
+        x[:k, 0] = x0[:k]
+    _arx(A, B, np.ascontiguousarray(w, dtype=float).reshape(-1, 1), x, n0)
+    return x[:, 0]
+
+
+def _bisect(f, w, lo, hi, sign, iterations):
+    a = np.full(w.shape, lo)
+    b = np.full(w.shape, hi)
+    for _ in range(iterations):
+        mid = 0.5 * (a + b)
+        below = sign * f(mid) < w
+        a = np.where(below, mid, a)
+        b = np.where(below, b, mid)
+    return 0.5 * (a + b)
+
+
+def _invert(p, spec, w):
+    """The block's input for its output ``w``, as blockid's ``invert`` finds it."""
+    if spec["method"] == "bisect":
+        lo, hi = spec["range"]
+        target = spec["sign"] * np.clip(w, *spec["clip"])
+        return _bisect(lambda s: _static(p, s), target, lo, hi, spec["sign"], 80)
+    # a polynomial on its monotone branch around 0, clipped to the branch's image
+    big = 1e6 * (1.0 + float(np.max(np.abs(w), initial=0.0)))
+    lo, hi = max(spec["range"][0], -big), min(spec["range"][1], big)
+    powers = _powers(p)
+    ends = sorted((float(_polyval(lo, powers)), float(_polyval(hi, powers))))
+    sign = 1.0 if _polyval(hi, powers) > _polyval(lo, powers) else -1.0
+    target = sign * np.clip(w, ends[0], ends[1])
+    return _bisect(lambda s: _polyval(s, powers), target, lo, hi, sign, 200)
+
+
+def _rows(y0):
+    y0 = np.asarray(y0, dtype=float)
+    return y0[:, None] if y0.ndim == 1 else y0
+
+
+def _chain(u, y0):
+    blocks, last = MODEL["chain"], SPEC["last_linear"]
+    s = u[:, 0] - _offsets("inputs")[0]
+    for i in range(last):
+        s = _apply(i, blocks[i], s)
+    x0 = None
+    if y0 is not None:
+        x0 = _rows(y0)[: SPEC["max_lag"], 0] - _offsets("outputs")[0]
+        for p, spec in zip(blocks[:last:-1], SPEC["inverses"], strict=False):
+            if spec is None:
+                x0 = None
+                break
+            x0 = _invert(p, spec, x0)
+    x = _linear(blocks[last], s, x0)
+    for i in range(last + 1, len(blocks)):
+        x = _apply(i, blocks[i], x)
+    return (x + _offsets("outputs")[0])[:, None]
+
+
+def _feedback(u, y0):
+    """y = z^-nk B/A [u - N(y)], N(y) = sum c_m y^m or another static block (Lur'e form)."""
+    lin, fb = MODEL["linear"], MODEL["feedback"]
+    a, b = [float(v) for v in lin["a"]], [float(v) for v in lin["b"]]
+    c = [float(v) for v in fb["coefficients"]] if fb["kind"] == "polynomial" else None
+    nk = int(lin["nk"])
+    s = (u[:, 0] - _offsets("inputs")[0]).tolist()
+    N = len(s)
+    y, v = [0.0] * N, [0.0] * N
+    n0 = 0
+    if y0 is not None:
+        y0 = _rows(y0)
+        n0 = min(SPEC["max_lag"], N)
+        for t in range(min(n0, y0.shape[0])):
+            y[t] = float(y0[t, 0]) - float(_offsets("outputs")[0])
+    for t in range(N):
+        if t >= n0:
+            acc = 0.0
+            for j in range(1, min(len(a), t) + 1):
+                acc -= a[j - 1] * y[t - j]
+            for i in range(len(b)):
+                if t - nk - i < 0:
+                    break
+                acc += b[i] * v[t - nk - i]
+            y[t] = acc
+        if c is None:
+            v[t] = s[t] - float(_static(fb, np.array([y[t]]))[0])
+            continue
+        p = 0.0
+        for m in range(len(c) - 1, -1, -1):
+            p = p * y[t] + c[m]
+        v[t] = s[t] - y[t] * p
+    return (np.array(y) + _offsets("outputs")[0])[:, None]
+
+
+def _arx_model(u, y0):
+    N, ny = u.shape[0], len(OUTPUTS)
+    y = np.zeros((N, ny))
+    n0 = 0 if y0 is None else SPEC["max_lag"]
+    if y0 is not None:
+        y0 = _rows(y0)
+        k = min(n0, y0.shape[0], N)
+        y[:k] = y0[:k] - _offsets("outputs")
+    _arx(SPEC["A"], SPEC["B"], u - _offsets("inputs"), y, min(n0, N))
+    return y + _offsets("outputs")
+
+
+def _ss_matrices():
+    m = MODEL
+    nx, nu, ny = int(m["nx"]), len(INPUTS), len(OUTPUTS)
+    out = {
+        k: np.asarray(m[k], dtype=float).reshape(s)
+        for k, s in (("A", (nx, nx)), ("B", (nx, nu)), ("C", (ny, nx)), ("D", (ny, nu)))
+    }
+    expo = np.asarray(m.get("exponents", []), dtype=np.int64).reshape(-1, nx + nu)
+    nm = expo.shape[0]
+    out["E"] = np.asarray(m.get("E", []), dtype=float).reshape(nx, nm)
+    out["F"] = np.asarray(m.get("F", []), dtype=float).reshape(ny, nm)
+    out["expo"] = expo
+    lo = m.get("lower") or [None] * (nx + nu)
+    hi = m.get("upper") or [None] * (nx + nu)
+    out["lo"] = np.array([-np.inf if v is None else v for v in lo], dtype=float)
+    out["hi"] = np.array([np.inf if v is None else v for v in hi], dtype=float)
+    return out
+
+
+def _ss_run(M, un, x, sens=False):
+    """Normalised outputs of a free run from ``x`` and, with ``sens``, their derivative
+    with respect to the initial state (rows k * ny + i)."""
+    A, B, C, D, E, F, expo = M["A"], M["B"], M["C"], M["D"], M["E"], M["F"], M["expo"]
+    lo, hi = M["lo"], M["hi"]
+    nx, ny, N = A.shape[0], C.shape[0], un.shape[0]
+    y = np.zeros((N, ny))
+    J = np.zeros((N * ny, nx)) if sens else None
+    S = np.eye(nx)
+    x = np.array(x, dtype=float)
+    for k in range(N):
+        z = np.concatenate((x, un[k]))
+        zc = np.minimum(np.maximum(z, lo), hi)
+        zeta = np.prod(zc[None, :] ** expo, axis=1) if expo.size else np.zeros(0)
+        y[k] = C @ x + D @ un[k] + F @ zeta
+        if sens:
+            dz = np.zeros((expo.shape[0], nx))
+            for j in range(expo.shape[0]):
+                for i in range(nx):
+                    p = expo[j, i]
+                    if p and lo[i] < z[i] < hi[i]:
+                        d = expo[j].copy()
+                        d[i] -= 1
+                        dz[j, i] = p * np.prod(zc**d)
+            J[k * ny : (k + 1) * ny] = (C + F @ dz) @ S
+            S = (A + E @ dz) @ S
+        x = A @ x + B @ un[k] + E @ zeta
+    return y, J
+
+
+def _state_space(u, y0):
+    m, M = MODEL["normalisation"], _ss_matrices()
+    un = (u - np.asarray(m["input_offset"])) / np.asarray(m["input_scale"])
+    y_off, y_scale = np.asarray(m["output_offset"]), np.asarray(m["output_scale"])
+    nx = M["A"].shape[0]
+    x0 = np.zeros(nx)
+    n = 0
+    if y0 is not None and len(np.atleast_1d(y0)):
+        y0 = _rows(y0)
+        n = min(y0.shape[0], u.shape[0])
+        yn = (y0[:n] - y_off) / y_scale
+        best = np.inf
+        for _ in range(SPEC["iterations"]):
+            out, J = _ss_run(M, un[:n], x0, sens=True)
+            r = (yn - out).reshape(-1)
+            cost = float(r @ r)
+            if not np.isfinite(cost) or cost >= best * (1 - 1e-12):
+                break
+            best = cost
+            x0 = x0 + np.linalg.lstsq(J, r, rcond=None)[0]
+            if not M["expo"].size:
+                break
+    y, _ = _ss_run(M, un, x0)
+    y = y * y_scale + y_off
+    k = min(n, SPEC["max_lag"])
+    if k:
+        y[:k] = y0[:k]
+    return y
+
+
+def simulate(u, y0=None):
+    """Free-run simulation: outputs (N, len(OUTPUTS)) for inputs ``u``; ``y0`` holds the
+    first measured outputs to start from (None: from rest)."""
+    u = np.asarray(u, dtype=float)
+    if u.ndim == 1:
+        u = u[:, None]
+    if u.ndim != 2 or u.shape[1] != len(INPUTS):
+        raise ValueError(
+            f"the model has {len(INPUTS)} input(s) {INPUTS} but got an input array of "
+            f"shape {u.shape}"
+        )
+    form = SPEC["form"]
+    if form == "state-space":
+        return _state_space(u, y0)
+    if form == "arx":
+        return _arx_model(u, y0)
+    if form == "feedback":
+        return _feedback(u, y0)
+    return _chain(u, y0)
