@@ -18,7 +18,7 @@ import typer
 from typer.testing import CliRunner
 
 from blockid.blocks import Polynomial, TwoSegmentPolynomial
-from blockid.cli.fit_commands import fit
+from blockid.cli.fit import fit
 from blockid.cli.streaming import stream
 from blockid.data import Dataset
 from blockid.fitting.key_term import fit_key_term_rls

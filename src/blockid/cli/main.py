@@ -1,6 +1,6 @@
 """The ``blockid`` command line: thin commands over library functions.
 
-One module per command group (:mod:`~blockid.cli.fit_commands`, :mod:`~blockid.cli.running`,
+One module per command group (:mod:`~blockid.cli.fit`, :mod:`~blockid.cli.running`,
 :mod:`~blockid.cli.examples`); the estimator flags are generated from the registry of
 structures and options (:mod:`blockid.cli._options`).
 
@@ -24,7 +24,7 @@ from typer.core import TyperGroup
 from blockid.cli import (
     examples,
     export,
-    fit_commands,
+    fit,
     fleet_cli,
     identify,
     orders,
@@ -154,9 +154,9 @@ SHORT_HELP = {
     "example-data": "Write a record of a built-in simulated plant.",
 }
 for _name, _command in (
-    ("fit", fit_commands.fit),
-    ("compare", fit_commands.compare),
-    ("fit-network", fit_commands.fit_network),
+    ("fit", fit.fit),
+    ("compare", fit.compare),
+    ("fit-network", fit.fit_network),
     ("simulate", running.simulate),
     ("predict", running.predict),
     ("orders", orders.orders),
