@@ -366,6 +366,12 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
         "The search is deterministic: the same data, effort and version give the same "
         "model on any machine; the times depend on the machine.",
         "",
+        "Search times of sets run before commit `86b1999` (2026-11-26) carry a cost since "
+        "removed: identify's forked workers each kept an OpenBLAS thread spinning beside "
+        "every fit ([identify](identify.md)). Re-run after it with the same models: WH "
+        "2009 848 -> 645 s, Silverbox 273 -> 201 s, Bouc-Wen 543 -> 226 s; the others' "
+        "times are from the older runs (each row's commit is in its results file).",
+        "",
         "## Single-output sets",
         "",
     ]
