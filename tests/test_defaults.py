@@ -2,6 +2,7 @@
 states one says the same."""
 
 import inspect
+import re
 
 import pytest
 
@@ -67,3 +68,44 @@ def test_a_method_default_left_open_is_the_tables():
     for method in ("rls", "aw-rls", "hierarchical-rls"):
         est = make_estimator(method)
         assert est.initial_covariance == RECURSIVE[method]["initial_covariance"], method
+
+
+#: docs/models.md "Methods in detail": (method, structures column) -> estimator
+DOC_ROWS = {
+    ("rls", "arx"): "rls",
+    ("aw-rls", "arx"): "aw-rls",
+    ("hierarchical-rls", "arx"): "hierarchical-rls",
+    ("key-term-rls", "hammerstein, wiener, hammerstein-wiener"): "key-term-rls",
+    ("aw-rls", "backlash"): "backlash-aw-rls",
+}
+
+
+def _same(text, value):
+    text = text.strip().strip("`")
+    try:
+        return float(text) == float(value)
+    except ValueError:
+        return text == value
+
+
+def test_the_docs_methods_table_states_the_tables_defaults():
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "models.md").read_text()
+    seen = set()
+    for line in doc.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 5:
+            continue
+        key = (cells[0].strip("`"), cells[1])
+        if key not in DOC_ROWS:
+            continue
+        seen.add(key)
+        flags = [f.replace("-", "_") for f in re.findall(r"`--([a-z0-9-]+)`", cells[3])]
+        values = cells[4].split(", ")
+        assert len(flags) == len(values), line
+        table = {**RECURSIVE[DOC_ROWS[key]], "r1": DEGREE, "r2": DEGREE}
+        for flag, text in zip(flags, values, strict=True):
+            if flag in table:
+                assert _same(text, table[flag]), (key, flag, text, table[flag])
+    assert seen == set(DOC_ROWS)
