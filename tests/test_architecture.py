@@ -1,4 +1,4 @@
-"""Import direction and isolation (STYLE.md: data flows one way)."""
+"""Import direction and isolation: the floors of blockid/floors.py, data flowing one way."""
 
 import ast
 import importlib
@@ -10,26 +10,13 @@ from pathlib import Path
 import pytest
 
 import blockid
+from blockid.floors import FLOORS
 
 SRC = Path(blockid.__file__).parent
 
-# Layer of each subpackage; a module may import only from its own or lower layers.
-LAYERS = {
-    "errors": 0,
-    "defaults": 0,
-    "_kernels": 0,
-    "data": 1,
-    "blocks": 2,
-    "plants": 3,
-    "models": 3,
-    "estimators": 4,
-    "evaluation": 5,  # scores and standard errors read models, never fitters
-    "fitting": 6,
-    "plotting": 7,
-    "workflows": 8,
-    "reporting": 8,
-    "cli": 9,
-}
+# Layer of each subpackage (blockid/floors.py, the one statement of them); a module may
+# import only from its own or lower layers.
+LAYERS = FLOORS
 
 
 def _layer(module: str) -> int | None:
@@ -156,3 +143,19 @@ def test_no_isinstance_ladder_over_block_types_outside_blocks():
             if seen:
                 offenders.append(f"{path.relative_to(SRC)}::{fn.name} tests {sorted(seen)}")
     assert not offenders, offenders
+
+
+def test_the_docs_state_the_floors_of_the_table():
+    """docs/architecture.md's diagram names every package on its floor: the floor in
+    columns 0-6 of a line, the packages in columns 7-25."""
+    import re
+
+    doc = (SRC.parents[1] / "docs" / "architecture.md").read_text()
+    start = doc.index("floor  package")
+    stated, floor = {}, None
+    for line in doc[start : doc.index("```", start)].splitlines()[1:]:
+        if line[:7].strip():
+            floor = int(line[:7])
+        for name in re.findall(r"[_a-z]+", line[7:26]):
+            stated[name] = floor
+    assert stated == FLOORS
