@@ -70,3 +70,27 @@ def test_no_thread_of_a_worker_spins_beside_its_fit():
     with TaskRunner(data, 2) as pool:
         shares = pool.map(_fit_cpu_share, [0, 1, 2, 3])
     assert max(shares) < 1.2, shares
+
+
+def test_a_plain_script_without_a_main_guard_runs_once_with_two_workers(tmp_path):
+    """The workers neither re-run the user's script from the top nor need its functions
+    importable: a function defined in the script itself runs in them."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "plain.py"
+    script.write_text(
+        "print('TOP')\n"
+        "import numpy as np\n"
+        "from blockid.data import Dataset\n"
+        "from blockid.workflows.parallel import TaskRunner\n"
+        "def total(data, k):\n"
+        "    return k + float(data.experiments[0].u.sum())\n"
+        "data = Dataset.from_arrays(np.ones(10), np.zeros(10), ['u'], ['y'])\n"
+        "with TaskRunner(data, 2) as pool:\n"
+        "    print('RESULTS', pool.map(total, [0, 1, 2]))\n"
+    )
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=120, cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.splitlines() == ["TOP", "RESULTS [10.0, 11.0, 12.0]"]
