@@ -1,13 +1,17 @@
 """Slow, obviously-correct twins of the compiled kernels (the stumpy ``naive.py`` idea).
 
-Written in the textbook form of SPEC.md with plain NumPy, one sample at a time.
+Written in the textbook form of SPEC.md with plain NumPy, one sample at a time. Also the
+small models and records that several test files share (imported as ``from reference
+import ...``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from blockid.blocks import Polynomial
 from blockid.blocks.base import StaticBlock
+from blockid.data import Dataset
 
 
 def rls(Phi, Y, lam, mu, theta0=0.0, trace_max=np.inf):
@@ -117,3 +121,50 @@ def squared_state_record(n=1500, seed=0, noise=0.01):
         y[k] = x[0]
         x = np.array([0.6 * x[0] + 0.3 * x[1] + u[k], -0.2 * x[0] + 0.5 * x[1] + 0.3 * x[0] ** 2])
     return Dataset.from_arrays(u, y + noise * rng.standard_normal(n), ["u"], ["y"])
+
+
+# Records and models shared by tests found by mutation testing (docs/testing.md)
+def _arx_data(n=200, seed=0):
+    # y(t) = 0.5 y(t-1) + u(t-1), noise free
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal(n)
+    y = np.zeros(n)
+    for t in range(1, n):
+        y[t] = 0.5 * y[t - 1] + u[t - 1]
+    return u, y
+
+
+def _dataset():
+    u, y = _arx_data()
+    return Dataset.from_arrays(u, y, inputs=["u"], outputs=["y"])
+
+
+def _backlash_model(a=-0.5):
+    # backlash (unit slopes, c = 0.3) then x(t) = -a x(t-1) + w(t-1)
+    from blockid.blocks import Backlash
+    from blockid.models import BacklashModel
+
+    return BacklashModel(
+        "u", "y", input_block=Backlash(1.0, 0.3, 1.0, 0.3), na=1, nb=1, nk=1, a=[a]
+    )
+
+
+def _backlash_data(scale=1.0):
+    # the backlash model's output, noise free, times `scale`
+    truth = _backlash_model()
+    rng = np.random.default_rng(0)
+    u = 2.0 * np.sin(np.linspace(0.0, 12.0 * np.pi, 400)) + 0.3 * rng.standard_normal(400)
+    return truth, Dataset.from_arrays(u, scale * truth.simulate(u)[:, 0], ["u"], ["y"])
+
+
+def _feedback(c, **kwargs):
+    from blockid.blocks.linear import LinearBlock
+    from blockid.models.feedback import LinearFeedback
+
+    return LinearFeedback(
+        "u",
+        "y",
+        linear=kwargs.pop("linear", LinearBlock(1, 1, 1, a=[-0.5], b=[1.0])),
+        feedback=Polynomial(c, constant=False),
+        **kwargs,
+    )

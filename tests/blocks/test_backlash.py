@@ -243,3 +243,56 @@ def test_plot_draws_loop_branches_and_truth():
     assert u.max() == pytest.approx(4 * 1.65)
     assert lines[1].get_linestyle() == "--"
     plt.close(ax.figure)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_backlash_template_is_the_unit_backlash():
+    assert Backlash.template().parameters == {
+        "m_left": 1.0,
+        "c_left": 0.0,
+        "m_right": 1.0,
+        "c_right": 0.0,
+    }
+
+
+def test_backlash_slope_lower_bounds_scale_with_each_slope():
+    lower, upper = Backlash(2.0, 0.1, 3.0, 0.2).bounds()
+    np.testing.assert_allclose(lower, [2e-6, 0.0, 3e-6, 0.0])
+    assert np.all(np.isinf(upper))
+
+
+def test_backlash_with_vector_takes_a_column():
+    b = Backlash(2.0, 0.1, 3.0, 0.2).with_vector(np.array([[1.5], [0.0], [2.5], [0.1]]))
+    assert b.parameters == {"m_left": 1.5, "c_left": 0.0, "m_right": 2.5, "c_right": 0.1}
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "named"), [(float("nan"), 1.0, "u_min"), (0.0, float("inf"), "u_max")]
+)
+def test_backlash_check_branches_names_the_bad_end(lo, hi, named):
+    with pytest.raises(ParameterError, match=f"^{named} must be finite"):
+        Backlash(1.0, 0.1, 1.0, 0.1).check_branches(lo, hi)
+
+
+def test_backlash_plot_draws_the_loop_over_the_given_input():
+    import matplotlib.pyplot as plt
+
+    block = Backlash(1.0, 0.2, 1.5, 0.1)
+    u = np.array([0.0, 1.0, 2.0, 1.0, -1.0, -2.0])
+    ax = block.plot(u=u)
+    try:
+        loop, left, right = ax.get_lines()[:3]
+        np.testing.assert_array_equal(loop.get_xdata(), u)
+        # from x = 0: dead band at u = 0, right branch 1.5 (u - 0.1) up to u = 2, then
+        # left branch u + 0.2 on the way down
+        np.testing.assert_allclose(loop.get_ydata(), [0.0, 1.35, 2.85, 1.2, -0.8, -1.8])
+        np.testing.assert_array_equal(left.get_xdata(), [-2.0, 2.0])  # the input's span
+        np.testing.assert_allclose(right.get_ydata(), [-3.15, 2.85])
+    finally:
+        plt.close(ax.figure)
+
+
+def test_backlash_with_vector_reports_a_missing_value_as_not_finite():
+    # the vector is read as floats first: None becomes NaN, refused as not finite
+    with pytest.raises(ParameterError, match=r"^m_left must be finite, got nan$"):
+        Backlash.template().with_vector([None, 0.0, 1.0, 0.0])

@@ -139,3 +139,11 @@ def test_files_and_templates_round_trip(tmp_path):
     u = np.random.default_rng(5).standard_normal(50)
     assert [b.kind for b in loaded.blocks] == ["linear", "integrator"]
     np.testing.assert_array_equal(loaded.simulate(u, [1.0, 1.5]), chain.simulate(u, [1.0, 1.5]))
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_integrator_refuses_a_complex_initial_output():
+    # read as floats: a complex start is an error, not cut to its real part
+    np.testing.assert_array_equal(Integrator().simulate(np.ones(3), x_init=[2]), [2.0, 3.0, 4.0])
+    with pytest.raises(TypeError):
+        Integrator().simulate(np.ones(3), x_init=[2.0 + 1.0j])

@@ -7,7 +7,7 @@ import pytest
 
 from blockid.blocks.base import BLOCK_TYPES, block_from_dict
 from blockid.blocks.polynomial import Polynomial, TwoSegmentPolynomial
-from blockid.errors import DataError, ParameterError
+from blockid.errors import DataError, EstimationError, ParameterError
 
 
 def two_segment_reference(f, p, u):
@@ -291,3 +291,46 @@ def test_negligible_leading_coefficient_puts_turning_points_at_infinity(tiny):
     assert block.monotone_branch() == pytest.approx((-1 / 0.6, np.inf))
     w = np.array([-0.1, 0.5, 1.0])
     np.testing.assert_allclose(block(block.invert(w)), w, rtol=1e-12)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_inverse_on_a_decreasing_block():
+    block = Polynomial([1.0, -2.0])  # w = 1 - 2 u, decreasing
+    u = block.inverse_on(np.array([1.0, 0.0, -1.0, 5.0]), (-1.0, 1.0))
+    np.testing.assert_allclose(u, [0.0, 0.5, 1.0, -1.0], atol=1e-12)  # 5 lies beyond w(-1) = 3
+
+
+def test_polynomial_is_monotone_names_its_range_argument():
+    with pytest.raises(
+        ParameterError, match=r"^\(u_min, u_max\) must have low < high, got \(1\.0, 0\.0\)$"
+    ):
+        Polynomial([0.0, 1.0]).is_monotone(1.0, 0.0)
+
+
+def test_two_segment_from_segments_names_the_bad_segment():
+    with pytest.raises(ParameterError, match=r"^positive needs at least 1 value\(s\), got 0$"):
+        TwoSegmentPolynomial.from_segments([], [1.0])
+
+
+def test_polynomial_inverse_checks_tol_and_reports_non_convergence():
+    p = Polynomial([0.0, 0.0, 0.0, 1.0])  # w = u^3
+    for bad in (0.0, -1e-3):
+        with pytest.raises(ParameterError, match=r"^tol must be > 0, got -?0\.0"):
+            p.inverse(np.array([8.0]), tol=bad)
+    # from the bracket's middle 0, w = 0 is solved at once; 8 and 1 need more steps
+    with pytest.raises(
+        EstimationError,
+        match=r"^polynomial inverse did not converge in 1 iterations for 2 sample\(s\); "
+        r"raise max_iter or tol$",
+    ):
+        p.inverse(np.array([8.0, 1.0, 0.0]), max_iter=1)
+
+
+def test_two_segment_check_data_message():
+    with pytest.raises(EstimationError) as info:
+        TwoSegmentPolynomial.template().check_data(np.array([1.0, 2.0]))
+    assert str(info.value) == (
+        "the input never changes sign, so the two polynomials of the two-segment input "
+        "block (B1) cannot both be identified; use data that span both signs of u, or a "
+        "Polynomial input block"
+    )

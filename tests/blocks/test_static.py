@@ -173,3 +173,77 @@ def test_kinds_and_flags():
 )
 def test_default_u_range_shows_the_kinks(block, expected):
     assert block.default_u_range() == pytest.approx(expected)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_dead_zone_derivative_is_zero_on_the_closed_band():
+    d = DeadZone(-1.0, 1.0, slope_left=2.0, slope_right=3.0)
+    np.testing.assert_array_equal(
+        d.derivative(np.array([-1.0, 0.0, 1.0, -1.5, 1.5])), [0, 0, 0, 2, 3]
+    )
+
+
+def test_saturation_jacobian_treats_both_limits_as_inside():
+    s = Saturation(-1.0, 1.0, slope=2.0)
+    # w = clip(2 u, -1, 1); columns d/d(lower, upper, slope): (1, 0, 0) below, (0, 1, 0)
+    # above, (0, 0, u) on the closed interval, edges v = 2 u = -1 and 1 included
+    np.testing.assert_array_equal(
+        s.jacobian(np.array([-0.5, 0.5, 0.25, 1.0, -1.0])),
+        [[0, 0, -0.5], [0, 0, 0.5], [0, 0, 0.25], [0, 1, 0], [1, 0, 0]],
+    )
+
+
+def test_saturation_bounds_leave_the_limits_free_and_the_slope_positive():
+    lower, upper = Saturation(-1.0, 1.0).bounds()
+    np.testing.assert_array_equal(lower, [-np.inf, -np.inf, 1e-6])
+    np.testing.assert_array_equal(upper, [np.inf, np.inf, np.inf])
+
+
+def test_piecewise_linear_template_and_adapted_breakpoints():
+    p = PiecewiseLinear.template(knots=3)
+    assert p.parameters == {"breakpoints": [-1.0, 0.0, 1.0], "values": [0.0, 0.0, 0.0]}
+    assert p.adapted(np.array([-2.0, 1.0, 5.0])).parameters["breakpoints"] == [-2.0, 1.5, 5.0]
+    for bad in (1, True, 2.5):
+        with pytest.raises(ParameterError, match="knots must be a whole number >= 2"):
+            PiecewiseLinear.template(knots=bad)
+
+
+def test_piecewise_linear_template_on_given_breakpoints_stays_there():
+    p = PiecewiseLinear.template(breakpoints=[-1, 0.5, 2])
+    assert p.parameters == {"breakpoints": [-1.0, 0.5, 2.0], "values": [0.0, 0.0, 0.0]}
+    # given breakpoints are not spread over the estimation input's range
+    assert p.adapted(np.array([-5.0, 5.0])) is p
+    with pytest.raises(ParameterError, match="breakpoints"):
+        PiecewiseLinear.template(breakpoints=[1.0])
+
+
+def test_piecewise_linear_vector_names():
+    p = PiecewiseLinear([-1.0, 0.0, 1.0], [0.0, 1.0, 2.0])
+    assert p.vector_names() == ["values_0", "values_1", "values_2"]
+    assert p.vector_names({"values": "v"}) == ["v_0", "v_1", "v_2"]
+
+
+def test_saturation_names_a_bad_lower_limit():
+    with pytest.raises(ParameterError, match=r"^lower must be a real number, got 'low'$"):
+        Saturation("low", 1.0)
+
+
+def test_dead_zone_jacobian_edges_do_not_move_on_the_band():
+    d = DeadZone(-0.5, 1.0, slope_left=2.0, slope_right=3.0)
+    # columns d/d(lower, upper, slope_left, slope_right); at u = lower and u = upper the
+    # output is 0 on the band side, as the derivative
+    np.testing.assert_array_equal(
+        d.jacobian(np.array([-0.5, 1.0, -1.0, 2.0])),
+        [[0, 0, 0, 0], [0, 0, 0, 0], [-2, 0, -0.5, 0], [0, -3, 0, 1]],
+    )
+
+
+def test_piecewise_linear_and_saturation_name_the_bad_argument():
+    with pytest.raises(ParameterError, match=r"^values needs at least 2 value\(s\), got 1$"):
+        PiecewiseLinear([0.0, 1.0], [0.0])
+    with pytest.raises(ParameterError, match=r"^upper must be a real number, got 'x'$"):
+        Saturation(-1.0, "x")
+
+
+def test_saturation_template_is_the_unit_saturation():
+    assert Saturation.template().parameters == {"lower": -1.0, "upper": 1.0, "slope": 1.0}

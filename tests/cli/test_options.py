@@ -4,6 +4,10 @@ Generated from :data:`blockid.fitting.registry.OPTIONS`: an option added there (
 method) without reaching ``fit`` and ``compare`` fails a test here.
 """
 
+# Annotations stay text here, as in the CLI's modules: with_fit_options must evaluate them.
+from __future__ import annotations
+
+import inspect
 import json
 import re
 
@@ -15,10 +19,10 @@ from typer.testing import CliRunner
 import blockid.fitting
 import blockid.workflows
 from blockid.blocks import DeadZone, Polynomial
-from blockid.cli._options import INTERNAL
+from blockid.cli._options import INTERNAL, cli_options, structures_help, with_fit_options
 from blockid.cli.main import app
 from blockid.errors import ParameterError
-from blockid.fitting.registry import OPTIONS, STRUCTURES, option_flag
+from blockid.fitting.registry import OPTIONS, STRUCTURES, Option, option_flag
 from blockid.models import Hammerstein, Wiener, load_model
 
 runner = CliRunner()
@@ -263,3 +267,116 @@ def test_a_new_registry_option_is_a_flag_without_touching_the_cli(csv):
     import sys
 
     subprocess.run([sys.executable, "-c", NEW_OPTION, str(csv)], check=True)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_cli_options_are_the_used_options_less_the_internal_ones():
+    names = [o.name for o in cli_options()]
+    assert "record_history" not in names
+    assert names == [n for n in OPTIONS if n != "record_history"]  # every other option is used
+
+
+def test_with_fit_options_puts_the_flags_after_method_as_keywords():
+    def command(data: str, method: str | None = None, output: str = "x", **options):
+        return options
+
+    signature = inspect.signature(with_fit_options(command))
+    names = list(signature.parameters)
+    flags = [o.name for o in cli_options()]
+    assert names == ["data", "method", *flags, "output"]
+    p = signature.parameters
+    assert p["data"].annotation is str  # evaluated, not the text "str"
+    assert p["output"].kind is inspect.Parameter.KEYWORD_ONLY
+    assert p["data"].kind is inspect.Parameter.POSITIONAL_OR_KEYWORD
+    for name in flags:
+        assert p[name].kind is inspect.Parameter.KEYWORD_ONLY
+        assert p[name].default is None
+    info = p["passes"].annotation.__metadata__[0]
+    assert info.metavar == "N" and info.show_default is False
+    assert info.help == OPTIONS["passes"].help
+    assert p["tol"].annotation.__metadata__[0].metavar == "X"
+    assert p["forgetting"].annotation.__metadata__[0].metavar == "SCHEDULE"
+    assert p["input_block"].annotation.__metadata__[0].metavar == "KIND"
+    assert p["initial_parameters"].annotation.__metadata__[0].metavar == "X[,X..]"
+    assert p["center"].annotation.__metadata__[0].show_default is False
+
+
+def test_with_fit_options_without_method_appends_the_flags():
+    def command(data: str, **options):
+        return options
+
+    names = list(inspect.signature(with_fit_options(command)).parameters)
+    assert names == ["data", *[o.name for o in cli_options()]]
+
+
+def test_structures_help_lists_each_structure_and_its_methods():
+    text = structures_help(width=200)
+    lines = text.split("\n")
+    assert lines[:2] == ["\b", "Structures, and their methods (the first is the default):"]
+    for s in STRUCTURES.values():
+        assert f"{s.name}: {s.help}" in lines
+        assert "    " + ", ".join(s.method_names) in lines
+    narrow = structures_help(width=30).split("\n")
+    assert len(narrow) > len(lines)
+    # help wrapped with an indent; the methods line starts indented
+    assert narrow[2:6] == [
+        "arx: linear ARX, multi-input",
+        "    multi-output (MATLAB",
+        "    na/nb/nk)",
+        "    batch, rls, aw-rls,",
+    ]
+    for line in narrow[2:]:
+        assert len(line) <= 30
+
+
+def test_boolean_flags_carry_their_declared_help():
+    def command(data: str, **options):
+        return options
+
+    p = inspect.signature(with_fit_options(command)).parameters
+    bools = [o.name for o in cli_options() if o.kind == "bool"]
+    assert "center" in bools
+    for name in bools:
+        info = p[name].annotation.__metadata__[0]
+        assert info.help == OPTIONS[name].help and info.help
+
+
+def _option_info(option):
+    import typing
+
+    from blockid.cli._options import _parameter
+
+    parameter = _parameter(option)
+    return parameter, typing.get_args(parameter.annotation)
+
+
+def test_generated_flags_carry_their_names_and_metavars():
+    parameter, (kind, info) = _option_info(OPTIONS["normalize"])
+    assert parameter.name == "normalize"
+    assert kind == bool | None
+    assert info.default == "--normalize/--no-normalize"
+    parameter, (kind, info) = _option_info(OPTIONS["max_nfev"])
+    assert kind == str | None
+    assert info.default == "--max-nfev"
+    assert info.metavar == "N"
+    # a kind without a metavar of its own falls back to VALUE
+    _, (_, info) = _option_info(Option("some_list", "numbers", "help"))
+    assert info.default == "--some-list"
+    assert info.metavar == "VALUE"
+
+
+def test_a_boolean_flag_and_its_negation_reach_the_command():
+    import typer
+    from typer.testing import CliRunner
+
+    app = typer.Typer()
+
+    @app.command()
+    @with_fit_options
+    def fit(method: str = "x", **options) -> None:
+        print(repr(options["normalize"]), repr(options["max_nfev"]))
+
+    runner = CliRunner()
+    assert runner.invoke(app, ["--no-normalize"]).output == "False None\n"
+    assert runner.invoke(app, ["--normalize", "--max-nfev", "7"]).output == "True '7'\n"
+    assert runner.invoke(app, []).output == "None None\n"

@@ -63,3 +63,11 @@ def test_fit_percent_of_a_constant_output():
     y = np.full(4, 2.0)
     assert fit_percent(y, y).tolist() == [100.0]
     assert np.isnan(fit_percent(y, y + np.array([0.0, 0.0, 0.0, -1.0]))).all()  # undefined
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_undefined_notes_say_why_for_every_metric():
+    from blockid.evaluation.metrics import undefined_notes
+
+    notes = undefined_notes({"mse": {"y": float("nan")}, "fit_percent": {"y": 5.0}})
+    assert notes == ["mse of output 'y' is undefined (null): not defined on these samples"]

@@ -3,9 +3,11 @@ import pytest
 
 from blockid import errors
 from blockid.data import Dataset
+from blockid.errors import ParameterError
 from blockid.fitting import fit_arx
 
 import reference
+from reference import _arx_data, _dataset
 
 
 def tito_plant():
@@ -161,3 +163,74 @@ def test_chunked_least_squares_names_a_column_the_whole_record_leaves_unexcited(
     dead = Dataset.from_arrays(u, y, inputs=["v1", "v2"], outputs=["y1", "y2"])
     with pytest.raises(errors.EstimationError, match="v2"):
         fit_arx(dead, 2, 2, 1)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_fit_arx_settings_record_orders_and_the_covariance_only_when_given():
+    data = _dataset()
+    batch = fit_arx(data, na=1, nb=1, nk=1)
+    assert (
+        batch.settings["na"] == [[1]]
+        and batch.settings["nb"] == [[1]]
+        and batch.settings["nk"] == [[1]]
+    )
+    assert "initial_covariance" not in fit_arx(data, na=1, nb=1, nk=1, method="rls").settings
+    given = fit_arx(data, na=1, nb=1, nk=1, method="rls", initial_covariance=1e4)
+    assert given.settings["initial_covariance"] == 1e4
+
+
+def test_fit_arx_unknown_method_lists_the_methods():
+    with pytest.raises(ParameterError, match="choose one of batch, rls, aw-rls, hierarchical-rls"):
+        fit_arx(_dataset(), na=1, nb=1, nk=1, method="nope")
+
+
+def test_rank_deficiency_from_a_constant_output_names_it_an_output():
+    rng = np.random.default_rng(0)
+    data = Dataset.from_arrays(rng.standard_normal(50), np.full(50, 3.0), ["u"], ["y"])
+    from blockid.errors import EstimationError
+
+    with pytest.raises(EstimationError) as info:
+        fit_arx(data, na=2, nb=1, nk=1)
+    assert str(info.value) == (
+        "output 'y': least squares is rank deficient: the regressors y at lag 2 are (nearly) "
+        "linear combinations of the others; output 'y' is constant over the estimation data "
+        "(3 at every sample): a constant signal tells nothing about the dynamics and its "
+        "lags repeat one another; use data in which it varies"
+    )
+
+
+def test_arx_with_nb_zero_for_every_input_names_the_inputs():
+    from blockid.errors import OrderError
+
+    with pytest.raises(OrderError) as info:
+        fit_arx(_dataset(), na=1, nb=0, nk=1)
+    assert str(info.value) == (
+        "nb is 0 for every input of output 'y' ('u'): the model would not use any input "
+        "(a pure autoregression that free-run simulation cannot drive); give nb >= 1, the "
+        "number of coefficients of an input"
+    )
+
+
+def test_rank_deficiency_from_a_constant_input_names_it_an_input():
+    from blockid.errors import EstimationError
+
+    rng = np.random.default_rng(0)
+    data = Dataset.from_arrays(np.full(50, 2.0), rng.standard_normal(50), ["u"], ["y"])
+    with pytest.raises(EstimationError) as info:
+        fit_arx(data, na=1, nb=2, nk=1)  # u(t-1) and u(t-2) are the same column
+    assert "input 'u' is constant over the estimation data (2 at every sample)" in str(info.value)
+
+
+def test_aw_rls_estimator_gets_both_weights():
+    from blockid.fitting.arx import make_estimator
+
+    est = make_estimator("aw-rls", eps1=2.0, eps2=0.5)
+    assert (est.eps1, est.eps2, est.initial_covariance) == (2.0, 0.5, 1e5)
+    # and fit_arx hands eps2 on: another floor gives other estimates on noisy data
+    u, y = _arx_data()
+    noisy = Dataset.from_arrays(
+        u, y + 0.3 * np.random.default_rng(1).standard_normal(y.size), ["u"], ["y"]
+    )
+    low = fit_arx(noisy, method="aw-rls", eps2=0.1).model.parameter_vector(0)
+    high = fit_arx(noisy, method="aw-rls", eps2=5.0).model.parameter_vector(0)
+    assert np.max(np.abs(low - high)) > 1e-6

@@ -12,6 +12,8 @@ from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.fitting.backlash import fit_backlash_aw_rls
 from blockid.models import BacklashModel
 
+from reference import _backlash_data
+
 #: Paper A's S2 with the sign-corrected linear block (SPEC): poles 0.78 and 0.22.
 TRUE = dict(m_left=0.9, c_left=0.8, m_right=0.9, c_right=0.85)
 PLANT = BacklashModel("u2", "v2", input_block=Backlash(**TRUE), na=2, nb=1, nk=1, a=[-1.0, 0.17])
@@ -213,3 +215,32 @@ def test_signals_around_an_operating_point():
     # the raw recursion is badly conditioned there (u f1 and f1 nearly parallel)
     with pytest.raises(EstimationError):
         fit_backlash_aw_rls(_data(u), normalize=False)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_backlash_aw_rls_settings_keep_tol_only_with_several_passes():
+    from blockid.fitting.backlash import fit_backlash_aw_rls
+
+    _, data = _backlash_data()
+    several = fit_backlash_aw_rls(data, na=1, nb=1, nk=1, passes=3, tol=1e-2)
+    assert several.settings["tol"] == 1e-2
+    assert several.settings["passes"] == 3 and several.settings["converged"] is True
+    assert several.settings["normalize"] is True
+    one = fit_backlash_aw_rls(data, na=1, nb=1, nk=1, passes=1, tol=1e-2)
+    assert "tol" not in one.settings  # not used in one pass
+    assert (
+        fit_backlash_aw_rls(data, na=1, nb=1, nk=1, normalize=False).settings["normalize"] is False
+    )
+
+
+def test_backlash_aw_rls_divergence_limit_grows_with_the_largest_output():
+    # |x_hat| beyond 1e6 (1 + max|y|) counts as divergence (the kernel's third parameter)
+    from blockid.fitting.backlash import BacklashAWRLS
+    from blockid.fitting.recursive import normalised_signals
+
+    _, data = _backlash_data(scale=1e4)
+    signals = normalised_signals(data, False)
+    y_max = float(np.max(np.abs(data.experiments[0].y)))
+    assert signals.y_max == y_max > 1e3
+    algorithm = BacklashAWRLS((1, 1, 1), (10.0, 0.1), signals)
+    np.testing.assert_allclose(algorithm.params, [10.0, 0.1, 1e6 * (1.0 + y_max)], rtol=1e-15)

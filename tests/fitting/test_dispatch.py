@@ -11,6 +11,8 @@ from blockid.fitting import fit_model
 from blockid.fitting.dispatch import default_centring, takes_both_signs
 from blockid.fitting.registry import STRUCTURES
 
+from reference import _arx_data, _backlash_data, _dataset
+
 
 def _saturated_record(mean: float, seed: int = 0) -> Dataset:
     """A second-order lag seen through a saturating sensor, around ``mean`` (a 2-10 V
@@ -77,3 +79,33 @@ def test_orders_the_data_cannot_hold_are_refused_before_any_work():
         assert time.perf_counter() - t0 < 1.0
     with pytest.raises(OrderError, match="nx=400"):
         fit_model(data, "state-space", nx=400)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_fit_model_fits_arx_through_the_registry():
+    result = fit_model(_dataset(), "arx", na=1, nb=1, nk=1)
+    np.testing.assert_allclose(
+        result.model.simulate(np.ones(5))[:, 0], [0.0, 1.0, 1.5, 1.75, 1.875], atol=1e-10
+    )
+
+
+def test_explicit_center_false_overrides_the_wiener_default():
+    u, y = _arx_data()
+    data = Dataset.from_arrays(u + 3.0, y + 6.0, inputs=["u"], outputs=["y"])
+    kwargs = dict(na=1, nb=1, nk=1, r2=1, max_nfev=5)
+    centred = fit_model(data, "wiener", **kwargs)  # the Wiener default: centre
+    plain = fit_model(data, "wiener", center=False, **kwargs)
+    assert centred.model.input_offset == pytest.approx(np.mean(u + 3.0))
+    assert plain.model.input_offset == 0.0 and plain.model.output_offset == 0.0
+
+
+def test_refined_recursive_fit_keeps_the_recursion_trajectory():
+    _, data = _backlash_data()
+    opts = dict(method="aw-rls", na=1, nb=1, nk=1, record_history=True)
+    plain = fit_model(data, "backlash", **opts)
+    refined = fit_model(data, "backlash", refine=True, **opts)
+    assert refined.method == "aw-rls+refine"
+    for key in ("theta", "update"):
+        np.testing.assert_array_equal(refined.history[key], plain.history[key])
+    assert refined.history["names"] == plain.history["names"]
+    assert plain.history["theta"].shape == (len(plain.history["update"]), 5)

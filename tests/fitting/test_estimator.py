@@ -7,10 +7,14 @@ import blockid
 from blockid import errors
 from blockid.blocks import Polynomial, TwoSegmentPolynomial
 from blockid.data import Dataset
+from blockid.errors import DataError
+from blockid.evaluation import evaluate
 from blockid.fitting import fit_model
 from blockid.fitting.estimator import ESTIMATORS, ModelEstimator
 from blockid.fitting.registry import STRUCTURES
 from blockid.models import HammersteinWiener
+
+from reference import _arx_data
 
 
 def hw_record(n=1500, seed=0):
@@ -88,3 +92,48 @@ def test_online_arx_rls_equals_the_offline_recursive_fit():
     offline = fit_model(data, "arx", method="rls", na=2, nb=1, nk=1, forgetting="0.99")
     assert isinstance(est, ModelEstimator) and est.n_samples_ == 800
     np.testing.assert_allclose(est.model_.a["y"]["y"], offline.model.a["y"]["y"], rtol=1e-6)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_estimator_names_and_score():
+    assert {cls.__name__ for cls in ESTIMATORS.values()} >= {
+        "ARXEstimator",
+        "HammersteinEstimator",
+        "WienerEstimator",
+        "HammersteinWienerEstimator",
+        "BacklashEstimator",
+    }
+    u, y = _arx_data()
+    est = ESTIMATORS["arx"](na=1, nb=1, nk=1).fit(u, y)
+    assert est.model_.inputs == ("u",) or list(est.model_.inputs) == ["u"]
+    data = Dataset.from_arrays(u, y, inputs=["u"], outputs=["y"])
+    expected = evaluate(est.model_, data).metrics["fit_percent"]["y"]
+    assert est.score(u, y) == pytest.approx(expected)
+    assert est.score(u, y) == pytest.approx(100.0, abs=1e-6)
+    named = ESTIMATORS["arx"](na=1, nb=1, nk=1).fit(u, y, inputs=["v"], outputs=["w"])
+    assert list(named.model_.inputs) == ["v"] and list(named.model_.outputs) == ["w"]
+
+
+def test_estimator_classes_carry_their_structure_and_a_docstring():
+    from blockid.fitting.registry import STRUCTURES
+
+    for name, cls in ESTIMATORS.items():
+        assert cls.structure == name
+        assert cls.__doc__.startswith(f"Estimator of {STRUCTURES[name].help} models")
+        assert f"(structure ``{name}``)" in cls.__doc__
+    doc = ESTIMATORS["hammerstein"].__doc__
+    assert "Methods: simulation-error, key-term-rls (default simulation-error)." in doc
+
+
+def test_estimator_without_outputs_says_what_to_give():
+    u, _ = _arx_data()
+    with pytest.raises(DataError) as info:
+        ESTIMATORS["arx"](na=1, nb=1, nk=1).fit(u)
+    assert str(info.value) == "give a Dataset, or the input array and the output array"
+
+
+def test_estimator_simulate_passes_the_initial_outputs():
+    u, y = _arx_data()
+    est = ESTIMATORS["arx"](na=1, nb=1, nk=1).fit(u, y)
+    sim = est.simulate(np.ones(4), [2.0])
+    np.testing.assert_allclose(sim[:, 0], [2.0, 2.0, 2.0, 2.0], atol=1e-10)  # 0.5*2 + 1

@@ -212,3 +212,65 @@ def test_feedback_block_options_are_checked():
         data, "feedback", na=2, nb=2, nk=1, feedback_block="piecewise-linear", center=True
     )
     assert centred.settings["center"] is True
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def _duffing_data(n=600):
+    # noise free: y from A y = z^-1 B [u - 0.2 y^2 - y^3], nb = 2
+    from blockid.blocks import Polynomial
+    from blockid.blocks.linear import LinearBlock
+    from blockid.models.feedback import LinearFeedback
+
+    plant = LinearFeedback(
+        "u",
+        "y",
+        linear=LinearBlock(2, 2, 1, a=[-1.5, 0.7], b=[0.2, 0.1]),
+        feedback=Polynomial([0.0, 0.2, 1.0], constant=False),
+    )
+    u = np.random.default_rng(4).normal(0.0, 0.5, n)
+    return plant, Dataset.from_arrays(u, plant.simulate(u), ["u"], ["y"])
+
+
+def test_feedback_rank_one_candidate_recovers_b_and_c_on_noise_free_data():
+    from blockid.fitting.feedback import _candidates
+    from blockid.models.feedback import LinearFeedback
+
+    plant, data = _duffing_data()
+    template = LinearFeedback.template("u", "y", na=2, nb=2, nk=1, r=3)
+    a, b, c = _candidates(template, data, 3)["equation error, rank one"]
+    np.testing.assert_allclose(a, [-1.5, 0.7], atol=1e-8)
+    np.testing.assert_allclose(b, [0.2, 0.1], atol=1e-8)
+    np.testing.assert_allclose(c, [0.2, 1.0], atol=1e-7)
+
+
+def test_feedback_start_counts_the_parameters_of_degree_r():
+    # r = 5: a_1, b_0, c_2..c_5 = 6 parameters; 6 samples give 5 rows
+    from blockid.errors import OrderError
+    from blockid.fitting.feedback import initial_feedback
+
+    _, data = _duffing_data()
+    short = data.select(0, 6)
+    with pytest.raises(OrderError, match=r"^feedback model r=5 has 6 parameters and needs at"):
+        initial_feedback(short, na=1, nb=1, nk=1, r=5)
+
+
+def test_feedback_start_that_explodes_for_every_candidate_is_reported(monkeypatch):
+    import blockid.fitting.feedback as feedback
+    from blockid.errors import EstimationError
+
+    _, data = _duffing_data()
+    monkeypatch.setattr(feedback, "simulation_mse", lambda model, data: float("inf"))
+    with pytest.raises(EstimationError) as info:
+        feedback.initial_feedback(data, na=2, nb=2, nk=1, r=3)
+    assert str(info.value) == (
+        "the feedback model's initial estimate explodes in free-run simulation for every "
+        "candidate; try other orders (na, nb, nk) or a lower degree r"
+    )
+
+
+def test_feedback_fit_records_the_time_of_the_initial_estimate():
+    from blockid.fitting.feedback import fit_feedback
+
+    _, data = _duffing_data(300)
+    fit = fit_feedback(data, na=2, nb=2, nk=1, r=3, max_nfev=2)
+    assert fit.history["initial_seconds"] >= 0.0

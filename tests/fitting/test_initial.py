@@ -35,6 +35,8 @@ from blockid.models.block import (
     Wiener,
 )
 
+from reference import _arx_data, _backlash_data, _backlash_model
+
 A2 = [-1.2, 0.5]  # poles 0.6 +- 0.37j
 TWO_SEGMENT = TwoSegmentPolynomial([0.2, 1.0, 0.8, -0.6], [-0.3, -0.5, 1.2, 0.8])
 
@@ -238,3 +240,47 @@ def test_a_hard_output_block_is_shaped_before_the_refinement(block):
     else:
         assert got["lower"] * gain == pytest.approx(-0.2, rel=0.03)
         assert got["upper"] * gain == pytest.approx(0.3, rel=0.03)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_initial_backlash_estimate_of_a_plant_with_a_tiny_gain_is_the_scaled_one():
+    # measured in units where the gain is 1e-13: every grid shape's b_0 is about 1e-13,
+    # below 1e-12 in absolute terms but far from zero relative to b itself
+    from blockid.fitting import initial_estimate
+
+    truth, data = _backlash_data()
+    _, tiny = _backlash_data(scale=1e-13)
+    plain = initial_estimate(data, "backlash", na=1, nb=1, nk=1).parameters
+    small = initial_estimate(tiny, "backlash", na=1, nb=1, nk=1).parameters
+    assert plain["c_left"] == pytest.approx(0.3, abs=0.02)
+    assert plain["m_left"] == pytest.approx(1.0, abs=0.03)
+    for key in ("c_left", "c_right", "a"):
+        np.testing.assert_allclose(small[key], plain[key], rtol=1e-9)
+    for key in ("m_left", "m_right"):
+        assert small[key] == pytest.approx(1e-13 * plain[key], rel=1e-9)
+
+
+def test_start_score_runs_from_the_measured_initial_outputs():
+    from blockid.fitting.initial import _sse
+
+    truth, data = _backlash_data()
+    u = data.experiments[0].u[:, 0]
+    z = truth.simulate(u, [2.0])[:, 0]  # started away from rest: x(0) = 2
+    assert _sse(truth, [u], [z]) == 0.0
+    other = _backlash_model(a=-0.4)
+    expected = np.sum((z[1:] - other.simulate(u, [2.0])[1:, 0]) ** 2)
+    assert _sse(other, [u], [z]) == pytest.approx(expected, rel=1e-12)
+    assert _sse(None, [u], [z]) == np.inf
+
+
+def test_hammerstein_wiener_first_candidate_is_the_linear_fit():
+    from blockid.fitting.initial import _linear_start, _signals, _template, _with_output_block
+    from blockid.models import HammersteinWiener
+
+    u, y = _arx_data()
+    data = Dataset.from_arrays(u, y + 0.1 * y**3, ["u"], ["y"])
+    template = _template(HammersteinWiener, data, 1, 2, 1, 3, 3, None, None)
+    start = _linear_start(*_signals(data), template)
+    first = _with_output_block(data, template)[0]
+    np.testing.assert_array_equal(first.linear.a, start[1])
+    np.testing.assert_array_equal(first.linear.b, start[2])

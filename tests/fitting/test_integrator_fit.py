@@ -104,3 +104,25 @@ def test_polynomial_template_is_unaffected():
     chain = ChainModel("u", "y", [Polynomial([0.0, 1.0, 0.0, 0.0]), LINEAR])
     notes = linear_block_notes(chain, _record([LINEAR], n=50))
     assert any("is linear over the estimation data" in n for n in notes)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_integrator_fit_passes_refine_options_and_times_the_start():
+    from blockid.blocks import Integrator, LinearBlock
+    from blockid.data import Dataset
+    from blockid.fitting import fit_model
+    from blockid.models import ChainModel
+
+    rng = np.random.default_rng(0)
+    u = 0.2 + rng.uniform(-1, 1, 200)
+    plant = [LinearBlock(2, 2, 1, [-1.2, 0.35], [1.0, 0.4]), Integrator(1)]
+    y = ChainModel("u", "y", plant).simulate(u)[:, 0] + 0.01 * rng.standard_normal(200)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"], sampling_time=0.01)
+    fit = fit_model(data, "output-error", na=2, nb=2, nk=1, integrator=1, max_nfev=1)
+    assert fit.settings["max_nfev"] == 1
+    assert fit.settings["stop_reason"] == "max_nfev reached"
+    assert fit.settings["integrator"] == 1
+    assert fit.model.sampling_time == 0.01
+    assert set(fit.history) == {"fit_mse", "tail_mse", "seconds", "initial_seconds"}
+    assert isinstance(fit.history["initial_seconds"], float)
+    assert 0.0 < fit.history["initial_seconds"] < 60.0

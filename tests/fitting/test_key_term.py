@@ -14,6 +14,8 @@ from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.fitting.key_term import fit_key_term_rls
 from blockid.models import ARX, Hammerstein, HammersteinWiener, Wiener
 
+from reference import _arx_data, _dataset
+
 # paper B's orders: na = 3, nb = 3 (b_0..b_2), nk = 8; two-segment cubic input block
 A_FAST = np.real(np.poly([0.7, 0.5, -0.3]))[1:]
 A_SLOW = np.real(np.poly([0.9, 0.8, 0.5]))[1:]
@@ -280,3 +282,20 @@ def test_needs_one_input_and_one_output():
     data = Dataset.from_arrays(np.zeros((50, 2)), np.zeros(50))
     with pytest.raises(DataError, match="one input and one output"):
         fit_key_term_rls(data, "arx")
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_key_term_rls_names_a_bad_nb():
+    from blockid.fitting.key_term import fit_key_term_rls
+
+    with pytest.raises(ParameterError, match=r"^nb=0 must be a whole number >= 1"):
+        fit_key_term_rls(_dataset(), structure="hammerstein", na=1, nb=0, nk=1)
+
+
+def test_key_term_rls_settings_record_r1():
+    from blockid.fitting.key_term import fit_key_term_rls
+
+    u, y = _arx_data()
+    data = Dataset.from_arrays(u, y + 0.2 * y**2, ["u"], ["y"])
+    fit = fit_key_term_rls(data, "hammerstein", na=1, nb=1, nk=1, r1=2)
+    assert fit.settings["r1"] == 2 and "r2" not in fit.settings

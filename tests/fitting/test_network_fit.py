@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from blockid.data import Dataset
+from blockid.errors import ParameterError
 from blockid.fitting import fit_model, fit_network, parse_subsystem, subset
 
 N = 400
@@ -99,3 +100,35 @@ def test_estimation_metrics_are_of_the_free_run_from_the_external_inputs(fitted)
         assert metrics["max_abs_error"][name] == pytest.approx(np.max(np.abs(err[:, j])), rel=1e-9)
     # small equation errors: the free run follows the measurement closely
     assert metrics["fit_percent"]["v1"] > 97.0 and metrics["fit_percent"]["y"] > 95.0
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def _network_data(n=200):
+    rng = np.random.default_rng(7)
+    u = rng.standard_normal(n)
+    v = np.zeros(n)
+    for t in range(1, n):
+        v[t] = 0.6 * v[t - 1] + 0.4 * u[t - 1]
+    return Dataset.from_arrays(u, v, ["u"], ["v"])
+
+
+def test_network_fit_records_methods_and_scores_by_simulation():
+    from blockid.fitting.network import SubsystemSpec, fit_network
+
+    spec = SubsystemSpec("S1", ["u"], ["v"], "arx", "batch", {"na": 1, "nb": 1, "nk": 1})
+    fit = fit_network(_network_data(), [spec])
+    assert fit.metrics_mode == "simulation"
+    assert fit.settings["subsystems"]["S1"]["method"] == "batch"
+    assert fit.settings["subsystems"]["S1"]["structure"] == "arx"
+
+
+def test_network_option_that_does_not_fit_is_named_with_the_subsystem_options():
+    # method given among the options as well as the spec's method: fit_model's TypeError
+    from blockid.fitting.network import SubsystemSpec, fit_network
+
+    opts = {"na": 1, "nb": 1, "nk": 1, "method": "rls"}
+    with pytest.raises(
+        ParameterError,
+        match=r"^subsystem S1: an option value does not fit \(na=1 nb=1 nk=1 method=rls\): ",
+    ):
+        fit_network(_network_data(), [SubsystemSpec("S1", ["u"], ["v"], "arx", None, opts)])

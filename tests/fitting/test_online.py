@@ -7,12 +7,14 @@ import pytest
 from blockid import ARXEstimator, HammersteinWienerEstimator
 from blockid.blocks import Backlash, Polynomial, TwoSegmentPolynomial
 from blockid.data import Dataset
-from blockid.errors import EstimationError, ParameterError
+from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.fitting.arx import fit_arx
 from blockid.fitting.backlash import fit_backlash_aw_rls
 from blockid.fitting.key_term import fit_key_term_rls
 from blockid.fitting.online import online_estimator
 from blockid.models import ARX, BacklashModel, Hammerstein, HammersteinWiener, Wiener
+
+from reference import _backlash_data
 
 # paper B's orders and a stable third-order linear block
 N1 = TwoSegmentPolynomial.from_segments(
@@ -408,3 +410,72 @@ def test_orders_given_beside_a_starting_model_must_be_its_own(structure, method,
         online_estimator(structure, method, {**given, "initial": start}, ["u"], ["y"])
     own = {k: getattr(start, k) for k in ("na", "nb", "nk")}
     online_estimator(structure, method, {**own, "initial": start}, ["u"], ["y"])  # its own: fine
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_online_backlash_predicts_nothing_before_its_first_update():
+    # orders na=2, nb=1, nk=1: the first update is at sample 2, as offline
+    from blockid.fitting.online import online_estimator
+
+    _, data = _backlash_data()
+    u, y = data.experiments[0].u[:40], data.experiments[0].y[:40]
+    whole = online_estimator("backlash", "aw-rls", {"na": 2}, "u", "y").partial_fit(u, y)
+    assert np.all(np.isnan(whole.predictions_[:2])) and np.all(np.isfinite(whole.predictions_[2:]))
+    single = online_estimator("backlash", "aw-rls", {"na": 2}, "u", "y")
+    steps = np.array([single.update(u[k], y[k]) for k in range(len(u))])
+    assert np.all(np.isnan(steps[:2])) and np.all(np.isfinite(steps[2:]))
+    np.testing.assert_array_equal(steps, whole.predictions_)
+
+
+def test_online_update_refuses_a_missing_output_sample():
+    from blockid.fitting.online import online_estimator
+
+    est = online_estimator("arx", "rls", {}, ["u"], ["y"])
+    with pytest.raises(DataError, match="^the chunk contains NaN or inf"):
+        est.update(1.0, np.nan)
+    assert est.n_samples == 0
+
+
+def test_online_arx_takes_its_orders_from_the_initial_model():
+    from blockid.fitting.online import online_estimator
+    from blockid.models import ARX
+
+    initial = ARX(["u"], ["y"], 2, 1, 1, a={"y": {"y": [-0.5, 0.1]}}, b={"y": {"u": [1.0]}})
+    est = online_estimator("arx", "rls", {"initial": initial}, ["u"], ["y"])
+    assert est.template.na.tolist() == [[2]] and est.template.nb.tolist() == [[1]]
+    np.testing.assert_allclose(est.model().parameter_vector(0), [-0.5, 0.1, 1.0])
+
+
+def test_online_key_term_names_a_bad_initial_covariance():
+    from blockid.fitting.online import online_estimator
+
+    with pytest.raises(ParameterError, match="^initial_covariance must be > 0, got -1"):
+        online_estimator("hammerstein", "key-term-rls", {"initial_covariance": -1}, "u", "y")
+
+
+def test_online_backlash_step_that_diverges_names_the_method():
+    from blockid.errors import EstimationError
+    from blockid.fitting.online import online_estimator
+
+    est = online_estimator("backlash", "aw-rls", {}, ["u"], ["y"])
+    est.update(0.1, 0.1)
+    est.update(1.0, 0.5)
+    with pytest.raises(EstimationError) as info:
+        est.update(1e12, 0.0)
+    assert str(info.value).startswith(
+        "AW-RLS diverged at sample 2 (counted from the first sample learned online): the "
+        "estimated backlash output x exceeded 1e6 (1 + max|v|)."
+    )
+
+
+def test_online_arx_names_the_sample_where_the_estimate_overflows():
+    from blockid.errors import EstimationError
+    from blockid.fitting.online import online_estimator
+
+    est = online_estimator("arx", "rls", {}, ["u"], ["y"])
+    with pytest.raises(EstimationError) as info:
+        est.partial_fit(np.array([1.0, 2.0, 1e200, 1.0]), np.array([0.5, 1.0, 2.0, 1e200]))
+    assert str(info.value).startswith(
+        "RLS of output 'y' diverged at sample 3 (counted from the first sample learned online)"
+    )
+    assert info.value.sample == 3 and est.n_samples == 0

@@ -10,6 +10,8 @@ from blockid.data import Dataset, Experiment
 from blockid.errors import DataError, OrderError, ParameterError
 from blockid.fitting.orders import OrderEvidence, false_nearest_neighbours
 
+from reference import _dataset
+
 
 def arx(u, a, b, nk, f=None, g=None):
     """y = g(x), A(z) x = z^-nk B(z) f(u): MATLAB convention, a = [a_1..], b = [b_0..]."""
@@ -220,3 +222,43 @@ def test_the_noise_allowance_is_estimated_where_the_classic_test_asks_for_a_lag_
     assert classic.recommended[0] == 3 and classic.settings["noise_estimated"] is False
     assert auto.recommended[0] == 2 and auto.settings["noise_estimated"] is True
     assert 0.005 < auto.settings["noise"] < 0.02
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_false_nearest_neighbour_shares_with_the_noise_allowance_by_brute_force():
+    from blockid.fitting.orders import false_nearest_neighbours
+
+    rng = np.random.default_rng(5)
+    n = 90
+    u = rng.standard_normal(n)
+    y = np.convolve(u, [0.0, 1.0, 0.5])[:n] + 0.3 * rng.standard_normal(n)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    r_tol, a_tol, noise = 2.0, 10.0, 0.1
+    ev = false_nearest_neighbours(
+        data, max_na=1, max_nb=2, max_nk=1, r_tol=r_tol, a_tol=a_tol, noise=noise,
+        max_points=None, exclude=0,
+    )  # fmt: skip
+    us, ys = (u - u.mean()) / u.std(), (y - y.mean()) / y.std()
+    lag = 2  # max(max_na, max_nk + max_nb - 1)
+    for i, na in enumerate(ev.na):
+        for j, nb in enumerate(ev.nb):
+            for m, nk in enumerate(ev.nk):
+                cols = [ys[lag - k : n - k] for k in range(1, na + 1)]
+                cols += [us[lag - d : n - d] for d in range(nk, nk + nb)]
+                x, out = np.column_stack(cols), ys[lag:]
+                dist = np.linalg.norm(x[:, None, :] - x[None, :, :], axis=2)
+                np.fill_diagonal(dist, np.inf)
+                nearest = dist.argmin(axis=1)
+                dy = np.abs(out - out[nearest])
+                slack = 2 * r_tol * np.sqrt(na * noise**2 + nb * noise**2) + 2 * noise
+                false = (dy > r_tol * dist.min(axis=1) + slack) | (dy > a_tol)
+                assert ev.percent[i, j, m] == pytest.approx(100.0 * false.mean(), abs=1e-9)
+    assert ev.percent.max() > 50.0  # (0, 1, 0): a wrong order, mostly false neighbours
+
+
+def test_order_test_names_the_bad_option():
+    from blockid.fitting.orders import false_nearest_neighbours
+
+    with pytest.raises(ParameterError, match=r"^max_na must be an integer >= 0, got -1") as info:
+        false_nearest_neighbours(_dataset(), max_na=-1)
+    assert info.value.parameter == "max_na"

@@ -18,9 +18,12 @@ from blockid.data.dataset import Experiment
 from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.estimators import RecursiveLeastSquares
 from blockid.estimators.forgetting import ForgettingSchedule
-from blockid.fitting import fit_arx, fit_key_term_rls
+from blockid.fitting import fit_arx, fit_key_term_rls, fit_model
 from blockid.fitting.recursive import RecursiveAlgorithm, fit_recursive, normalised_signals
 from blockid.models import ARX, BlockModel
+
+import reference
+from reference import _dataset
 
 GAIN = 2.0
 LENGTHS = (301, 201)  # samples of the two experiments: 300 + 200 updates a pass (n0 = 1)
@@ -303,3 +306,30 @@ def test_fitters_share_the_driver_and_import_nothing_private(module):
             assert not private, f"{module} imports {private} from {node.module}"
             others = {"blockid.fitting.key_term", "blockid.fitting.backlash"}
             assert node.module not in others, f"{module} imports from {node.module}"
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_recursive_fitters_refuse_what_is_not_a_dataset():
+    u, y = reference._arx_data(20)
+    with pytest.raises(DataError, match="key-term RLS needs a blockid Dataset, got ndarray"):
+        fit_model(u, "hammerstein", method="key-term-rls")
+
+
+def test_recursive_fit_settings_keep_tol_and_normalize():
+    from blockid.fitting.key_term import fit_key_term_rls
+
+    data = _dataset()
+    kwargs = dict(na=1, nb=1, nk=1, passes=5, tol=1e-3, forgetting=1)
+    raw = fit_key_term_rls(data, "arx", normalize=False, **kwargs)
+    np.testing.assert_allclose(raw.model.parameter_vector(0), [-0.5, 1.0], atol=1e-6)
+    assert raw.settings["tol"] == 1e-3
+    assert raw.settings["normalize"] is False
+    assert raw.settings["converged"] is True
+    assert fit_key_term_rls(data, "arx", **kwargs).settings["normalize"] is True
+
+
+def test_empty_trajectory_has_one_column_per_parameter():
+    from blockid.fitting.recursive import _Trajectory
+
+    theta, update = _Trajectory(5, 1).arrays()
+    assert theta.shape == (0, 5) and update.shape == (0,)

@@ -604,3 +604,14 @@ def test_with_a_linear_output_block_there_is_one_start():
     data = record(true, rng.uniform(-1, 1, 1500), rng)
     fit = fit_simulation_error(data, "hammerstein-wiener", na=3, nb=3, nk=2, r2=1)
     assert set(fit.settings["starts"]) == {"initial estimate"}
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_tail_is_kept_when_the_head_holds_one_sample_for_one_parameter():
+    from blockid.fitting.simulation_error import _segments
+
+    u = np.arange(10.0)
+    data = Dataset.from_arrays(u, u, ["u"], ["y"])
+    # N = 10, tail 5, n0 = 4: a head of 1 sample holds 1 parameter
+    assert [s.n_fit for s in _segments(data, 4, 0.5, 1)] == [5]
+    assert [s.n_fit for s in _segments(data, 4, 0.5, 2)] == [10]

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from blockid._kernels import rls as k
+from blockid._kernels.rls import rls_step
 
 import reference
 
@@ -92,3 +93,66 @@ def test_textbook_update_loses_symmetry_where_ours_does_not(rng):
     theta, Pk, E = np.zeros(n), 1e4 * np.eye(n), np.empty(N)
     k.rls_run(theta, Pk, Phi, y, np.full(N, 0.99), np.inf, E)
     assert np.array_equal(Pk, Pk.T)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def _step(P0, phi, rho0, s_coef=1.0, inv_lam=1.0, trace_max=1e9):
+    n = len(phi)
+    theta = np.zeros(n)
+    P = np.array(P0, dtype=float)
+    out = np.zeros(2)
+    ok = rls_step(
+        theta, P, np.asarray(phi, float), 1.0, np.zeros(n), rho0, s_coef, inv_lam, trace_max, out
+    )
+    return ok, theta, P
+
+
+def test_rls_step_refuses_a_negative_finite_denominator():
+    # d = rho0 + s = -1 + 0.25 < 0: the update would divide by a negative number.
+    ok, _, _ = _step([[1.0]], [0.5], rho0=-1.0)
+    assert not ok
+
+
+def test_rls_step_accepts_a_positive_denominator_on_the_same_data():
+    ok, theta, P = _step([[1.0]], [0.5], rho0=1.0)
+    assert ok
+    # theta = P phi e / (1 + 0.25) with e = 1; P = 1 - 0.25 / 1.25
+    np.testing.assert_allclose(theta, [0.4])
+    np.testing.assert_allclose(P, [[0.8]])
+
+
+def test_rls_step_refuses_a_covariance_diagonal_of_exactly_zero():
+    # rho0 = 0, P = 1, phi = 1: d = 1 and P(t) = 1 - 1 * 1 / 1 = 0 exactly.
+    ok, _, P = _step([[1.0]], [1.0], rho0=0.0)
+    assert P[0, 0] == 0.0
+    assert not ok
+
+
+def test_rls_run_without_forgetting_ignores_the_trace_bound():
+    # lam = 1 exactly: no anti-wind-up, whatever trace_max says (SPEC A2).
+    from blockid._kernels.rls import OK, rls_run
+
+    theta = np.zeros(2)
+    P = 100.0 * np.eye(2)
+    E = np.zeros(1)
+    status = rls_run(theta, P, np.array([[1.0, 0.0]]), np.array([1.0]), np.array([1.0]), 1e-3, E)
+    assert status == OK
+    # P(1) = P - P phi phi^T P / (1 + phi^T P phi)
+    np.testing.assert_allclose(P, [[100.0 / 101.0, 0.0], [0.0, 100.0]])
+    np.testing.assert_allclose(theta, [100.0 / 101.0, 0.0])
+    assert E[0] == 1.0  # the a-priori error y - phi^T theta(0), not phi^T P phi = 100
+
+
+def test_hierarchical_rls_without_forgetting_ignores_the_trace_bound():
+    from blockid._kernels.rls import OK, hierarchical_rls_run
+
+    theta = np.zeros(2)
+    P = 100.0 * np.eye(2)
+    E = np.zeros(1)
+    Phi = np.array([[1.0, 0.0]])
+    bounds = np.array([0, 1, 2])
+    status = hierarchical_rls_run(theta, P, Phi, np.array([1.0]), bounds, np.array([1.0]), 1e-3, E)
+    assert status == OK
+    # group 1 sees phi = 1: P = 100 - 100^2 / 101; group 2 sees phi = 0: unchanged
+    np.testing.assert_allclose(np.diag(P), [100.0 / 101.0, 100.0])
+    assert E[0] == 1.0

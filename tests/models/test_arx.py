@@ -116,3 +116,16 @@ def test_bad_orders_are_named(kwargs, match):
 def test_wrong_signal_shape_is_named(rng):
     with pytest.raises(errors.DataError, match=r"2 input\(s\) \['v1', 'v2'\].*shape \(10, 3\)"):
         tito().simulate(np.ones((10, 3)))
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+U = np.array([0.0, 1.0, -2.0, 0.5, 3.0, -1.0])
+
+
+def test_arx_from_dict_without_offsets_has_zero_offsets():
+    m = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-0.5]}}, b={"y": {"u": [1.0]}})
+    data = m.to_dict()
+    data.pop("offsets", None)
+    loaded = model_from_dict(data)
+    np.testing.assert_array_equal(loaded.simulate(U), m.simulate(U))
+    assert list(np.ravel(loaded.input_offset)) == [0.0]

@@ -4,6 +4,7 @@ from scipy.signal import lfilter
 
 from blockid import errors
 from blockid.blocks import Backlash, DeadZone, Polynomial, TwoSegmentPolynomial
+from blockid.errors import ModelFileError
 from blockid.models import (
     BacklashModel,
     Hammerstein,
@@ -12,6 +13,7 @@ from blockid.models import (
     load_model,
     save_model,
 )
+from blockid.models.base import model_from_dict
 
 N1 = TwoSegmentPolynomial([0.05, 1.0, 0.3, -0.1], [-0.05, -0.4, 0.2, 0.05])
 N2 = Polynomial([1.0, 0.2, 0.1], constant=False)
@@ -144,3 +146,149 @@ def test_polynomial_input_block_without_constant_round_trips(rng, tmp_path):
     again = load_model(save_model(model, tmp_path / "m.json"))
     u = rng.uniform(-1, 1, 50)
     assert np.array_equal(again.simulate(u), model.simulate(u))
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+U = np.array([0.0, 1.0, -2.0, 0.5, 3.0, -1.0])
+
+
+def _version1(structure, blocks, parameters, orders=(1, 2, 1)):
+    na, nb, nk = orders
+    return {
+        "structure": structure,
+        "inputs": ["u"],
+        "outputs": ["y"],
+        "orders": {"na": na, "nb": nb, "nk": nk},
+        "blocks": blocks,
+        "parameters": parameters,
+    }
+
+
+def test_version1_hammerstein_with_a_polynomial_input_block():
+    # before chains: SPEC names (f for the input polynomial), orders beside them
+    data = _version1(
+        "hammerstein", {"input": "polynomial"}, {"f": [0.0, 1.0, 0.5], "a": [-0.5], "b": [1.0, 0.3]}
+    )
+    model = model_from_dict(data)
+    expected = Hammerstein(
+        "u", "y", input_block=Polynomial([0.0, 1.0, 0.5]), na=1, nb=2, nk=1, a=[-0.5], b=[1.0, 0.3]
+    )
+    assert model.to_dict()["chain"] == expected.to_dict()["chain"]
+    np.testing.assert_array_equal(model.simulate(U), expected.simulate(U))
+
+
+def test_version1_hammerstein_wiener_with_its_output_polynomial():
+    data = _version1(
+        "hammerstein-wiener",
+        {"input": "two-segment-polynomial", "output": "polynomial"},
+        {"f": [0.0, 1.0], "p": [0.0, -0.5], "a": [-0.5], "b": [1.0, 0.3], "q": [1.0, 0.2]},
+    )
+    model = model_from_dict(data)
+    expected = HammersteinWiener(
+        "u", "y",
+        input_block=TwoSegmentPolynomial([0.0, 1.0], [0.0, -0.5]),
+        output_block=Polynomial([1.0, 0.2], constant=False),
+        na=1, nb=2, nk=1, a=[-0.5], b=[1.0, 0.3],
+    )  # fmt: skip
+    assert model.to_dict()["chain"] == expected.to_dict()["chain"]
+    np.testing.assert_array_equal(model.simulate(U), expected.simulate(U))
+
+
+def test_version1_output_block_must_be_a_polynomial_with_q():
+    data = _version1("wiener", {"output": "dead-zone"}, {"a": [-0.5], "b": [1.0, 0.3], "q": [1.0]})
+    with pytest.raises(
+        ModelFileError, match="the output block must be a polynomial with parameters 'q'"
+    ):
+        model_from_dict(data)
+
+
+def test_free_parameter_names_of_a_two_segment_input_block():
+    m = Hammerstein(
+        "u",
+        "y",
+        input_block=TwoSegmentPolynomial([0.0, 1.0], [0.0, -0.5]),
+        na=1,
+        nb=2,
+        nk=1,
+        a=[-0.5],
+        b=[1.0, 0.3],
+    )
+    # b_0 = 1 is fixed by the normalisation after a nonlinear block
+    assert m.free_parameter_names() == ["f_0", "f_1", "p_0", "p_1", "a_1", "b_1"]
+    assert len(m.free_parameter_names()) == len(m.free_parameters())
+
+
+def test_block_inputs_are_the_signals_entering_each_block():
+    m = Wiener(
+        "u",
+        "y",
+        output_block=Polynomial([1.0, 2.0], constant=False),
+        na=1,
+        nb=1,
+        nk=1,
+        a=[-0.5],
+        b=[1.0],
+    )
+    u_in, x_in = m.block_inputs(U.reshape(-1, 1))
+    np.testing.assert_array_equal(u_in, U)
+    # x(t) = 0.5 x(t-1) + u(t-1)
+    x = np.zeros(len(U))
+    for t in range(1, len(U)):
+        x[t] = 0.5 * x[t - 1] + U[t - 1]
+    np.testing.assert_allclose(x_in, x)
+    np.testing.assert_allclose(m.simulate(U)[:, 0], x + 2.0 * x**2)
+
+
+def test_extrapolation_names_the_linear_blocks_output_leaving_its_range():
+    m = Wiener(
+        "u",
+        "y",
+        output_block=Polynomial([1.0, 2.0], constant=False),
+        na=1,
+        nb=1,
+        nk=1,
+        a=[-0.5],
+        b=[1.0],
+    ).replace(ranges={"u": [-1.0, 1.0], "x": [-1.0, 1.0]})
+    # x(t) = 0.5 x(t-1) + u(t-1) = [0, 0, 3, 1.5]: 2 of 4 samples above 1 (by 2 = 100 %)
+    assert m.extrapolation(np.array([0.0, 3.0, 0.0, 0.0])) == [
+        "the linear block's output x (input of the output block) leaves the range seen in "
+        "estimation [-1, 1] in 2 of 4 samples (by up to 100 % of that range): the model "
+        "extrapolates there (along the block's tangent at the range's end)"
+    ]
+    assert m.extrapolation(np.array([0.0, 1.0, 0.0, 0.0])) == []
+
+
+def test_saved_chain_whose_blocks_do_not_fit_names_the_structure():
+    data = Wiener(
+        "u", "y", output_block=Polynomial([1.0, 0.5], constant=False), na=1, nb=1, nk=1, a=[-0.5]
+    ).to_dict()
+    data["chain"] = Hammerstein(
+        "u", "y", input_block=Polynomial([0.0, 1.0]), na=1, nb=1, nk=1, a=[-0.5]
+    ).to_dict()["chain"]
+    with pytest.raises(ModelFileError) as info:
+        model_from_dict(data)
+    assert (
+        str(info.value) == "the wiener model's blocks do not fit: a wiener model has no input block"
+    )
+
+
+def test_backlash_model_refuses_another_input_block():
+    from blockid.errors import OrderError
+    from blockid.models.block import BacklashModel
+
+    with pytest.raises(OrderError, match="^a backlash model's input block must be a Backlash$"):
+        BacklashModel("u", "y", input_block=Polynomial([0.0, 1.0]), na=1, nb=1, nk=1, a=[-0.5])
+
+
+def test_a_block_model_of_two_outputs_is_refused_with_the_advice():
+    from blockid.blocks import Polynomial
+    from blockid.errors import OrderError
+    from blockid.models.block import Hammerstein
+
+    with pytest.raises(OrderError) as info:
+        Hammerstein("u", ["y1", "y2"], input_block=Polynomial([0.0, 1.0]), na=1, nb=1, nk=1)
+    assert str(info.value) == (
+        "block-oriented models have one output; got 2 (['y1', 'y2']). "
+        "Use an ARX model or a network of blocks for several signals"
+    )

@@ -13,7 +13,7 @@ from blockid.data import Dataset
 from blockid.models import load_model, model_from_dict, save_model
 from blockid.models.feedback import LinearFeedback
 
-from reference import TanhSpring
+from reference import TanhSpring, _feedback
 
 
 def duffing(**kwargs):
@@ -315,3 +315,62 @@ def test_other_blocks_in_feedback_save_and_load(name, tmp_path):
     assert loaded.feedback.kind == model.feedback.kind
     np.testing.assert_array_equal(loaded.simulate(u), model.simulate(u))
     np.testing.assert_array_equal(loaded.free_parameters(), model.free_parameters())
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+U = np.array([0.0, 1.0, -2.0, 0.5, 3.0, -1.0])
+
+
+def test_feedback_block_without_kind_is_refused_by_name():
+    from blockid.blocks.linear import LinearBlock
+    from blockid.errors import OrderError
+    from blockid.models.feedback import LinearFeedback
+
+    with pytest.raises(OrderError) as info:
+        LinearFeedback("u", "y", linear=LinearBlock(1, 1, 1, a=[-0.5], b=[1.0]), feedback=object())
+    assert str(info.value) == (
+        "the feedback block must be a static block (polynomial, dead-zone, saturation, "
+        "piecewise-linear, ...), got object; a dynamic or linear block cannot be fed back"
+    )
+
+
+def test_feedback_template_refuses_a_degree_below_one():
+    from blockid.errors import OrderError
+    from blockid.models.feedback import LinearFeedback
+
+    with pytest.raises(OrderError) as info:
+        LinearFeedback.template("u", "y", na=1, nb=1, nk=1, r=0)
+    assert str(info.value) == "the feedback degree r must be a whole number >= 1, got 0"
+
+
+def test_feedback_ranges_of_a_diverging_free_run_keep_the_measured_outputs():
+    # N(y) = y^2: y(t) = 0.5 y(t-1) + u(t-1) - y(t-1)^2 runs to -inf, then NaN
+    model = _feedback([0.0, 1.0])
+    u = np.array([0.0] + [3.0] * 15)
+    y = np.array([0.0, 0.5, 1.0, -1.0, 2.0] + [0.0] * 11)
+    assert not np.isfinite(model.simulate(u)).all()
+    assert model.estimation_ranges([(u, y)]) == {"u": [0.0, 3.0], "y": [-1.0, 2.0]}
+
+
+def test_feedback_extrapolation_tolerates_two_percent_of_the_range():
+    from blockid.blocks.linear import LinearBlock
+
+    # N = 0 and y(t) = u(t-1); range [-1, 49]: 2 % is 1, so y = -2 and 50 are still inside
+    model = _feedback(
+        [0.0, 0.0], linear=LinearBlock(0, 1, 1, b=[1.0]), ranges={"u": [-2, 50], "y": [-1, 49]}
+    )
+    assert model.extrapolation(np.array([-2.0, 50.0, 0.0])) == []
+    assert model.extrapolation(np.array([-2.0, -2.5, 0.0])) == [
+        "the output 'y' (input of the feedback polynomial) leaves the range seen in "
+        "estimation [-1, 49] in 1 of 3 samples (by up to 3 % of that range): the model "
+        "extrapolates there"
+    ]
+
+
+def test_feedback_from_dict_without_offsets_has_zero_offsets():
+    model = _feedback([0.0, 0.1], input_offset=0.5, output_offset=1.0)
+    data = model.to_dict()
+    data.pop("offsets")
+    loaded = model_from_dict(data)
+    assert (loaded.input_offset, loaded.output_offset) == (0.0, 0.0)
+    np.testing.assert_array_equal(loaded.simulate(U), _feedback([0.0, 0.1]).simulate(U))

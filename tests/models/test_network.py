@@ -91,3 +91,41 @@ def test_bad_option_values_are_reported_per_subsystem(rng):
     assert spec.options == {"forgetting": "none"}
     fit = fit_network(data, [spec])  # "none": the method's default forgetting (1)
     assert fit.settings["subsystems"]["S1"]["forgetting"] == "1.0"
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_check_wiring_messages_name_the_signal_and_the_whole_cycle():
+    from blockid.errors import OrderError
+    from blockid.models.network import check_wiring
+
+    with pytest.raises(OrderError) as info:
+        check_wiring([("S1", ["u"], ["v"]), ("S2", ["u"], ["v"])])
+    assert str(info.value) == (
+        "signal 'v' is made by subsystem 'S1' and by 'S2'; each signal must come from one subsystem"
+    )
+    tail = (
+        "; every signal in it is made inside the network, so the loop has no external input "
+        "to start from. Feed one of them from outside (a measured input), or model the loop "
+        "inside one subsystem"
+    )
+    loop3 = [("S1", ["v3"], ["v1"]), ("S2", ["v1"], ["v2"]), ("S3", ["v2"], ["v3"])]
+    with pytest.raises(OrderError) as info:
+        check_wiring(loop3)
+    assert str(info.value) == (
+        "the subsystems form a cycle: 'S1' -> v1 -> 'S2' -> v2 -> 'S3' -> v3 -> 'S1'" + tail
+    )
+    with pytest.raises(OrderError) as info:
+        check_wiring([("S1", ["u", "v1"], ["v1"])])
+    assert str(info.value) == "the subsystems form a cycle: 'S1' -> v1 -> 'S1'" + tail
+
+
+def test_network_to_dict_lists_its_external_inputs_and_all_outputs():
+    s1 = ARX(["u"], ["v"], 1, 1, 1, a={"v": {"v": [-0.5]}}, b={"v": {"u": [1.0]}})
+    s2 = ARX(["v"], ["y"], 1, 1, 1, a={"y": {"y": [-0.25]}}, b={"y": {"v": [2.0]}})
+    from blockid.models.network import Network
+
+    data = Network([("S1", s1), ("S2", s2)], sampling_time=0.1).to_dict()
+    assert data["structure"] == "network"
+    assert data["inputs"] == ["u"]
+    assert data["outputs"] == ["v", "y"]
+    assert [s["name"] for s in data["subsystems"]] == ["S1", "S2"]

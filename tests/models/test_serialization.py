@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from blockid import errors
+from blockid.errors import ModelFileError
 from blockid.models import ARX, load_model, save_model
 
 
@@ -102,3 +103,46 @@ def test_a_model_refuses_non_finite_inputs_naming_the_sample():
     u[4] = np.nan
     with pytest.raises(DataError, match=r"input 'u' is nan at sample 4"):
         model.simulate(u)
+
+
+# ---------------------------------------------------- found by mutation testing (docs/testing.md)
+def test_model_document_without_format_is_named_by_default():
+    from blockid.models.serialization import model_from_document
+
+    with pytest.raises(ModelFileError) as info:
+        model_from_document({})
+    assert str(info.value) == (
+        'the model document is not a blockid model file (no "format": "blockid-model")'
+    )
+
+
+def test_model_files_are_indented_by_two_and_name_the_non_finite_entry(tmp_path):
+    import json
+    import math
+
+    from blockid.errors import ModelFileError
+    from blockid.models import ARX, save_model
+    from blockid.models.serialization import check_finite
+
+    model = ARX("u", "y", 1, 1, 1, a={"y": {"y": [-0.5]}}, b={"y": {"u": [1.0]}})
+    path = tmp_path / "m.json"
+    save_model(model, path)
+    text = path.read_text()
+    assert text.startswith('{\n  "') and text == json.dumps(json.loads(text), indent=2) + "\n"
+    document = {"parameters": {"y": {"a": [0.1, math.nan]}}}
+    with pytest.raises(ModelFileError) as info:
+        check_finite(document)
+    assert "parameters.y.a[1] is nan" in str(info.value)
+
+
+def test_a_model_with_a_nan_parameter_is_not_written(tmp_path):
+    """json's allow_nan=False is the guard: a NaN would make a file no reader accepts."""
+    import math
+
+    from blockid.models import ARX, save_model
+
+    model = ARX("u", "y", 1, 1, 1, a={"y": {"y": [math.nan]}}, b={"y": {"u": [1.0]}})
+    path = tmp_path / "m.json"
+    with pytest.raises(ValueError, match="Out of range float values"):
+        save_model(model, path)
+    assert not path.exists()
