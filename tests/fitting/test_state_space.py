@@ -202,3 +202,23 @@ def test_a_fitted_model_measures_extrapolation_against_the_range_it_covered():
     assert max(model.range_excursion(1.3 * u).values()) > 0.05
     again = type(model).from_dict(model.to_dict())
     np.testing.assert_array_equal(again.observed_lower, model.observed_lower)
+
+
+@pytest.mark.parametrize("structure", ["state-space", "polynomial-state-space"])
+def test_collinear_inputs_are_refused_naming_them(structure):
+    """Two inputs that move together (u2 = 3 u1) leave B's columns unidentifiable; the
+    subspace fit used to split their effect without a word (issue 18, data)."""
+    from blockid.errors import DataError
+
+    rng = np.random.default_rng(0)
+    u1, u3 = rng.standard_normal(400), rng.standard_normal(400)
+    y = np.convolve(u1 + 0.5 * u3, [0.0, 0.5, 0.2], "full")[:400]
+    u = np.c_[u1, 3.0 * u1 + 1.0, u3]
+    data = Dataset.from_arrays(u, y, ["u1", "u2", "u3"], ["y"])
+    with pytest.raises(DataError, match=r"inputs 'u1', 'u2' are \(nearly\) linear") as err:
+        fit_model(data, structure, nx=2)
+    assert "'u3'" not in str(err.value)
+    # the same inputs moving independently fit
+    free = Dataset.from_arrays(np.c_[u1, rng.standard_normal(400), u3], y,
+                               ["u1", "u2", "u3"], ["y"])  # fmt: skip
+    assert list(fit_model(free, "state-space", nx=2).model.inputs) == ["u1", "u2", "u3"]

@@ -108,11 +108,36 @@ def _normalised(data: Dataset) -> _Signals:
                     f"{what} '{name}' is constant over the estimation data; a state-space "
                     "model needs every signal to vary (choose another range or column)"
                 )
+    if data.n_inputs > 1:
+        _check_independent_inputs((u_all - u_off) / u_sc, data.inputs)
     return _Signals(
         [np.ascontiguousarray((e.u - u_off) / u_sc) for e in data.experiments],
         [np.ascontiguousarray((e.y - y_off) / y_sc) for e in data.experiments],
         u_off, u_sc, y_off, y_sc,
     )  # fmt: skip
+
+
+#: Smallest singular value, relative to the largest, of the standardised inputs below
+#: which the inputs count as collinear (their effects cannot be told apart).
+COLLINEAR = 1e-6
+
+
+def _check_independent_inputs(u: np.ndarray, names: list[str]) -> None:
+    """Refuse inputs that are (nearly) linear combinations of each other over the record,
+    naming them: B's columns of such inputs are not identifiable, and a subspace fit
+    would split their effect arbitrarily."""
+    _, sv, vt = np.linalg.svd(u, full_matrices=False)
+    if sv[-1] > COLLINEAR * sv[0]:
+        return
+    v = np.abs(vt[-1])
+    involved = [n for n, w in zip(names, v, strict=True) if w > 0.1 * v.max()]
+    raise DataError(
+        f"inputs {', '.join(repr(n) for n in involved)} are (nearly) linear combinations "
+        "of each other over the estimation data (smallest singular value of the "
+        f"standardised inputs {sv[-1] / sv[0]:.1e} of the largest): a model cannot tell "
+        "their effects apart; drop one of these columns, or use data where they move "
+        "independently"
+    )
 
 
 def _model(data: Dataset, sig: _Signals, A, B, C, D, **extra: Any) -> PolynomialStateSpace:
