@@ -77,6 +77,15 @@ def polynomial_state_space_plant() -> PolynomialStateSpace:
                                 np.zeros((1, expo.shape[0])), expo)  # fmt: skip
 
 
+def block_state_space_plant() -> Any:
+    """The state-space plant with a cubic input block (Hammerstein)."""
+    from blockid.models.block_state_space import BlockStateSpace
+
+    lin = state_space_plant()
+    return BlockStateSpace(["u"], ["y"], lin.A, lin.B, lin.C, lin.D,
+                           input_blocks=[Polynomial([0.0, 1.0, 0.0, -0.3])])  # fmt: skip
+
+
 def wiener_hammerstein_plant() -> WienerHammerstein:
     return WienerHammerstein(
         "u",
@@ -109,6 +118,7 @@ PLANTS = {
     "feedback": feedback_plant,
     "state-space": state_space_plant,
     "polynomial-state-space": polynomial_state_space_plant,
+    "block-state-space": block_state_space_plant,
 }
 
 
@@ -223,6 +233,14 @@ CASES = {
             "simulation-error",
             500,
             {"nx": 2, "degree": 2, "max_nfev": 20},
+            mean=0.2,
+            snr_db=50.0,
+        ),
+        Case(
+            "block-state-space",
+            "simulation-error",
+            400,
+            {"nx": 2, "input_block": "polynomial:degree=3", "max_nfev": 20},
             mean=0.2,
             snr_db=50.0,
         ),

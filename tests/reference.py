@@ -124,6 +124,37 @@ def squared_state_record(n=1500, seed=0, noise=0.01):
 
 
 # Records and models shared by tests found by mutation testing (docs/testing.md)
+#: A two-input two-output Hammerstein-Wiener plant on a third-order state-space core:
+#: input cubics with unit linear coefficient and no constant, output cubics likewise
+#: (coefficients lowest power first).
+MIMO_HW_INPUT = [[0.0, 1.0, 0.0, 0.3], [0.0, 1.0, 0.4, 0.0]]
+MIMO_HW_OUTPUT = [[0.0, 1.0, 0.2, -0.05], [0.0, 1.0, -0.1, 0.0]]
+
+
+def mimo_hw_plant():
+    from blockid.models.block_state_space import BlockStateSpace
+
+    return BlockStateSpace(
+        ["u1", "u2"], ["y1", "y2"],
+        A=[[0.7, 0.2, 0.0], [-0.2, 0.7, 0.0], [0.0, 0.0, 0.5]],
+        B=[[1.0, 0.0], [0.0, 0.5], [0.3, 1.0]],
+        C=[[1.0, 0.0, 0.5], [0.0, 1.0, 1.0]],
+        D=np.zeros((2, 2)),
+        input_blocks=[Polynomial(c) for c in MIMO_HW_INPUT],
+        output_blocks=[Polynomial(c[1:], constant=False) for c in MIMO_HW_OUTPUT],
+    )  # fmt: skip
+
+
+def mimo_hw_record(n=4000, snr_db=40.0, seed=1):
+    """``(data, u)``: the plant driven by uniform white inputs on [-1.5, 1.5], white
+    output noise at ``snr_db``."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1.5, 1.5, (n, 2))
+    y = mimo_hw_plant().simulate(u)
+    y = y + rng.standard_normal(y.shape) * y.std(axis=0) * 10 ** (-snr_db / 20)
+    return Dataset.from_arrays(u, y, inputs=["u1", "u2"], outputs=["y1", "y2"]), u
+
+
 def _arx_data(n=200, seed=0):
     # y(t) = 0.5 y(t-1) + u(t-1), noise free
     rng = np.random.default_rng(seed)

@@ -34,6 +34,7 @@ _WHERE = {
     "TwoSegmentPolynomial": "blockid.blocks",
     # models
     "ARX": "blockid.models",
+    "BlockStateSpace": "blockid.models",
     "ChainModel": "blockid.models",
     "LinearFeedback": "blockid.models",
     "PolynomialStateSpace": "blockid.models",

@@ -320,11 +320,22 @@ def _check_r(case, default, changed, value):
 
 
 def _check_input_block(case, default, changed, value):
+    if case.structure == "block-state-space":  # a block per channel
+        assert default.model.input_blocks[0].kind == "polynomial"
+        assert changed.model.input_blocks[0].kind == value
+        assert changed.settings["input_blocks"] == [value]
+        return
     assert default.model.input_block.kind == "two-segment-polynomial"
     assert changed.model.input_block.kind == value == changed.settings["input_block"]
 
 
 def _check_output_block(case, default, changed, value):
+    if case.structure == "block-state-space":  # a block per channel
+        assert default.model.output_blocks == (None,)
+        (block,) = changed.model.output_blocks
+        assert block.kind == "polynomial" and len(block.coefficients) == 4  # no constant
+        assert changed.settings["output_blocks"] == ["polynomial"]
+        return
     assert len(default.model.parameters["q"]) == case.options["r2"]
     assert len(changed.model.parameters["q"]) == 4  # degree 4, no constant term
     assert changed.settings["output_block"] == "polynomial"

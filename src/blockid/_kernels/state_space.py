@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["monomials", "pnlss_jacobian", "pnlss_simulate"]
+__all__ = ["channel_response", "monomials", "pnlss_jacobian", "pnlss_simulate"]
 
 
 @njit(cache=True)
@@ -225,3 +225,34 @@ def pnlss_jacobian(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J):
             x[i] = xn[i]
             for p in range(P):
                 S[i, p] = Sn[i, p]
+
+
+@njit(cache=True)
+def channel_response(A, B, C, D, chans, G, X, out):
+    """Response of the linear system ``(A, B, C, D)`` to each column of ``G`` entering
+    the input channel ``chans[q]``, carrying the states.
+
+    ``G`` (N, p) holds the columns, ``X`` (nx, p) their states at the piece's first
+    sample (updated in place to those after its last), ``out`` (N, ny, p) receives the
+    outputs. Used for the sensitivity of a linear core's output to the parameters of a
+    static block before its input ``chans[q]``: ``∂x(k+1)/∂θ = A ∂x(k)/∂θ + B_i ∂w_i/∂θ``.
+    """
+    N, p = G.shape
+    nx, ny = A.shape[0], C.shape[0]
+    Xn = np.empty((nx, p))
+    for k in range(N):
+        for i in range(ny):
+            for q in range(p):
+                acc = D[i, chans[q]] * G[k, q]
+                for j in range(nx):
+                    acc += C[i, j] * X[j, q]
+                out[k, i, q] = acc
+        for i in range(nx):
+            for q in range(p):
+                acc = B[i, chans[q]] * G[k, q]
+                for j in range(nx):
+                    acc += A[i, j] * X[j, q]
+                Xn[i, q] = acc
+        for i in range(nx):
+            for q in range(p):
+                X[i, q] = Xn[i, q]

@@ -46,6 +46,7 @@ __all__ = [
     "StaticBlock",
     "block_from_dict",
     "block_template",
+    "channel_specs",
 ]
 
 #: Registry ``kind -> class`` filled by :meth:`Block.__init_subclass__`; used to load
@@ -473,6 +474,37 @@ def _option_value(text: str) -> Any:
         for v, p in zip(numbers, parts, strict=True)
     ]
     return numbers[0] if len(numbers) == 1 else numbers
+
+
+def channel_specs(value: Any) -> dict[str, Any] | None:
+    """Blocks named by channel, ``{channel: spec}``, from a mapping, a text
+    ``"CHANNEL=KIND[:options]"`` or a list of such texts; None when ``value`` names no
+    channel (one block for every channel).
+
+    >>> channel_specs(["u1=dead-zone", "u2=polynomial:degree=3"])
+    {'u1': 'dead-zone', 'u2': 'polynomial:degree=3'}
+    >>> channel_specs("polynomial:degree=3") is None
+    True
+    """
+    if isinstance(value, dict):
+        return {str(k): v for k, v in value.items()}
+    items = [value] if isinstance(value, str) else value
+    if not isinstance(items, list | tuple) or not all(isinstance(v, str) for v in items):
+        return None
+    pairs: dict[str, Any] = {}
+    for item in items:
+        head, eq, spec = item.partition("=")
+        if not eq or ":" in head:
+            if len(items) > 1:
+                raise ParameterError(
+                    f"{item!r}: with several blocks, name each one's channel, e.g. "
+                    "'u1=dead-zone' 'u2=polynomial:degree=3'"
+                )
+            return None
+        if head.strip() in pairs:
+            raise ParameterError(f"channel {head.strip()!r} is given two blocks")
+        pairs[head.strip()] = spec.strip()
+    return pairs
 
 
 def block_template(spec: str, *, output: bool = False) -> Block:

@@ -61,7 +61,9 @@ def _parameter(option: Option) -> inspect.Parameter:
     else:
         metavar = option.metavar or _METAVARS.get(option.kind, "VALUE")
         info = typer.Option(name, help=option.help, metavar=metavar, show_default=False)
-        annotation = Annotated[str | None, info]
+        # a block flag repeats: one block per channel of a multivariable model
+        kind = list[str] | None if option.kind == "block" else str | None
+        annotation = Annotated[kind, info]
     keyword = inspect.Parameter.KEYWORD_ONLY
     return inspect.Parameter(option.name, keyword, default=None, annotation=annotation)
 
@@ -82,8 +84,15 @@ def with_fit_options(command: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def given(options: dict[str, Any]) -> dict[str, Any]:
-    """The options the user gave (a flag left out is None: the method's default)."""
-    return {name: value for name, value in options.items() if value is not None}
+    """The options the user gave (a flag left out is None: the method's default); a
+    repeatable flag given once is its one value."""
+    out = {}
+    for name, value in options.items():
+        if isinstance(value, list):
+            value = (value[0] if len(value) == 1 else value) if value else None
+        if value is not None:
+            out[name] = value
+    return out
 
 
 def structures_help(width: int = 74) -> str:

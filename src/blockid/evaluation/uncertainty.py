@@ -234,6 +234,15 @@ class SimulationBand(NamedTuple):
     bias: np.ndarray
 
 
+def _state_space_models() -> tuple[type, ...]:
+    """The models whose covariance is that of a state-space fit (every experiment's
+    initial state estimated alongside; :meth:`information`)."""
+    from blockid.models.block_state_space import BlockStateSpace
+    from blockid.models.state_space import PolynomialStateSpace
+
+    return (PolynomialStateSpace, BlockStateSpace)
+
+
 def _finite_or_none(value: float) -> float | None:
     value = float(value)
     return value if np.isfinite(value) else None
@@ -350,8 +359,8 @@ def _state_space_covariance(model: Any, data: Dataset, method: str | None) -> Pa
     p = model.free_parameters().size
     names = list(model.free_parameter_names())
     fixed = np.zeros(H.shape[0], dtype=bool)
-    if not np.any(model.D):  # fitted without feedthrough: D held at zero
-        fixed[:p] = [n.startswith("D[") for n in names]
+    # fitted without feedthrough when D is zero: D held there, as other fixed entries
+    fixed[:p] = ~model.parameter_mask(bool(np.any(model.D)))
     free = np.flatnonzero(~fixed)
     if not (np.all(np.isfinite(H)) and np.all(np.isfinite(r))):
         raise DataError("the model's simulation on the data is not finite: no standard errors")
@@ -512,9 +521,7 @@ def parameter_covariance(
             f"the model maps {list(model.inputs)} to {list(model.outputs)} but the data have "
             f"inputs {list(data.inputs)} and outputs {list(data.outputs)}"
         )
-    from blockid.models.state_space import PolynomialStateSpace
-
-    if isinstance(model, PolynomialStateSpace):
+    if isinstance(model, _state_space_models()):
         return _state_space_covariance(model, data, method)
     if centered is None:
         centered = hasattr(model, "output_offset") and _is_centered(model, data)
@@ -579,12 +586,21 @@ def named_standard_errors(model: Any, cov: ParameterCovariance | np.ndarray) -> 
 
     Raises :class:`~blockid.errors.ParameterError` if ``cov`` does not fit the model.
     """
+    from blockid.models.block_state_space import BlockStateSpace
     from blockid.models.state_space import PolynomialStateSpace
 
     matrix = cov.matrix if isinstance(cov, ParameterCovariance) else np.asarray(cov, float)
     se = np.sqrt(np.abs(np.diag(matrix)))
     if isinstance(model, PolynomialStateSpace):  # shaped like its matrices
         return _state_space_shaped(model, se)
+    if isinstance(model, BlockStateSpace):
+        if se.size != model.free_parameters().size:
+            raise ParameterError(
+                f"a covariance of {se.size} parameters does not fit the block-state-space "
+                f"model's {model.free_parameters().size}"
+            )
+        shaped = model.shaped(se)
+        return _unflatten(shaped, [_finite_or_none(v) for v in _flatten(shaped)])
     template = model.to_dict()["parameters"]
     positions = _free_positions(model)
     if len(positions) != se.size:
@@ -653,9 +669,7 @@ def _output_sensitivities(
     model: Any, u: Any, y_initial: Any, names: list[str]
 ) -> tuple[np.ndarray, np.ndarray]:
     """Simulated output (N, ny) and its derivative (N, ny, p) to the free parameters."""
-    from blockid.models.state_space import PolynomialStateSpace
-
-    if isinstance(model, PolynomialStateSpace):
+    if isinstance(model, _state_space_models()):
         return model.output_sensitivities(u, y_initial)
     if hasattr(model, "free_parameters"):
         y, dy = model.simulate_with_sensitivities(u, y_initial)

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset, Experiment
-from blockid.errors import EstimationError
+from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.registry import (
     STRUCTURES,
     Structure,
@@ -81,6 +81,14 @@ def fit_model(
         values are dropped (the method's default applies).
     """
     decl, method, options = resolve_options(structure, method, options)
+    for key in ("input_block", "output_block"):
+        if decl.block_oriented and isinstance(options.get(key), dict):
+            raise ParameterError(
+                f"{key}: blocks per channel ({', '.join(options[key])}) are for a model of "
+                f"several inputs or outputs (structure block-state-space); {decl.name} takes "
+                "one block",
+                parameter=key,
+            )
     _check_orders_fit(data, decl.name, options)
     uncertainty = bool(options.pop("standard_errors", False))
     refine = bool(options.pop("refine", False))

@@ -165,10 +165,18 @@ def _forgetting(value: Any, name: str) -> Any:
 
 
 def _block(value: Any, name: str) -> Any:
-    from blockid.blocks.base import Block, block_template
+    """A block, or (blocks per channel, for a model of several inputs or outputs) a dict
+    ``{channel: block}`` from a mapping, ``"u1=dead-zone"`` or a list of such texts."""
+    from blockid.blocks.base import Block, block_template, channel_specs
 
     if isinstance(value, Block):
         return value
+    specs = channel_specs(value)
+    if specs is not None:
+        return {
+            channel: spec if isinstance(spec, Block) or spec is None else _block(spec, name)
+            for channel, spec in specs.items()
+        }
     text = _text(value)
     if text is None:
         raise ParameterError(
@@ -294,14 +302,16 @@ OPTIONS: dict[str, Option] = _options(
         "block",
         "Input block: two-segment-polynomial, polynomial[:degree=N], dead-zone, "
         "saturation, piecewise-linear[:knots=N], piecewise-linear-free[:knots=N] (breakpoints "
-        "estimated too) or a user block's kind.",
+        "estimated too) or a user block's kind. For several inputs or outputs "
+        "(block-state-space) one kind for every channel, or CHANNEL=KIND, repeated.",
         metavar="KIND",
     ),
     Option(
         "output_block",
         "block",
         "Output block: polynomial[:degree=N], piecewise-linear-free[:knots=N], dead-zone, "
-        "saturation or a user block's kind.",
+        "saturation or a user block's kind. For several inputs or outputs "
+        "(block-state-space) one kind for every channel, or CHANNEL=KIND, repeated.",
         metavar="KIND",
     ),
     Option(
@@ -759,6 +769,24 @@ STRUCTURES: dict[str, Structure] = {
             block_oriented=False,
             orders="state",
             search_rank=9,
+        ),
+        Structure(
+            "block-state-space",
+            "blockid.models.block_state_space:BlockStateSpace",
+            "a static block per input and/or output channel around a linear state space "
+            "(Hammerstein, Wiener, Hammerstein-Wiener of several inputs and outputs)",
+            (
+                Method(
+                    "simulation-error",
+                    "blockid.fitting.block_state_space:fit_block_state_space",
+                    ("input_block", "output_block") + _STATE_SPACE + _REFINEMENT,
+                    "linear state-space start with every block near the identity, then "
+                    "every parameter refined on the free-run error (exact Jacobian)",
+                ),
+            ),
+            block_oriented=False,
+            orders="state",
+            search_rank=10,
         ),
         Structure(
             "feedback",

@@ -57,7 +57,7 @@ from typing import Any
 
 import numpy as np
 
-from blockid._kernels.state_space import pnlss_jacobian, pnlss_simulate
+from blockid._kernels.state_space import pnlss_simulate
 from blockid.data.dataset import Dataset
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
@@ -350,16 +350,16 @@ class _Tracker:
 
 
 class _Problem:
-    """Simulation error of a (polynomial) state-space model and its normal equations,
-    over the model's free parameters (``D`` is held at zero without a feedthrough) and
-    every experiment's initial state."""
+    """Simulation error of a state-space model (polynomial, or with blocks:
+    :class:`~blockid.models.state_space.ForwardSensitivities`) and its normal equations,
+    over the model's free parameters (its ``parameter_mask``: ``D`` held at zero
+    without a feedthrough) and every experiment's initial state."""
 
-    def __init__(self, template: PolynomialStateSpace, sig: _Signals, feedthrough: bool):
+    def __init__(self, template: Any, sig: _Signals, feedthrough: bool):
         self.template = template
         self.sig = sig
         full = template.free_parameters()
-        names = template.free_parameter_names()
-        self.free = np.array([feedthrough or not n.startswith("D[") for n in names])
+        self.free = template.parameter_mask(feedthrough)
         self.full = full
         self.n_model = int(self.free.sum())
         self.nx = template.nx
@@ -376,7 +376,10 @@ class _Problem:
             return None, x0s
         full = self.full.copy()
         full[self.free] = theta[: self.n_model]
-        model = self.template.with_free_parameters(full)
+        try:
+            model = self.template.with_free_parameters(full)
+        except (OrderError, ParameterError):  # a block refusing its parameters: rejected
+            return None, x0s
         if not model.is_stable(STABILITY_MARGIN):
             return None, x0s
         return model, x0s
@@ -389,7 +392,7 @@ class _Problem:
         parts = []
         with np.errstate(all="ignore"):
             for u, y, x0 in zip(self.sig.u, self.sig.y, x0s, strict=True):
-                out, _ = model.run(u, x0)
+                out = model.run(u, x0)[0]
                 parts.append((y - out).reshape(-1))
         r = np.concatenate(parts)
         if not np.all(np.isfinite(r)) or float(np.mean(r**2)) > self.limit:
@@ -399,24 +402,17 @@ class _Problem:
     def normal_equations(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         model, x0s = self.split(theta)
         assert model is not None, "the Jacobian is taken at accepted iterates only"
-        arrays = model._arrays()
         n_exp, nm, nx = len(self.sig.u), self.n_model, self.nx
-        P = self.full.size + nx
         kept = np.r_[np.flatnonzero(self.free), self.full.size + np.arange(nx)]
         H = np.zeros((nm + nx * n_exp, nm + nx * n_exp))
         g = np.zeros(nm + nx * n_exp)
-        l = self.sig.y[0].shape[1]
         cost = 0.0
         for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
-            x = np.array(x0, dtype=float)
-            S = np.zeros((nx, P))
-            S[:, P - nx :] = np.eye(nx)
+            carried = model._sensitivity_start(x0)
             cols = np.r_[np.arange(nm), nm + e * nx + np.arange(nx)]
             for k0 in range(0, u.shape[0], CHUNK):
-                uk = u[k0 : k0 + CHUNK]
-                out = np.zeros((uk.shape[0], l))
-                J = np.zeros((uk.shape[0] * l, P))
-                pnlss_jacobian(*arrays, uk, x, S, out, J)
+                with np.errstate(all="ignore"):
+                    out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried)
                 J = J[:, kept]
                 r = (y[k0 : k0 + CHUNK] - out).reshape(-1)
                 cost += float(r @ r)
@@ -428,7 +424,7 @@ class _Problem:
 
 
 def refine_state_space(
-    model: PolynomialStateSpace,
+    model: Any,
     data: Dataset,
     *,
     initial_states: list[np.ndarray] | None = None,
@@ -440,7 +436,9 @@ def refine_state_space(
 ) -> tuple[PolynomialStateSpace, dict[str, Any]]:
     """Refine every parameter of ``model`` (``D`` held where it is without
     ``feedthrough``) and every experiment's initial state on the free-run simulation
-    error (module docstring); returns the model and what the solver did."""
+    error (module docstring); returns the model and what the solver did. ``model`` is a
+    (polynomial) state-space model or a block state-space model
+    (:mod:`blockid.fitting.block_state_space`), within its ``parameter_bounds``."""
     sig = _Signals(
         [np.ascontiguousarray(model.normalised_input(e.u)) for e in data.experiments],
         [np.ascontiguousarray(model.normalised_output(e.y)) for e in data.experiments],
@@ -458,6 +456,9 @@ def refine_state_space(
         )
     t0 = time.perf_counter()
     bounds = (np.full(theta0.size, -np.inf), np.full(theta0.size, np.inf))
+    low, high = model.parameter_bounds()  # a block's (a state-space block model)
+    bounds[0][: problem.n_model] = low[problem.free]
+    bounds[1][: problem.n_model] = high[problem.free]
     theta, reason = levenberg_marquardt(
         problem, theta0, bounds, max_nfev, ftol, xtol, gtol, null_space=NULL_SPACE
     )

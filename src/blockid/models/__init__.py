@@ -13,6 +13,7 @@ from blockid.models.block import (
     Wiener,
     WienerHammerstein,
 )
+from blockid.models.block_state_space import BlockStateSpace
 from blockid.models.feedback import LinearFeedback
 from blockid.models.network import Network
 from blockid.models.serialization import (
@@ -24,6 +25,7 @@ from blockid.models.serialization import (
 from blockid.models.state_space import PolynomialStateSpace, StateSpace
 
 __all__ = [
+    "BlockStateSpace",
     "LinearFeedback",
     "PolynomialStateSpace",
     "StateSpace",

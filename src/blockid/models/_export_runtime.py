@@ -335,6 +335,99 @@ def _state_space(u, y0):
     return y
 
 
+def _static_slope(p, s):
+    """dN/du of a static block (an output block's, for the start from measured outputs)."""
+    kind = p["kind"]
+    if kind in ("polynomial", "two-segment-polynomial"):
+        return _slope(p, s)
+    if kind == "dead-zone":
+        return p["slope_left"] * (s < p["lower"]) + p["slope_right"] * (s > p["upper"])
+    if kind == "saturation":
+        v = p["slope"] * s
+        return p["slope"] * ((v >= p["lower"]) & (v <= p["upper"]))
+    if kind in ("piecewise-linear", "piecewise-linear-free"):
+        bp, v = np.array(p["breakpoints"]), np.array(p["values"])
+        j = np.clip(np.searchsorted(bp, s, side="right") - 1, 0, bp.size - 2)
+        return (v[j + 1] - v[j]) / (bp[j + 1] - bp[j])
+    raise ValueError("unknown block kind " + repr(kind))
+
+
+def _bss_run(M, w, x, sens=False):
+    """Normalised outputs of a block state-space model's free run on the core's input
+    ``w`` from ``x`` and, with ``sens``, their derivative to the initial state."""
+    A, B, C, D, e = M["A"], M["B"], M["C"], M["D"], M["e"]
+    nx, ny, N = A.shape[0], C.shape[0], w.shape[0]
+    z = np.zeros((N, ny))
+    J = np.zeros((N * ny, nx)) if sens else None
+    S = np.eye(nx)
+    x = np.array(x, dtype=float)
+    for k in range(N):
+        z[k] = C @ x + D @ w[k]
+        if sens:
+            J[k * ny : (k + 1) * ny] = C @ S
+            S = A @ S
+        x = A @ x + B @ w[k] + e
+    y = z.copy()
+    for j, p in enumerate(MODEL["output_blocks"]):
+        if p is not None:
+            y[:, j] = _static(p, z[:, j])
+            if sens:
+                J[j::ny] *= _static_slope(p, z[:, j])[:, None]
+    return y + M["h"], J
+
+
+def _block_state_space(u, y0):
+    """w = f(u_n) per input, x(k+1) = A x + B w + e, z = C x + D w, y_n = g(z) + h."""
+    m, norm = MODEL, MODEL["normalisation"]
+    nx, nu, ny = int(m["nx"]), len(INPUTS), len(OUTPUTS)
+    M = {
+        k: np.asarray(m[k], dtype=float).reshape(s)
+        for k, s in (("A", (nx, nx)), ("B", (nx, nu)), ("C", (ny, nx)), ("D", (ny, nu)))
+    }
+    M["e"] = np.asarray(m["state_bias"], dtype=float)
+    M["h"] = np.asarray(m["output_bias"], dtype=float)
+    un = (u - np.asarray(norm["input_offset"])) / np.asarray(norm["input_scale"])
+    w = un.copy()
+    for i, p in enumerate(m["input_blocks"]):
+        if p is not None:
+            w[:, i] = _static(p, un[:, i])
+    y_off, y_scale = np.asarray(norm["output_offset"]), np.asarray(norm["output_scale"])
+    x0, n = np.zeros(nx), 0
+    if y0 is not None and len(np.atleast_1d(y0)):
+        y0 = _rows(y0)
+        n = min(y0.shape[0], u.shape[0])
+        yn = (y0[:n] - y_off) / y_scale
+
+        def linearised(x):
+            out, J = _bss_run(M, w[:n], x, sens=True)
+            r = (yn - out).reshape(-1)
+            return float(r @ r), r, J
+
+        best, r, J = linearised(x0)
+        for _ in range(SPEC["iterations"] if np.isfinite(best) else 0):
+            if not np.all(np.isfinite(J)):
+                break
+            step = np.linalg.lstsq(J, r, rcond=None)[0]
+            for _halving in range(10):  # Gauss-Newton, the step halved until it helps
+                trial = x0 + step
+                cost, r_new, J_new = linearised(trial)
+                if np.isfinite(cost) and cost < best:
+                    break
+                step = step / 2
+            else:
+                break
+            gain = (best - cost) / max(best, 1e-300)
+            x0, best, r, J = trial, cost, r_new, J_new
+            if gain < 1e-12:
+                break
+    y, _ = _bss_run(M, w, x0)
+    y = y * y_scale + y_off
+    k = min(n, SPEC["max_lag"])
+    if k:
+        y[:k] = y0[:k]
+    return y
+
+
 def simulate(u, y0=None):
     """Free-run simulation: outputs (N, len(OUTPUTS)) for inputs ``u``; ``y0`` holds the
     first measured outputs to start from (None: from rest)."""
@@ -349,6 +442,8 @@ def simulate(u, y0=None):
     form = SPEC["form"]
     if form == "state-space":
         return _state_space(u, y0)
+    if form == "block-state-space":
+        return _block_state_space(u, y0)
     if form == "arx":
         return _arx_model(u, y0)
     if form == "feedback":

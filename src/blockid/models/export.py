@@ -10,8 +10,9 @@ self-contained Python module.
   model's parameters embedded and ``simulate(u, y0=None)`` reproducing
   ``model.simulate(u, y_initial=y0[:max_lag])`` to rounding, for ARX (MIMO), every chain of
   blocks (Hammerstein, Wiener, Hammerstein-Wiener, backlash, Wiener-Hammerstein, output
-  error), the feedback model, and linear and polynomial state-space models (MIMO; their
-  initial state estimated from all of ``y0``, by the same Gauss-Newton iteration).
+  error), the feedback model, linear and polynomial state-space models and block
+  state-space models (MIMO; their initial state estimated from all of ``y0``, by the
+  same Gauss-Newton iteration).
 
 The linear block ``x = z^-nk B(z^-1)/A(z^-1) w`` (MATLAB convention) is, in positive
 powers with ``n = max(na, nk + nb - 1)``,
@@ -245,10 +246,18 @@ def _check_kinds(blocks: Any) -> None:
 
 def _spec(model: Any) -> dict[str, Any]:
     """What the module's ``simulate`` needs beyond the model description."""
+    from blockid.models.block_state_space import BlockStateSpace
     from blockid.models.state_space import INITIAL_ITERATIONS, PolynomialStateSpace
 
     if isinstance(model, PolynomialStateSpace):
         return {"form": "state-space", "max_lag": model.max_lag, "iterations": INITIAL_ITERATIONS}
+    if isinstance(model, BlockStateSpace):
+        _check_kinds([b for b in (*model.input_blocks, *model.output_blocks) if b is not None])
+        return {
+            "form": "block-state-space",
+            "max_lag": model.max_lag,
+            "iterations": INITIAL_ITERATIONS,
+        }
     if hasattr(model, "lag_arrays"):  # ARX
         A, B = model.lag_arrays()
         return {"form": "arx", "A": A.tolist(), "B": B.tolist(), "max_lag": model.max_lag}

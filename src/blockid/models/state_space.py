@@ -45,7 +45,7 @@ from blockid.models.base import Model, excursion
 #: Samples per piece of the Jacobian walks (:meth:`PolynomialStateSpace.information`).
 JACOBIAN_CHUNK = 4096
 
-__all__ = ["PolynomialStateSpace", "StateSpace", "monomial_exponents"]
+__all__ = ["ForwardSensitivities", "PolynomialStateSpace", "StateSpace", "monomial_exponents"]
 
 #: Gauss-Newton iterations of the initial-state estimate.
 INITIAL_ITERATIONS = 20
@@ -107,7 +107,133 @@ def _vector(value: Any, n: int, name: str, default: float) -> np.ndarray:
     return arr
 
 
-class PolynomialStateSpace(Model):
+class ForwardSensitivities:
+    """What a model whose output sensitivity is walked forward in time gets from it:
+    the initial state fitted to measured outputs, the Gauss-Newton information of its
+    free-run error (the standard errors read it) and its output sensitivities.
+
+    The model gives ``jacobian_piece(un, *carried) -> (y_n, J)`` (normalised outputs of
+    a piece of a record and ``∂y_n/∂[θ, x(0)]``, rows ``k * ny + i``, the carried
+    state and sensitivities updated in place), ``_sensitivity_start(x0)`` (what to
+    carry from ``x0``), ``linear_in_state`` and the usual ``nx``, ``outputs``,
+    ``free_parameters``, ``normalised_input``/``normalised_output``, ``output_scale``,
+    ``output_offset`` and ``max_lag``. :class:`PolynomialStateSpace` and
+    :class:`~blockid.models.block_state_space.BlockStateSpace` are such models.
+    """
+
+    def initial_state(self, u: Any, y_initial: Any) -> np.ndarray:
+        """``x(0)`` fitted to the measured outputs ``y_initial`` (their number ``n``; the
+        first ``n`` inputs of ``u``): least squares, Gauss-Newton from 0 with the exact
+        sensitivity (one step for a model linear in the state)."""
+        yn = self.normalised_output(y_initial)
+        n = yn.shape[0]
+        un = self.normalised_input(u)[:n]
+        nx = self.nx
+
+        def linearised(x0: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+            with np.errstate(all="ignore"):
+                y, J = self.jacobian_piece(un, *self._sensitivity_start(x0))
+            r = (yn - y).reshape(-1)
+            return float(r @ r), r, J[:, -nx:]
+
+        best_x = np.zeros(nx)
+        best, r, J = linearised(best_x)
+        if not np.isfinite(best):
+            return best_x
+        for _ in range(INITIAL_ITERATIONS):
+            if not np.all(np.isfinite(J)):
+                break
+            step = np.linalg.lstsq(J, r, rcond=None)[0]
+            for _halving in range(10):  # Gauss-Newton, the step halved until it helps
+                trial = best_x + step
+                cost, r_new, J_new = linearised(trial)
+                if np.isfinite(cost) and cost < best:
+                    break
+                step = step / 2
+            else:
+                break  # no step lowers the cost: the best state so far
+            gain = (best - cost) / max(best, 1e-300)
+            best_x, best, r, J = trial, cost, r_new, J_new
+            if self.linear_in_state or gain < 1e-12:
+                break  # exact in one step for a linear model; converged otherwise
+        return best_x
+
+    def _walk(
+        self, un: np.ndarray, yn: np.ndarray, x0: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``J^T J``, ``J^T r``, the residuals ``r`` and each output's column sums of
+        ``J`` (rows: outputs) of a free run from ``x0`` on normalised signals, over
+        ``[θ, x(0)]``, walked in pieces of ``JACOBIAN_CHUNK`` samples."""
+        carried = self._sensitivity_start(x0)
+        P, ny = self.free_parameters().size + self.nx, yn.shape[1]
+        H, g, sums, parts = np.zeros((P, P)), np.zeros(P), np.zeros((ny, P)), []
+        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
+            out, J = self.jacobian_piece(un[k0 : k0 + JACOBIAN_CHUNK], *carried)
+            r = (yn[k0 : k0 + JACOBIAN_CHUNK] - out).reshape(-1)
+            H += J.T @ J
+            g += J.T @ r
+            sums += J.reshape(out.shape[0], ny, P).sum(axis=0)
+            parts.append(r)
+        return H, g, np.concatenate(parts), sums
+
+    def information(
+        self, records: Sequence[tuple[Any, Any]]
+    ) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
+        """The Gauss-Newton information ``J^T J`` of the free-run simulation error (in
+        the normalised units a fit minimises) over ``θ`` (:meth:`free_parameters`) and
+        every record's initial state, each record's residuals (N, ny), and ``J^T 1_i``
+        per output ``i`` (rows; ``1_i``: a unit step of output ``i``'s offset).
+
+        ``records``: ``(u, y)`` pairs. Rows and columns: ``θ``, then ``nx`` per record.
+        The initial states are those that best fit each whole record at this ``θ`` (one
+        Gauss-Newton step from the state its first samples give: exact for a linear
+        model), as a fit estimates them.
+        """
+        p, nx = self.free_parameters().size, self.nx
+        H = np.zeros((p + nx * len(records), p + nx * len(records)))
+        sums = np.zeros((len(self.outputs), H.shape[0]))
+        residuals = []
+        for e, (u, y) in enumerate(records):
+            un = self.normalised_input(u)
+            yn = np.ascontiguousarray(self.normalised_output(y))
+            x0 = self.initial_state(u, np.asarray(y)[: min(len(yn), max(50, 10 * nx))])
+            with np.errstate(all="ignore"):
+                He, ge, _, _ = self._walk(un, yn, x0)
+                step = np.linalg.lstsq(He[p:, p:], ge[p:], rcond=None)[0]
+                He, _, r, se = self._walk(un, yn, x0 + step)
+            cols = np.r_[np.arange(p), p + e * nx + np.arange(nx)]
+            H[np.ix_(cols, cols)] += He
+            sums[:, cols] += se
+            residuals.append(r.reshape(-1, yn.shape[1]))
+        return H, residuals, sums
+
+    def output_sensitivities(self, u: Any, y_initial: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """The free run (N, ny) and its derivative (N, ny, p) to the parameters ``θ``, in
+        the data's units, from the initial state that ``y_initial`` gives (held fixed);
+        the first ``min(n, max_lag)`` outputs are the measured ones, as :meth:`simulate`
+        gives them."""
+        un = self.normalised_input(u)
+        x0, n = np.zeros(self.nx), 0
+        if y_initial is not None and len(np.atleast_1d(y_initial)):
+            n = min(len(y_initial), un.shape[0])
+            x0 = self.initial_state(u, np.asarray(y_initial, dtype=float)[:n])
+        p, ny = self.free_parameters().size, len(self.outputs)
+        carried = self._sensitivity_start(x0)
+        y = np.zeros((un.shape[0], ny))
+        dy = np.zeros((un.shape[0], ny, p))
+        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
+            out, J = self.jacobian_piece(un[k0 : k0 + JACOBIAN_CHUNK], *carried)
+            y[k0 : k0 + out.shape[0]] = out
+            dy[k0 : k0 + out.shape[0]] = J[:, :p].reshape(out.shape[0], ny, p)
+        scale = np.asarray(self.output_scale, dtype=float).reshape(-1)
+        y, dy = y * scale + self.output_offset, dy * scale[None, :, None]
+        k = min(n, self.max_lag)
+        y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, ny)[:k]
+        dy[:k] = 0.0
+        return y, dy
+
+
+class PolynomialStateSpace(ForwardSensitivities, Model):
     """Polynomial nonlinear state-space model (module docstring).
 
     Parameters
@@ -264,6 +390,17 @@ class PolynomialStateSpace(Model):
             rows.append(("monomials", f"{self.n_monomials} up to degree {self.degree}"))
         return rows
 
+    def parameter_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of :meth:`free_parameters`: none."""
+        n = self.free_parameters().size
+        return np.full(n, -np.inf), np.full(n, np.inf)
+
+    def parameter_mask(self, feedthrough: bool) -> np.ndarray:
+        """Which entries of :meth:`free_parameters` a fit moves: all but ``D`` without
+        ``feedthrough`` (held at zero)."""
+        names = self.free_parameter_names()
+        return np.array([feedthrough or not n.startswith("D[") for n in names])
+
     def free_parameter_names(self) -> list[str]:
         names = []
         for key, m in zip("ABCDEF", (self.A, self.B, self.C, self.D, self.E, self.F), strict=True):
@@ -357,130 +494,30 @@ class PolynomialStateSpace(Model):
             pnlss_simulate(*self._arrays(), np.repeat(np.atleast_2d(un0), samples, 0), x, y)
         return x if np.all(np.isfinite(x)) else np.zeros(self.nx)
 
-    def initial_state(self, u: Any, y_initial: Any) -> np.ndarray:
-        """``x(0)`` fitted to the measured outputs ``y_initial`` (their number ``n``; the
-        first ``n`` inputs of ``u``): least squares, Gauss-Newton from 0 with the exact
-        sensitivity (one step for a linear model)."""
-        yn = self.normalised_output(y_initial)
-        n = yn.shape[0]
-        un = self.normalised_input(u)[:n]
-        nx, P = self.nx, self.free_parameters().size + self.nx
-
-        def linearised(x0: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-            x = x0.copy()
-            S = np.zeros((nx, P))
-            S[:, P - nx :] = np.eye(nx)
-            y = np.zeros((n, len(self.outputs)))
-            J = np.zeros((n * len(self.outputs), P))
-            with np.errstate(all="ignore"):
-                pnlss_jacobian(*self._arrays(), un, x, S, y, J)
-            r = (yn - y).reshape(-1)
-            return float(r @ r), r, J[:, P - nx :]
-
-        best_x = np.zeros(nx)
-        best, r, J = linearised(best_x)
-        if not np.isfinite(best):
-            return best_x
-        for _ in range(INITIAL_ITERATIONS):
-            step = np.linalg.lstsq(J, r, rcond=None)[0]
-            for _halving in range(10):  # Gauss-Newton, the step halved until it helps
-                trial = best_x + step
-                cost, r_new, J_new = linearised(trial)
-                if np.isfinite(cost) and cost < best:
-                    break
-                step = step / 2
-            else:
-                break  # no step lowers the cost: the best state so far
-            gain = (best - cost) / max(best, 1e-300)
-            best_x, best, r, J = trial, cost, r_new, J_new
-            if self.n_monomials == 0 or gain < 1e-12:
-                break  # exact in one step for a linear model; converged otherwise
-        return best_x
-
     # ------------------------------------------------------------------ derivatives
-    def _walk(
-        self, un: np.ndarray, yn: np.ndarray, x0: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``J^T J``, ``J^T r``, the residuals ``r`` and each output's column sums of
-        ``J`` (rows: outputs) of a free run from ``x0`` on normalised signals, over
-        ``[θ, x(0)]``, walked in pieces of ``JACOBIAN_CHUNK`` samples."""
-        arrays = self._arrays()
-        nx, P, ny = self.nx, self.free_parameters().size + self.nx, yn.shape[1]
-        x = np.array(x0, dtype=float)
-        S = np.zeros((nx, P))
-        S[:, P - nx :] = np.eye(nx)
-        H, g, sums, parts = np.zeros((P, P)), np.zeros(P), np.zeros((ny, P)), []
-        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
-            uk = np.ascontiguousarray(un[k0 : k0 + JACOBIAN_CHUNK])
-            out = np.zeros((uk.shape[0], ny))
-            J = np.zeros((uk.shape[0] * ny, P))
-            pnlss_jacobian(*arrays, uk, x, S, out, J)
-            r = (yn[k0 : k0 + JACOBIAN_CHUNK] - out).reshape(-1)
-            H += J.T @ J
-            g += J.T @ r
-            sums += J.reshape(uk.shape[0], ny, P).sum(axis=0)
-            parts.append(r)
-        return H, g, np.concatenate(parts), sums
+    def _sensitivity_start(self, x0: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The state ``x0`` and its sensitivity ``[0 | I]`` over ``[θ, x(0)]``."""
+        P = self.free_parameters().size + self.nx
+        S = np.zeros((self.nx, P))
+        S[:, P - self.nx :] = np.eye(self.nx)
+        return np.array(x0, dtype=float), S
 
-    def information(
-        self, records: Sequence[tuple[Any, Any]]
-    ) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
-        """The Gauss-Newton information ``J^T J`` of the free-run simulation error (in
-        the normalised units a fit minimises) over ``θ`` (:meth:`free_parameters`) and
-        every record's initial state, each record's residuals (N, ny), and ``J^T 1_i``
-        per output ``i`` (rows; ``1_i``: a unit step of output ``i``'s offset).
+    def jacobian_piece(
+        self, un: np.ndarray, x: np.ndarray, S: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Normalised outputs (n, ny) and ``∂y/∂[θ, x(0)]`` (rows ``k * ny + i``) over a
+        piece of a record, ``x`` and ``S`` carried in place
+        (:func:`~blockid._kernels.state_space.pnlss_jacobian`)."""
+        ny = len(self.outputs)
+        out = np.zeros((un.shape[0], ny))
+        J = np.zeros((un.shape[0] * ny, S.shape[1]))
+        pnlss_jacobian(*self._arrays(), np.ascontiguousarray(un), x, S, out, J)
+        return out, J
 
-        ``records``: ``(u, y)`` pairs. Rows and columns: ``θ``, then ``nx`` per record.
-        The initial states are those that best fit each whole record at this ``θ`` (one
-        Gauss-Newton step from the state its first samples give: exact for a linear
-        model), as a fit estimates them.
-        """
-        p, nx = self.free_parameters().size, self.nx
-        H = np.zeros((p + nx * len(records), p + nx * len(records)))
-        sums = np.zeros((len(self.outputs), H.shape[0]))
-        residuals = []
-        for e, (u, y) in enumerate(records):
-            un = self.normalised_input(u)
-            yn = np.ascontiguousarray(self.normalised_output(y))
-            x0 = self.initial_state(u, np.asarray(y)[: min(len(yn), max(50, 10 * nx))])
-            with np.errstate(all="ignore"):
-                He, ge, _, _ = self._walk(un, yn, x0)
-                step = np.linalg.lstsq(He[p:, p:], ge[p:], rcond=None)[0]
-                He, _, r, se = self._walk(un, yn, x0 + step)
-            cols = np.r_[np.arange(p), p + e * nx + np.arange(nx)]
-            H[np.ix_(cols, cols)] += He
-            sums[:, cols] += se
-            residuals.append(r.reshape(-1, yn.shape[1]))
-        return H, residuals, sums
-
-    def output_sensitivities(self, u: Any, y_initial: Any = None) -> tuple[np.ndarray, np.ndarray]:
-        """The free run (N, ny) and its derivative (N, ny, p) to the parameters ``θ``, in
-        the data's units, from the initial state that ``y_initial`` gives (held fixed);
-        the first ``min(n, max_lag)`` outputs are the measured ones, as :meth:`simulate`
-        gives them."""
-        un = self.normalised_input(u)
-        x0, n = np.zeros(self.nx), 0
-        if y_initial is not None and len(np.atleast_1d(y_initial)):
-            n = min(len(y_initial), un.shape[0])
-            x0 = self.initial_state(u, np.asarray(y_initial, dtype=float)[:n])
-        arrays, p, nx, ny = self._arrays(), self.free_parameters().size, self.nx, len(self.outputs)
-        x, S = x0.copy(), np.zeros((nx, p + nx))
-        S[:, p:] = np.eye(nx)
-        y = np.zeros((un.shape[0], ny))
-        dy = np.zeros((un.shape[0], ny, p))
-        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
-            uk = np.ascontiguousarray(un[k0 : k0 + JACOBIAN_CHUNK])
-            out = np.zeros((uk.shape[0], ny))
-            J = np.zeros((uk.shape[0] * ny, p + nx))
-            pnlss_jacobian(*arrays, uk, x, S, out, J)
-            y[k0 : k0 + uk.shape[0]] = out
-            dy[k0 : k0 + uk.shape[0]] = J[:, :p].reshape(uk.shape[0], ny, p)
-        scale = np.asarray(self.output_scale, dtype=float).reshape(-1)
-        y, dy = y * scale + self.output_offset, dy * scale[None, :, None]
-        k = min(n, self.max_lag)
-        y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, ny)[:k]
-        dy[:k] = 0.0
-        return y, dy
+    @property
+    def linear_in_state(self) -> bool:
+        """Whether the output is linear in ``x(0)`` (no monomials)."""
+        return self.n_monomials == 0
 
     # ------------------------------------------------------------------ Model
     def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
@@ -527,18 +564,22 @@ class PolynomialStateSpace(Model):
         """How far a free run on ``u`` from rest at its first sample
         (:meth:`settled_state`) drives ``z = [x; u_n]`` beyond the range it covered on
         the estimation data (``observed_lower``/``observed_upper``; fractions of each
-        range's width); empty for a linear model or an unbounded range."""
+        range's width): ``"x1"``, ... for the states, ``"u"`` the inputs' own (the
+        largest over the inputs, as :func:`~blockid.evaluation.trust.assess` subtracts
+        it); empty for a linear model or an unbounded range."""
         if not self.n_monomials:
             return {}
         un = self.normalised_input(u)
         z = np.hstack([self.states(u, self.settled_state(un[:1])), un])
-        inputs = ["u" if i == 0 else f"u{i + 1}" for i in range(len(self.inputs))]
-        names = [f"x{i + 1}" for i in range(self.nx)] + inputs
-        out = {}
+        out: dict[str, float] = {}
         lo, hi = self.observed_lower, self.observed_upper
-        for i, name in enumerate(names):
+        for i in range(z.shape[1]):
             if np.isfinite(lo[i]) and np.isfinite(hi[i]):
-                out[name] = excursion((lo[i], hi[i]), z[:, i])
+                value = excursion((lo[i], hi[i]), z[:, i])
+                if i < self.nx:
+                    out[f"x{i + 1}"] = value
+                else:  # the inputs' own excursion: the largest over the inputs
+                    out["u"] = max(out.get("u", 0.0), value)
         return out
 
     def extrapolation(self, u: Any) -> list[str]:

@@ -523,3 +523,20 @@ def history_figure(history: dict[str, Any], max_points: int = 2000, max_panels: 
     for ax in axes[-1]:
         ax.set_xlabel("sample (all passes over the estimation data)", fontsize=8)
     return fig
+
+
+def curves_figure(curves: Sequence[dict[str, Any]]) -> Any:
+    """One panel per curve (dicts with ``title``, ``x``, ``y``, ``xlabel``, ``ylabel``;
+    :meth:`~blockid.models.block_state_space.BlockStateSpace.static_curves`), two per
+    row."""
+    cols = min(len(curves), 2)
+    rows = -(-len(curves) // cols)
+    fig = _new_figure(4.6 * cols, 3.2 * rows)
+    for k, c in enumerate(curves):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        ax.plot(c["x"], c["y"], color="C1")
+        ax.set_title(wrap(c["title"], 48), fontsize=9)
+        ax.set_xlabel(c["xlabel"])
+        ax.set_ylabel(c["ylabel"])
+        ax.grid(True, alpha=0.3)
+    return fig

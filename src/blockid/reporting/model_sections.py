@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from blockid.data.dataset import Dataset
+from blockid.models.block_state_space import BlockStateSpace
 from blockid.plotting import report_figures as figures
 from blockid.plotting.html import encode_png
 from blockid.plotting.linear import linear_dynamics, linear_figure, pole_rows
@@ -113,6 +114,9 @@ def blocks_section(
     parts = []
     for e in entries:
         model = e.model
+        if isinstance(model, BlockStateSpace):
+            parts += _channel_blocks(e, estimation, est_text)
+            continue
         blocks = getattr(model, "blocks", None)
         if blocks is None or all(b.role == "linear" for b in blocks):
             continue
@@ -149,6 +153,28 @@ def blocks_section(
     if not parts:
         parts.append(paragraph("No model with a nonlinear block was identified."))
     return section("blocks", "Identified nonlinearities", parts)
+
+
+def _channel_blocks(e: Entry, estimation: Dataset, est_text: str) -> list[str]:
+    """A model with a block per channel: one panel per block."""
+    u = np.vstack([x.u for x in estimation.experiments])
+    curves = e.model.static_curves(u)
+    if not curves:
+        return []
+    return [
+        heading(e),
+        figure(
+            encode_png(figures.curves_figure(curves)),
+            f"{e.label}: identified nonlinear blocks",
+            f"{e.label}: one panel per block (the channel in its title), estimated on the "
+            f"estimation range {est_text}; each curve drawn over the range its argument "
+            "takes when the estimation input is simulated from rest. An input block maps "
+            "its input (in its units) to the linear core's input (normalised: the gain "
+            "between block and core is the core's); an output block maps the core's "
+            "output (normalised) to the output in its units. No uncertainty band is drawn "
+            "for these models.",
+        ),
+    ]
 
 
 def histories_section(entries: list[Entry], est_text: str) -> str:

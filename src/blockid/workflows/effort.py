@@ -49,6 +49,13 @@ class Effort:
     state_keep: int = 1
     #: training samples of the finalists' and later fits on a long record (None: all)
     final_samples: int | None = None
+    #: (input block, output block) of the block state-space candidates, searched on data
+    #: of several inputs or outputs (one family on every channel; None: no block there)
+    block_state_plans: tuple[tuple[str | None, str | None], ...] = (
+        ("polynomial:degree=3", None),
+        (None, "polynomial:degree=3"),
+        ("polynomial:degree=3", "polynomial:degree=3"),
+    )
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -63,6 +70,10 @@ EFFORTS: dict[str, Effort] = {
             families=3, screen_nfev=15, screen_samples=10_000, finalists=2, final_nfev=60,
             grow_steps=1, state_plans=((3, "states"),), state_parameters=60, state_keep=1,
             final_samples=20_000,
+            block_state_plans=(
+                ("polynomial:degree=3", None), (None, "polynomial:degree=3"),
+                ("polynomial:degree=3", "polynomial:degree=3"),
+            ),
         ),
         Effort(
             name="standard", folds=4, folds_long=3, max_order=8, max_delay=20, linear_keep=2,

@@ -77,6 +77,7 @@ from blockid.workflows.parallel import TaskRunner, available_cores
 from blockid.workflows.search_space import (
     LINEAR,
     Candidate,
+    block_state_candidates,
     delay_candidates,
     grown,
     integrating_candidates,
@@ -852,3 +853,9 @@ def _state_space(search: _Search, states: list[str], screen: dict[str, Any]) -> 
     found = candidates(chosen)
     if found:
         search.run("nonlinear state space", found, True)
+    if search.data.n_inputs > 1 or search.data.n_outputs > 1:
+        # static blocks per channel: on one input and one output the chain structures
+        # (Hammerstein, Wiener, ...) hold these models with polynomial linear blocks
+        blocks = block_state_candidates(states, chosen, eff.block_state_plans, screen)
+        if blocks:
+            search.run("block state space", blocks, True)

@@ -270,9 +270,9 @@ def state_candidates(
     out = []
     for name in structures:
         decl = STRUCTURES[name]
-        if decl.orders != "state" or "degree" in decl.accepted(None):
-            continue
         accepted = decl.accepted(None)
+        if decl.orders != "state" or "degree" in accepted or "input_block" in accepted:
+            continue
         for nx in nxs:
             options = {"nx": int(nx), **iterations}
             out.append(Candidate(name, {k: v for k, v in options.items() if k in accepted}))
@@ -311,6 +311,30 @@ def polynomial_state_candidates(
                     continue
                 options = {"nx": int(nx), "degree": degree, "monomials": which, **iterations}
                 out.append(Candidate(name, {k: v for k, v in options.items() if k in accepted}))
+    return unique(out)
+
+
+def block_state_candidates(
+    structures: Sequence[str],
+    nxs: Sequence[int],
+    plans: Sequence[tuple[str | None, str | None]],
+    iterations: dict[str, Any],
+) -> list[Candidate]:
+    """The state-space structures with blocks (those taking ``input_block``) at every
+    state dimension in ``nxs`` and every ``(input block, output block)`` of ``plans``
+    (one family on every channel; None: no block on that side)."""
+    out = []
+    for name in structures:
+        decl = STRUCTURES[name]
+        accepted = decl.accepted(None)
+        if decl.orders != "state" or "input_block" not in accepted:
+            continue
+        for nx in nxs:
+            for left, right in plans:
+                options = {"nx": int(nx), "input_block": left, "output_block": right,
+                           **iterations}  # fmt: skip
+                kept = {k: v for k, v in options.items() if k in accepted and v is not None}
+                out.append(Candidate(name, kept))
     return unique(out)
 
 

@@ -1,0 +1,613 @@
+"""Block-oriented models of several inputs and outputs: a static block on every input
+channel (Hammerstein), on every output channel (Wiener), or on both, around one
+multivariable linear state-space core.
+
+.. math::
+
+    w_i(k) = f_i(u_{n,i}(k)), \\qquad
+    x(k+1) = A x(k) + B w(k) + e, \\qquad
+    z(k) = C x(k) + D w(k), \\qquad
+    y_{n,j}(k) = g_j(z_j(k)) + h_j
+
+in normalised signals, as the state-space models (:mod:`blockid.models.state_space`):
+``u_n = (u - input_offset) / input_scale`` and ``y = output_offset + output_scale y_n``.
+A channel without a block passes its signal through (``f_i(u) = u``). The state bias
+``e`` (zero in fitted models, see below) and the output bias ``h`` carry the operating
+point the nonlinear blocks move (the signals' means are not where ``w`` and ``z`` have
+mean zero).
+
+**Parameters and what is unique.** The core's parameters are unique up to the state
+basis; each block's gain is shared with its column of ``B`` (input) or row of ``C``
+and ``D`` (output) unless the block fixes its own input gain
+(:meth:`~blockid.blocks.base.Block.free_mask` with ``after_linear=True``: a polynomial's
+linear coefficient is 1, a free piecewise-linear map fixes a breakpoint). A fit holds
+``e = 0``: an input block's constant (the input polynomial has one) carries the
+operating point into the core, and an output block's argument shifted by a free ``e``
+would be another block of the same family (a cubic of ``z + β`` is a cubic of ``z``),
+so its shape would not be unique. The fit (:mod:`blockid.fitting.block_state_space`)
+leaves the remaining directions (the state basis, gains a block does not fix) alone.
+
+**Derivatives.** :meth:`BlockStateSpace.jacobian_piece` gives the exact sensitivity of
+the simulated output to every parameter and to ``x(0)``, walked forward in time: the
+core's by :func:`~blockid._kernels.state_space.pnlss_jacobian` (the bias ``e`` is its
+constant monomial), an input block's through the core by
+:func:`~blockid._kernels.state_space.channel_response`, and an output block's by the
+chain rule (:meth:`~blockid.blocks.base.StaticBlock.forward`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from blockid._kernels.state_space import channel_response, pnlss_jacobian
+from blockid.blocks.base import Block, StaticBlock, block_from_dict
+from blockid.errors import DataError, ModelFileError, OrderError
+from blockid.models.base import Model, excursion
+from blockid.models.state_space import ForwardSensitivities, PolynomialStateSpace
+
+__all__ = ["BlockStateSpace", "channel_blocks"]
+
+
+def _names(value: Any) -> tuple[str, ...]:
+    return tuple(str(v) for v in ([value] if isinstance(value, str) else value))
+
+
+def channel_blocks(
+    blocks: Any, channels: Sequence[str], what: str
+) -> tuple[StaticBlock | None, ...]:
+    """One block (or None) per channel from ``blocks``: None (no blocks), one block (a
+    copy on every channel), a sequence with one entry per channel, or a mapping from
+    channel names to blocks (channels not named get none)."""
+    n = len(channels)
+    if blocks is None:
+        return (None,) * n
+    if isinstance(blocks, Block):
+        return (blocks,) * n
+    if isinstance(blocks, Mapping):
+        unknown = [k for k in blocks if k not in channels]
+        if unknown:
+            raise OrderError(
+                f"{what} blocks name {unknown}, which are not among the {what}s {list(channels)}"
+            )
+        out = tuple(blocks.get(c) for c in channels)
+    else:
+        out = tuple(blocks)
+        if len(out) != n:
+            raise OrderError(f"{n} {what} channel(s) need {n} {what} block(s), got {len(out)}")
+    for block in out:
+        if block is not None and getattr(block, "role", None) != "static":
+            raise OrderError(
+                f"{what} blocks of a state-space block model must be static blocks, got "
+                f"{type(block).__name__}"
+            )
+    return out
+
+
+def _range(value: Any, n: int, name: str) -> np.ndarray:
+    if value is None:
+        return np.tile([-np.inf, np.inf], (n, 1))
+    arr = np.array(
+        [[-np.inf if v is None else v for v in row] for row in np.asarray(value, dtype=object)],
+        dtype=float,
+    )
+    if arr.shape != (n, 2):
+        raise OrderError(f"{name} needs one (low, high) pair per channel ({n}), got {arr.shape}")
+    return arr
+
+
+class BlockStateSpace(ForwardSensitivities, Model):
+    """Static blocks per channel around a linear state-space core (module docstring).
+
+    Parameters
+    ----------
+    inputs, outputs : sequence of str
+    A, B, C, D : array_like
+        The core, shapes (nx, nx), (nx, nu), (ny, nx), (ny, nu), in normalised units.
+    input_blocks, output_blocks : optional
+        A static block per channel (None: the signal passes through); one block for every
+        channel, a sequence, or a mapping from channel names (:func:`channel_blocks`).
+    state_bias, output_bias : array_like, optional
+        ``e`` (nx,) and ``h`` (ny,); zeros by default.
+    input_offset, input_scale, output_offset, output_scale : array_like, optional
+        Normalisation of the signals (default 0 and 1).
+    input_range, output_range : array_like, optional
+        (channels, 2): the range each block's argument covered in estimation (``u_n``
+        for an input block, ``z`` for an output block), against which
+        :meth:`range_excursion` measures new data.
+    sampling_time : float, optional
+
+    Examples
+    --------
+    >>> from blockid.blocks import Polynomial
+    >>> m = BlockStateSpace(["u1", "u2"], ["y"], A=[[0.5]], B=[[1.0, 1.0]], C=[[1.0]],
+    ...                     D=[[0.0, 0.0]], input_blocks={"u1": Polynomial([0.0, 1.0, 0.5])})
+    >>> m.simulate([[2.0, 1.0], [2.0, 1.0], [0.0, 0.0]])[:, 0].tolist()
+    [0.0, 5.0, 7.5]
+    """
+
+    structure: ClassVar[str] = "block-state-space"
+
+    def __init__(
+        self,
+        inputs: Any,
+        outputs: Any,
+        A: Any,
+        B: Any,
+        C: Any,
+        D: Any,
+        *,
+        input_blocks: Any = None,
+        output_blocks: Any = None,
+        state_bias: Any = None,
+        output_bias: Any = None,
+        input_offset: Any = None,
+        input_scale: Any = None,
+        output_offset: Any = None,
+        output_scale: Any = None,
+        input_range: Any = None,
+        output_range: Any = None,
+        sampling_time: float | None = None,
+    ) -> None:
+        self.inputs, self.outputs = _names(inputs), _names(outputs)
+        nu, ny = len(self.inputs), len(self.outputs)
+        A = np.asarray(A, dtype=float)
+        nx = int(A.shape[0]) if A.ndim == 2 else 0
+        e = np.zeros(nx) if state_bias is None else np.asarray(state_bias, dtype=float)
+        if e.shape != (nx,):
+            raise OrderError(f"state_bias needs {nx} value(s), got {np.shape(state_bias)}")
+        self.core = PolynomialStateSpace(
+            [f"w{i + 1}" for i in range(nu)], [f"z{j + 1}" for j in range(ny)], A, B, C, D,
+            E=e.reshape(nx, 1), F=np.zeros((ny, 1)), exponents=np.zeros((1, nx + nu)),
+        )  # fmt: skip
+        self.input_blocks = channel_blocks(input_blocks, self.inputs, "input")
+        self.output_blocks = channel_blocks(output_blocks, self.outputs, "output")
+        h = np.zeros(ny) if output_bias is None else np.asarray(output_bias, dtype=float)
+        if h.shape != (ny,):
+            raise OrderError(f"output_bias needs {ny} value(s), got {np.shape(output_bias)}")
+        self.output_bias = h
+        # the core's normalisation is the identity: the model holds the signals' own
+        norm = PolynomialStateSpace(
+            self.inputs, self.outputs, np.zeros((1, 1)), np.zeros((1, nu)), np.zeros((ny, 1)),
+            np.zeros((ny, nu)), input_offset=input_offset, input_scale=input_scale,
+            output_offset=output_offset, output_scale=output_scale,
+        )  # fmt: skip
+        self.input_offset, self.input_scale = norm.input_offset, norm.input_scale
+        self.output_offset, self.output_scale = norm.output_offset, norm.output_scale
+        self.input_range = _range(input_range, nu, "input_range")
+        self.output_range = _range(output_range, ny, "output_range")
+        self.sampling_time = sampling_time
+
+    # ------------------------------------------------------------------ structure
+    @property
+    def A(self) -> np.ndarray:
+        return self.core.A
+
+    @property
+    def B(self) -> np.ndarray:
+        return self.core.B
+
+    @property
+    def C(self) -> np.ndarray:
+        return self.core.C
+
+    @property
+    def D(self) -> np.ndarray:
+        return self.core.D
+
+    @property
+    def state_bias(self) -> np.ndarray:
+        return self.core.E[:, 0]
+
+    @property
+    def nx(self) -> int:
+        return self.core.nx
+
+    @property
+    def max_lag(self) -> int:
+        return self.nx
+
+    @property
+    def kind(self) -> str:
+        """``hammerstein``, ``wiener``, ``hammerstein-wiener`` or ``linear`` (which
+        sides carry blocks)."""
+        left = any(b is not None for b in self.input_blocks)
+        right = any(b is not None for b in self.output_blocks)
+        return {(True, True): "hammerstein-wiener", (True, False): "hammerstein",
+                (False, True): "wiener", (False, False): "linear"}[(left, right)]  # fmt: skip
+
+    def poles(self) -> np.ndarray:
+        return self.core.poles()
+
+    def is_stable(self, margin: float = 0.0) -> bool:
+        return self.core.is_stable(margin)
+
+    # ------------------------------------------------------------------ parameters
+    def _blocks(self) -> list[StaticBlock | None]:
+        return [*self.input_blocks, *self.output_blocks]
+
+    def free_parameters(self) -> np.ndarray:
+        """``[A, B, C, D, e, 0 (ny, unused), input blocks, output blocks, h]``: the core's
+        vector (:meth:`PolynomialStateSpace.free_parameters`, ``E = e``), each block's
+        :meth:`~blockid.blocks.base.Block.to_vector` in channel order, then ``h``."""
+        parts = [self.core.free_parameters()]
+        parts += [b.to_vector() for b in self._blocks() if b is not None]
+        return np.concatenate([*parts, self.output_bias])
+
+    def parameter_mask(self, feedthrough: bool) -> np.ndarray:
+        """Which entries of :meth:`free_parameters` a fit moves: not ``D`` without
+        ``feedthrough``, not the state bias ``e`` (module docstring: the blocks carry the
+        operating point, and a free ``e`` would make an output block's shape non-unique),
+        not the unused column, not a block's entries its normalisation fixes."""
+        nx, nu, ny = self.nx, len(self.inputs), len(self.outputs)
+        core = np.zeros(self.core.free_parameters().size, dtype=bool)
+        o_d = nx * nx + nx * nu + ny * nx
+        core[:o_d] = True
+        core[o_d : o_d + ny * nu] = feedthrough
+        parts = [core] + [b.free_mask(after_linear=True) for b in self._blocks() if b is not None]
+        return np.concatenate([*parts, np.ones(ny, dtype=bool)])
+
+    def parameter_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of :meth:`free_parameters`: the blocks' own (positive slopes, ordered
+        breakpoints, ..), none elsewhere."""
+        nc, ny = self.core.free_parameters().size, len(self.outputs)
+        lows, highs = [np.full(nc, -np.inf)], [np.full(nc, np.inf)]
+        for b in self._blocks():
+            if b is not None:
+                lo, hi = b.bounds()
+                lows.append(np.asarray(lo, dtype=float))
+                highs.append(np.asarray(hi, dtype=float))
+        return np.concatenate([*lows, np.full(ny, -np.inf)]), np.concatenate(
+            [*highs, np.full(ny, np.inf)]
+        )
+
+    @property
+    def n_free_parameters(self) -> int:
+        return int(self.parameter_mask(bool(np.any(self.D != 0.0))).sum())
+
+    def free_parameter_names(self) -> list[str]:
+        names = [n if not n.startswith("E[") else f"e[{n[2:].split(',')[0]}]"
+                 for n in self.core.free_parameter_names()]  # fmt: skip
+        for side, channels, blocks in (
+            ("input", self.inputs, self.input_blocks),
+            ("output", self.outputs, self.output_blocks),
+        ):
+            for c, b in zip(channels, blocks, strict=True):
+                if b is not None:
+                    names += [f"{side} {c}: {v}" for v in b.vector_names()]
+        return names + [f"h[{j}]" for j in range(len(self.outputs))]
+
+    def with_free_parameters(self, theta: Any) -> BlockStateSpace:
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        if theta.size != self.free_parameters().size:
+            raise OrderError(
+                f"the model takes {self.free_parameters().size} parameters, got {theta.size}"
+            )
+        nc = self.core.free_parameters().size
+        core = self.core.with_free_parameters(theta[:nc])
+        k = nc
+        blocks: list[StaticBlock | None] = []
+        for b in self._blocks():
+            if b is None:
+                blocks.append(None)
+                continue
+            n = b.to_vector().size
+            blocks.append(b.with_vector(theta[k : k + n]))  # type: ignore[arg-type]
+            k += n
+        nu = len(self.inputs)
+        return self.replace(
+            A=core.A, B=core.B, C=core.C, D=core.D, state_bias=core.E[:, 0],
+            input_blocks=blocks[:nu], output_blocks=blocks[nu:], output_bias=theta[k:],
+        )  # fmt: skip
+
+    def replace(self, **changes: Any) -> BlockStateSpace:
+        """A copy with some constructor arguments changed."""
+        kwargs: dict[str, Any] = dict(
+            A=self.A, B=self.B, C=self.C, D=self.D, input_blocks=self.input_blocks,
+            output_blocks=self.output_blocks, state_bias=self.state_bias,
+            output_bias=self.output_bias, input_offset=self.input_offset,
+            input_scale=self.input_scale, output_offset=self.output_offset,
+            output_scale=self.output_scale, input_range=self.input_range,
+            output_range=self.output_range, sampling_time=self.sampling_time,
+        )  # fmt: skip
+        kwargs.update(changes)
+        return BlockStateSpace(self.inputs, self.outputs, **kwargs)
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        out: dict[str, Any] = {k: getattr(self, k).tolist() for k in "ABCD"}
+        out["e"] = self.state_bias.tolist()
+        out["h"] = self.output_bias.tolist()
+        for side, channels, blocks in (
+            ("input", self.inputs, self.input_blocks),
+            ("output", self.outputs, self.output_blocks),
+        ):
+            for c, b in zip(channels, blocks, strict=True):
+                if b is not None:
+                    out[f"{side} block {c}"] = b.to_dict()
+        return out
+
+    def parameter_table(self) -> list[tuple[str, str]]:
+        rows = []
+        for key in "ABCD":
+            for i, row in enumerate(getattr(self, key)):
+                if row.size:
+                    rows.append((f"{key}[{i}]", ", ".join(f"{v:.6g}" for v in row)))
+        rows.append(("e", ", ".join(f"{v:.6g}" for v in self.state_bias)))
+        rows.append(("h", ", ".join(f"{v:.6g}" for v in self.output_bias)))
+        for side, channels, blocks in (
+            ("input", self.inputs, self.input_blocks),
+            ("output", self.outputs, self.output_blocks),
+        ):
+            for c, b in zip(channels, blocks, strict=True):
+                if b is None:
+                    continue
+                for name, value in b.parameters.items():
+                    values = value if isinstance(value, list | tuple | np.ndarray) else [value]
+                    text = ", ".join(
+                        f"{v:.6g}" if isinstance(v, float | np.floating) else str(v) for v in values
+                    )
+                    rows.append((f"{side} {c}: {b.kind} {name}", text))
+        return rows
+
+    # ------------------------------------------------------------------ signals
+    def normalised_input(self, u: Any) -> np.ndarray:
+        u, _ = self._check_signals(u)
+        return np.ascontiguousarray((u - self.input_offset) / self.input_scale)
+
+    def normalised_output(self, y: Any) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        y = y.reshape(-1, 1) if y.ndim == 1 else y
+        if y.ndim != 2 or y.shape[1] != len(self.outputs):
+            raise DataError(
+                f"the model has {len(self.outputs)} output(s) {list(self.outputs)} but got an "
+                f"output array of shape {np.shape(y)}"
+            )
+        return (y - self.output_offset) / self.output_scale
+
+    def block_inputs(self, un: np.ndarray) -> np.ndarray:
+        """``w``: the core's input for the normalised input ``un`` (N, nu)."""
+        w = np.array(un, dtype=float)
+        for i, b in enumerate(self.input_blocks):
+            if b is not None:
+                w[:, i] = b.run(un[:, i])
+        return np.ascontiguousarray(w)
+
+    def block_outputs(self, z: np.ndarray) -> np.ndarray:
+        """``y_n`` for the core's output ``z`` (N, ny)."""
+        y = np.array(z, dtype=float)
+        for j, b in enumerate(self.output_blocks):
+            if b is not None:
+                y[:, j] = b.run(z[:, j])
+        return y + self.output_bias
+
+    def run(
+        self, un: np.ndarray, x0: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Free run on a normalised input from ``x0`` (default 0): normalised outputs,
+        the core's outputs ``z`` and the state after the last sample."""
+        z, x = self.core.run(self.block_inputs(un), x0)
+        with np.errstate(all="ignore"):
+            return self.block_outputs(z), z, x
+
+    # ------------------------------------------------------------------ derivatives
+    def jacobian_piece(
+        self, un: np.ndarray, x: np.ndarray, S: np.ndarray, X: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Normalised outputs and ``∂y_n/∂[θ, x(0)]`` over a piece of a record.
+
+        ``θ`` is :meth:`free_parameters` (every entry; a fit keeps the columns of its
+        mask). ``x`` (nx,), ``S`` (nx, Pc + nx: the core's parameters and ``x(0)``) and
+        ``X`` (nx, p_in: the input blocks' parameters) carry the state and its
+        sensitivities across pieces, updated in place; start with ``x = x(0)``, ``S =
+        [0 | I]`` and ``X = 0``. Row ``k * ny + j`` of the Jacobian is output ``j`` at
+        sample ``k``; its columns are ``θ`` then ``x(0)``.
+        """
+        n, ny, nx = un.shape[0], len(self.outputs), self.nx
+        w = self.block_inputs(un)
+        cols, chans = [], []
+        for i, b in enumerate(self.input_blocks):
+            if b is not None:
+                G = b.jacobian(un[:, i])
+                cols.append(G)
+                chans += [i] * G.shape[1]
+        p_in = len(chans)
+        Pc = S.shape[1] - nx
+        z = np.zeros((n, ny))
+        Jc = np.zeros((n * ny, Pc + nx))
+        core = self.core._arrays()
+        pnlss_jacobian(*core, w, x, S, z, Jc)
+        Jin = np.zeros((n, ny, p_in))
+        if p_in:
+            G = np.ascontiguousarray(np.hstack(cols))
+            channel_response(core[0], core[1], core[2], core[3],
+                             np.array(chans, dtype=np.int64), G, X, Jin)  # fmt: skip
+        p_out = sum(b.to_vector().size for b in self.output_blocks if b is not None)
+        P = Pc + p_in + p_out + ny
+        J = np.zeros((n * ny, P + nx))
+        J[:, : Pc - ny] = Jc[:, : Pc - ny]  # the core's F (last ny) is unused: zero
+        J[:, Pc : Pc + p_in] = Jin.reshape(n * ny, p_in)
+        J[:, P:] = Jc[:, Pc:]
+        y = np.array(z)
+        k = Pc + p_in
+        for j, b in enumerate(self.output_blocks):
+            rows = slice(j, None, ny)
+            if b is not None:
+                own = np.full(b.to_vector().size, -1, dtype=np.int64)
+                y[:, j], S_j = b.forward(z[:, j], J[rows, :], own)
+                J[rows, :] = S_j
+                J[rows, k : k + own.size] = b.jacobian(z[:, j])
+                k += own.size
+            J[rows, Pc + p_in + p_out + j] = 1.0
+        return y + self.output_bias, J
+
+    @property
+    def linear_in_state(self) -> bool:
+        """Whether the output is linear in ``x(0)`` (no output block)."""
+        return all(b is None for b in self.output_blocks)
+
+    def _sensitivity_start(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        nx = self.nx
+        Pc = self.core.free_parameters().size
+        S = np.zeros((nx, Pc + nx))
+        S[:, Pc:] = np.eye(nx)
+        p_in = sum(b.to_vector().size for b in self.input_blocks if b is not None)
+        return np.array(x0, dtype=float), S, np.zeros((nx, p_in))
+
+    def shaped(self, values: Any) -> dict[str, Any]:
+        """Numbers, one per entry of :meth:`free_parameters` (standard errors), shaped
+        like :attr:`parameters`; the unused column is left out."""
+        values = np.asarray(values, dtype=float).reshape(-1)
+        nx, nu, ny = self.nx, len(self.inputs), len(self.outputs)
+        sizes = [nx * nx, nx * nu, ny * nx, ny * nu, nx, ny]
+        parts = np.split(values[: sum(sizes)], np.cumsum(sizes)[:-1])
+        shapes = [(nx, nx), (nx, nu), (ny, nx), (ny, nu)]
+        out: dict[str, Any] = {
+            k: part.reshape(sh).tolist() for k, part, sh in zip("ABCD", parts, shapes, strict=False)
+        }
+        out["e"] = parts[4].tolist()
+        out["h"] = values[-ny:].tolist()
+        k = sum(sizes)
+        for side, channels, blocks in (
+            ("input", self.inputs, self.input_blocks),
+            ("output", self.outputs, self.output_blocks),
+        ):
+            for c, b in zip(channels, blocks, strict=True):
+                if b is not None:
+                    n = b.to_vector().size
+                    out[f"{side} block {c}"] = dict(
+                        zip(b.vector_names(), values[k : k + n].tolist(), strict=True)
+                    )
+                    k += n
+        return out
+
+    # ------------------------------------------------------------------ simulation
+    def simulate(self, u: Any, y_initial: Any = None) -> np.ndarray:
+        """Free run; with measured outputs ``y_initial`` the initial state is estimated
+        from all of them and the first ``min(n, max_lag)`` outputs are copied from them;
+        without, the run starts at ``x(0) = 0``."""
+        un = self.normalised_input(u)
+        x0, n = None, 0
+        if y_initial is not None and len(np.atleast_1d(y_initial)):
+            y0 = np.asarray(y_initial, dtype=float).reshape(-1, len(self.outputs))
+            n = min(y0.shape[0], un.shape[0])
+            x0 = self.initial_state(u, y0[:n])
+        yn, _, _ = self.run(un, x0)
+        y = yn * self.output_scale + self.output_offset
+        k = min(n, self.max_lag)
+        if k:
+            y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, len(self.outputs))[:k]
+        return y
+
+    def predict(self, u: Any, y: Any) -> np.ndarray:
+        """One step ahead: an output-error model has no noise model, so the prediction is
+        the free run from the state estimated from the first ``max_lag`` outputs."""
+        u, y = self._check_signals(u, y)
+        return self.simulate(u, y[: self.max_lag])
+
+    def range_excursion(self, u: Any) -> dict[str, float]:
+        """How far input ``u`` and a free run on it from ``x(0) = 0`` drive the blocks'
+        arguments beyond the ranges they covered in estimation (fractions of each
+        range's width): ``"u"`` the inputs' own (the largest over the channels with a
+        block), ``"z <output>"`` the argument of each output block."""
+        un = self.normalised_input(u)
+        _, z, _ = self.run(un)
+        out: dict[str, float] = {}
+        for i, b in enumerate(self.input_blocks):
+            if b is not None and np.all(np.isfinite(self.input_range[i])):
+                value = excursion(tuple(self.input_range[i]), un[:, i])
+                out["u"] = max(out.get("u", 0.0), value)
+        for j, (c, b) in enumerate(zip(self.outputs, self.output_blocks, strict=True)):
+            if b is not None and np.all(np.isfinite(self.output_range[j])):
+                out[f"z {c}"] = excursion(tuple(self.output_range[j]), z[:, j])
+        return out
+
+    def static_curves(self, u: Any, n_points: int = 400) -> list[dict[str, Any]]:
+        """Each block's curve over the range its argument takes when input ``u`` is
+        simulated from ``x(0) = 0``, in the signals' units where they have them: an
+        input block against its input, an output block's output (with the offset and
+        scale) against its argument ``z``. Dicts with ``title``, ``x``, ``y``,
+        ``xlabel``, ``ylabel`` (the report draws one panel each)."""
+        un = self.normalised_input(u)
+        _, z, _ = self.run(un)
+        curves = []
+        for i, (c, b) in enumerate(zip(self.inputs, self.input_blocks, strict=True)):
+            if b is None:
+                continue
+            grid = np.linspace(un[:, i].min(), un[:, i].max(), n_points)
+            curves.append({
+                "title": f"input block on {c} ({b.kind})",
+                "x": self.input_offset[i] + self.input_scale[i] * grid,
+                "y": np.asarray(b(grid), dtype=float),
+                "xlabel": c,
+                "ylabel": f"w{i + 1} (core input, normalised)",
+            })  # fmt: skip
+        for j, (c, b) in enumerate(zip(self.outputs, self.output_blocks, strict=True)):
+            if b is None or not np.all(np.isfinite(z[:, j])):
+                continue
+            grid = np.linspace(z[:, j].min(), z[:, j].max(), n_points)
+            out = np.asarray(b(grid), dtype=float) + self.output_bias[j]
+            curves.append({
+                "title": f"output block on {c} ({b.kind})",
+                "x": grid,
+                "y": self.output_offset[j] + self.output_scale[j] * out,
+                "xlabel": f"z{j + 1} (core output, normalised)",
+                "ylabel": c,
+            })  # fmt: skip
+        return curves
+
+    # ------------------------------------------------------------------ files
+    def to_dict(self) -> dict[str, Any]:
+        def pair(row: np.ndarray) -> list[float | None]:
+            return [float(v) if np.isfinite(v) else None for v in row]
+
+        def blocks(bs: tuple[StaticBlock | None, ...]) -> list[dict[str, Any] | None]:
+            return [None if b is None else b.to_dict() for b in bs]
+
+        return {
+            "structure": self.structure,
+            "inputs": list(self.inputs),
+            "outputs": list(self.outputs),
+            "sampling_time": self.sampling_time,
+            "nx": self.nx,
+            "A": self.A.tolist(),
+            "B": self.B.tolist(),
+            "C": self.C.tolist(),
+            "D": self.D.tolist(),
+            "state_bias": self.state_bias.tolist(),
+            "output_bias": self.output_bias.tolist(),
+            "input_blocks": blocks(self.input_blocks),
+            "output_blocks": blocks(self.output_blocks),
+            "input_range": [pair(r) for r in self.input_range],
+            "output_range": [pair(r) for r in self.output_range],
+            "normalisation": {
+                "input_offset": self.input_offset.tolist(),
+                "input_scale": self.input_scale.tolist(),
+                "output_offset": self.output_offset.tolist(),
+                "output_scale": self.output_scale.tolist(),
+            },
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> BlockStateSpace:
+        norm = data.get("normalisation", {})
+
+        def blocks(key: str) -> list[Any]:
+            return [None if b is None else block_from_dict(b) for b in data.get(key) or []] or None
+
+        try:
+            return cls(
+                data["inputs"], data["outputs"], data["A"], data["B"], data["C"], data["D"],
+                input_blocks=blocks("input_blocks"), output_blocks=blocks("output_blocks"),
+                state_bias=data.get("state_bias"), output_bias=data.get("output_bias"),
+                input_offset=norm.get("input_offset"), input_scale=norm.get("input_scale"),
+                output_offset=norm.get("output_offset"), output_scale=norm.get("output_scale"),
+                input_range=data.get("input_range"), output_range=data.get("output_range"),
+                sampling_time=data.get("sampling_time"),
+            )  # fmt: skip
+        except OrderError as exc:
+            raise ModelFileError(
+                f"the block state-space model description is invalid: {exc}"
+            ) from None
