@@ -11,9 +11,12 @@ For each operating condition (110 kPa / Ma 0.578 and 130 kPa / Ma 0.822):
 * **conventional**: a two-input two-output ARX of the same orders straight from u1, u2 to
   y1, y2, fitted by least squares.
 
-Two estimator sets identify the network: the **paper's** (S1 by RLS, S2 by AW-RLS, S3 by
-H-RLS with forgetting) and blockid's **default** (S1 by least squares, S2 by refinement on
-free-run simulation error, S3 by least squares). Every number is a free-run simulation
+Three estimator sets identify the network: the **paper's** (S1 by RLS, S2 by AW-RLS, S3
+by H-RLS with forgetting), blockid's **default** (S1 by least squares, S2 by refinement
+on free-run simulation error, S3 by least squares) and the default with **S3 as a block
+model** of two inputs and two outputs (a cubic per input around a linear state space
+whose order the data choose, :mod:`blockid.fitting.block_state_space`, fitted on its
+free-run error). Every number is a free-run simulation
 on the validation record: RMSE and maximum absolute error (paper A's "MAE") of the
 stagnation pressure P0 (y1, kPa) and the Mach number (y2).
 """
@@ -67,6 +70,22 @@ ESTIMATORS: dict[str, list[SubsystemSpec]] = {
             "arx",
             "batch",
             {"na": 2, "nb": 2, "nk": 1, "center": True},
+        ),
+    ],
+    # S3 as a block model of two inputs and two outputs: a cubic per input around a
+    # linear state space whose order the data choose (issue 18)
+    "S3 block model (LS, simulation error, block state space)": [
+        SubsystemSpec("S1", ["u1"], ["v1"], "arx", "batch", {"na": 1, "nb": 1, "nk": 1}),
+        SubsystemSpec(
+            "S2", ["u2"], ["v2"], "backlash", "simulation-error", {"na": 2, "nb": 1, "nk": 1}
+        ),
+        SubsystemSpec(
+            "S3",
+            ["v1", "v2"],
+            ["y1", "y2"],
+            "block-state-space",
+            None,
+            {"input_block": "polynomial:degree=3"},
         ),
     ],
 }
