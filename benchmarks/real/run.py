@@ -122,6 +122,25 @@ def _arx_reference(result: Any, bench: Benchmark) -> dict[str, Any] | None:
     return {"label": best.candidate.label, "cv_rmse": best.rmse * bench.scale, "tests": tests}
 
 
+def _block_reference(result: Any, bench: Benchmark) -> dict[str, Any] | None:
+    """The best block model of several inputs and outputs of the search (by its
+    cross-validated score), fitted on all estimation data, and its test errors: shown
+    beside the chosen model, never used to choose (issue 18 asks whether a block model
+    beats the ARX on each multivariable set)."""
+    from blockid.fitting.dispatch import fit_model
+
+    blocks = [s for s in result.ranked if s.candidate.structure == "block-state-space" and s.ok]
+    if not blocks:
+        return None
+    best = min(blocks, key=lambda s: s.rmse)
+    fit = fit_model(bench.estimation, "block-state-space", **best.candidate.options)
+    tests = {}
+    for rec in bench.tests:
+        rmse, _ = test_rmse(fit.model, rec, bench.n_init)
+        tests[rec.name] = [v * bench.scale for v in rmse]
+    return {"label": best.candidate.label, "cv_rmse": best.rmse * bench.scale, "tests": tests}
+
+
 def _load() -> str:
     return " ".join(f"{v:.2f}" for v in os.getloadavg())
 
@@ -190,6 +209,10 @@ def run_one(bench: Benchmark, effort: str, jobs: int | None) -> dict[str, Any]:
             arx = _arx_reference(result, bench)
         except Exception as exc:  # noqa: BLE001 - a reference, reported not raised
             arx = {"error": f"{type(exc).__name__}: {exc}"}
+        try:
+            block = _block_reference(result, bench)
+        except Exception as exc:  # noqa: BLE001 - a reference, reported not raised
+            block = {"error": f"{type(exc).__name__}: {exc}"}
     out.update(
         status="ok",
         search_seconds=result.seconds,
@@ -237,6 +260,7 @@ def run_one(bench: Benchmark, effort: str, jobs: int | None) -> dict[str, Any]:
         identify_notes=list(result.notes),
         tests=tests,
         arx_reference=arx,
+        block_reference=block,
         warnings=sorted({f"{w.category.__name__}: {str(w.message)[:200]}" for w in caught})[:10],
     )
     return out
@@ -402,6 +426,7 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
         table, more = _summary(mimo)
         lines += table
         shortfalls += more
+        lines += _block_section(mimo)
     if pnlss:
         lines += _pnlss_section(pnlss)
     if study:
@@ -428,6 +453,52 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
     for name, r in records.items():
         lines += _section(name, r)
     return "\n".join(lines).rstrip() + "\n"
+
+
+def _block_section(mimo: dict[str, dict[str, Any]]) -> list[str]:
+    """Issue 18's question per multivariable set: does a block model (static blocks per
+    channel around a linear state space) beat the ARX, and if not, why."""
+    out = [
+        "",
+        "### Block models of several inputs and outputs (issue 18)",
+        "",
+        "The best `block-state-space` candidate of each search (by its cross-validated "
+        "score), fitted on all estimation data and simulated on the test record, beside "
+        "our ARX (the best ARX of the same search, fitted likewise) and the chosen model's "
+        "score. Shown to answer whether a block model beats the ARX; it never changes "
+        "what `identify` chooses. Cross-validated scores are free-run RMSEs on the "
+        "folds, averaged over the outputs.",
+        "",
+        "| data set | chosen (CV) | best block model (CV) | best ARX (CV) | block model, test | "
+        "our ARX, test | block model better on |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    notes = []
+    for name, r in mimo.items():
+        if r.get("status") != "ok":
+            continue
+        block, arx = r.get("block_reference"), r.get("arx_reference") or {}
+        sel = f"`{r['selected']['label']}` ({_f(r['selected']['cv_rmse'])})"
+        arx_cv = _f(arx.get("cv_rmse")) if "cv_rmse" in arx else "-"
+        if not block or "tests" not in block:
+            why = "none scored" if not block else f"failed: {block.get('error')}"
+            out.append(f"| {r['title']} | {sel} | {why} | {arx_cv} | - | - | - |")
+        else:
+            rec = next(iter(block["tests"]))
+            b, a = block["tests"][rec], arx.get("tests", {}).get(rec)
+            better = (
+                "-"
+                if a is None
+                else f"{sum(x < y for x, y in zip(b, a, strict=True))} of {len(b)} outputs"
+            )
+            out.append(
+                f"| {r['title']} | {sel} | `{block['label']}` ({_f(block['cv_rmse'])}) | "
+                f"{arx_cv} | {' / '.join(_f(v) for v in b)} | "
+                f"{' / '.join(_f(v) for v in a) if a else '-'} | {better} |"
+            )
+        if name in WHY_BLOCK:
+            notes.append(f"- **{r['title']}**: {WHY_BLOCK[name]}")
+    return out + ([""] + notes if notes else [])
 
 
 def _pnlss_section(pnlss: dict[str, dict[str, Any]]) -> list[str]:
@@ -494,6 +565,10 @@ def _study_section(study: dict[str, Any]) -> list[str]:
 
 #: Explanations of shortfalls, by data set, from the evidence of the run they refer to
 #: (its ranked candidates, rejections, fold scores); check them against a new run.
+#: Why a block model does or does not beat the ARX on a multivariable set (read from the
+#: results of the searches; issue 18).
+WHY_BLOCK: dict[str, str] = {}
+
 WHY: dict[str, str] = {
     "emps": (
         "The integrating Hammerstein model won the three folds (cross-validated 18.2 mm "

@@ -145,6 +145,13 @@ def test_structures_asked_for_are_what_comes_back():
     assert result.fit.model.structure == "output-error"
     # ARX fits still chose the orders, but are not offered as the answer
     assert any(s.candidate.structure == "arx" for s in result.ranked)
+    # models built on the linear state space, asked for alone on one input and one output
+    # (the default search leaves block-state-space to several inputs or outputs): the
+    # linear state space still gives their dimensions, and is not the answer
+    for asked in ("block-state-space", "polynomial-state-space"):
+        result = identify(data, structures=[asked], effort=SMALL, jobs=1)
+        assert result.fit.model.structure == asked
+        assert any(s.candidate.structure == "state-space" for s in result.ranked)
 
 
 def test_when_no_structure_asked_for_fits_the_error_says_why(monkeypatch):

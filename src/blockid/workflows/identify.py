@@ -615,7 +615,7 @@ def identify(
 
     with TaskRunner(data, min(jobs, 64)) as runner:
         search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
-        _stages(search, chosen, recommended, notes)
+        _stages(search, chosen, recommended, notes, asked=bool(asked))
         ranked_all = search.ranked()
         eligible = [s for s in ranked_all if s.candidate.structure in chosen]
     if not eligible:
@@ -696,8 +696,11 @@ def _stages(
     chosen: Sequence[str],
     recommended: tuple[int, int, int] | None,
     notes: list[str],
+    asked: bool = False,
 ) -> None:
-    """Run the stages (module docstring); every score lands in ``search``."""
+    """Run the stages (module docstring); every score lands in ``search``. ``asked``:
+    the structures were named by the caller (searched even where the default search
+    leaves them out)."""
     eff = search.effort
     # 1. delay
     delays_scored = search.run(
@@ -735,7 +738,7 @@ def _stages(
     if block:
         orders = _block_structures(search, block, orders, recommended, screen, notes)
     if states:
-        _state_space(search, states, screen)
+        _state_space(search, states, screen, asked)
     iterative = block + states
     if not iterative:
         return
@@ -818,7 +821,9 @@ def _block_structures(
     return orders
 
 
-def _state_space(search: _Search, states: list[str], screen: dict[str, Any]) -> None:
+def _state_space(
+    search: _Search, states: list[str], screen: dict[str, Any], asked: bool = False
+) -> None:
     """Linear state-space models at every state dimension up to the effort's largest
     order, then polynomial ones at ``state_keep`` of those dimensions: the best (the
     smallest among near-ties), then the largest dimension tied with it whose polynomial
@@ -829,7 +834,9 @@ def _state_space(search: _Search, states: list[str], screen: dict[str, Any]) -> 
     """
     eff = search.effort
     nxs = list(range(1, eff.max_order + 1))  # linear fits are cheap: every dimension
-    search.run("state space", state_candidates(states, nxs, screen), True)
+    # the linear state space gives the dimensions even when only models built on it
+    # were asked for (its scores are kept, it is chosen only if asked for)
+    search.run("state space", state_candidates([*states, "state-space"], nxs, screen), True)
     linear = search.ranked([s for s in search.order if s.stage == "state space"])
     if not linear:
         return
@@ -853,9 +860,10 @@ def _state_space(search: _Search, states: list[str], screen: dict[str, Any]) -> 
     found = candidates(chosen)
     if found:
         search.run("nonlinear state space", found, True)
-    if search.data.n_inputs > 1 or search.data.n_outputs > 1:
+    if asked or search.data.n_inputs > 1 or search.data.n_outputs > 1:
         # static blocks per channel: on one input and one output the chain structures
-        # (Hammerstein, Wiener, ...) hold these models with polynomial linear blocks
+        # (Hammerstein, Wiener, ...) hold these models with polynomial linear blocks, so
+        # the default search leaves them out there
         blocks = block_state_candidates(states, chosen, eff.block_state_plans, screen)
         if blocks:
             search.run("block state space", blocks, True)
