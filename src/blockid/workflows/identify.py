@@ -594,8 +594,9 @@ def identify(
             )
         if block:
             notes.append(
-                "several inputs or outputs: the block structures (one input, one output) "
-                "are not searched"
+                "several inputs or outputs: the chain structures (one input, one output) "
+                "are not searched; the block models of several inputs and outputs "
+                "(block-state-space) are"
             )
         chosen = [s for s in chosen if not STRUCTURES[s].block_oriented] or [LINEAR]
     n_samples = sum(e.n_samples for e in data.experiments)
