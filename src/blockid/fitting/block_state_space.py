@@ -88,7 +88,10 @@ def near_identity(block: StaticBlock, v: np.ndarray) -> StaticBlock:
     def jac(theta: np.ndarray) -> np.ndarray:
         return start.with_vector(theta).jacobian(v)  # type: ignore[union-attr]
 
-    sol = least_squares(residual, theta0, jac=jac, bounds=(lo, hi), max_nfev=200)
+    try:
+        sol = least_squares(residual, theta0, jac=jac, bounds=(lo, hi), max_nfev=200)
+    except ValueError:  # bounds the solver refuses (an entry fixed by lo == hi): as adapted
+        return start
     return start.with_vector(sol.x)  # type: ignore[return-value]
 
 
