@@ -171,3 +171,26 @@ def test_range_excursion_reports_the_inputs_and_each_output_blocks_argument():
     out = m.range_excursion(u)
     assert set(out) == {"u", "z y1"}  # y2 has no output block
     assert out["u"] == pytest.approx(0.5)
+
+
+def test_beyond_its_recorded_range_a_polynomial_block_follows_its_tangent():
+    """A cubic run on inputs beyond the range it was estimated on runs away; like the
+    chains' polynomial blocks, it continues along its tangent there, and the exported
+    module does the same."""
+    m = _model(input_range=[[-1.0, 1.0], [-1.0, 1.0]], output_range=[[-2.0, 2.0], [-2.0, 2.0]])
+    un = np.linspace(-4.0, 4.0, 801)
+    w = m.block_inputs(np.column_stack((un, un)))[:, 0]
+    cubic = m.input_blocks[0]
+    inside = np.abs(un) <= 1.0
+    np.testing.assert_allclose(w[inside], cubic(un[inside]), rtol=0, atol=1e-15)
+    right = un > 1.0
+    slope = cubic.derivative(np.array([1.0]))[0]
+    np.testing.assert_allclose(w[right], cubic(np.array([1.0]))[0] + slope * (un[right] - 1.0))
+    assert np.abs(w).max() < 0.5 * np.abs(cubic(un)).max()  # the cubic itself runs away
+    u = 1.0 + 2.0 * np.column_stack((np.linspace(-3, 3, 300), np.linspace(2, -2, 300)))
+    namespace: dict = {}
+    exec(to_python_module(m), namespace)  # noqa: S102 - the module under test
+    y = _reference(_model(), u, np.zeros(3))
+    for start in (None, y[:10]):
+        np.testing.assert_allclose(namespace["simulate"](u, start), m.simulate(u, start),
+                                   rtol=0, atol=1e-10)  # fmt: skip

@@ -352,6 +352,16 @@ def _static_slope(p, s):
     raise ValueError("unknown block kind " + repr(kind))
 
 
+def _bss_block(p, s, seen):
+    """A block of a block state-space model on ``s`` and its slope; a polynomial block
+    continues along its tangent beyond its recorded range ``seen``."""
+    edge = s
+    if p["kind"] in ("polynomial", "two-segment-polynomial") and None not in seen:
+        edge = np.clip(s, seen[0], seen[1])
+    out, slope = _static(p, edge), _static_slope(p, edge)
+    return out + slope * (s - edge) * (edge != s), slope
+
+
 def _bss_run(M, w, x, sens=False):
     """Normalised outputs of a block state-space model's free run on the core's input
     ``w`` from ``x`` and, with ``sens``, their derivative to the initial state."""
@@ -370,9 +380,9 @@ def _bss_run(M, w, x, sens=False):
     y = z.copy()
     for j, p in enumerate(MODEL["output_blocks"]):
         if p is not None:
-            y[:, j] = _static(p, z[:, j])
+            y[:, j], slope = _bss_block(p, z[:, j], MODEL["output_range"][j])
             if sens:
-                J[j::ny] *= _static_slope(p, z[:, j])[:, None]
+                J[j::ny] *= slope[:, None]
     return y + M["h"], J
 
 
@@ -390,7 +400,7 @@ def _block_state_space(u, y0):
     w = un.copy()
     for i, p in enumerate(m["input_blocks"]):
         if p is not None:
-            w[:, i] = _static(p, un[:, i])
+            w[:, i] = _bss_block(p, un[:, i], m["input_range"][i])[0]
     y_off, y_scale = np.asarray(norm["output_offset"]), np.asarray(norm["output_scale"])
     x0, n = np.zeros(nx), 0
     if y0 is not None and len(np.atleast_1d(y0)):

@@ -367,12 +367,32 @@ class BlockStateSpace(ForwardSensitivities, Model):
             )
         return (y - self.output_offset) / self.output_scale
 
+    @staticmethod
+    def _edge(block: StaticBlock, s: np.ndarray, seen: np.ndarray) -> np.ndarray | None:
+        """``s`` clipped to the range ``seen`` for a block that extrapolates unreliably
+        (``warn_extrapolation``: polynomials) when the range is recorded; else None."""
+        if not block.warn_extrapolation or not np.all(np.isfinite(seen)):
+            return None
+        return np.clip(s, seen[0], seen[1])
+
+    def _apply(self, block: StaticBlock, s: np.ndarray, seen: np.ndarray) -> np.ndarray:
+        """``block`` on ``s``; beyond the range recorded in estimation a polynomial block
+        continues along its tangent instead of running away, as the chains' blocks do."""
+        out = block.run(s)
+        edge = self._edge(block, s, seen)
+        if edge is None or not (outside := edge != s).any():
+            return out
+        out = np.array(out, dtype=float, copy=True)
+        e = edge[outside]
+        out[outside] = np.asarray(block(e), dtype=float) + block.derivative(e) * (s[outside] - e)
+        return out
+
     def block_inputs(self, un: np.ndarray) -> np.ndarray:
         """``w``: the core's input for the normalised input ``un`` (N, nu)."""
         w = np.array(un, dtype=float)
         for i, b in enumerate(self.input_blocks):
             if b is not None:
-                w[:, i] = b.run(un[:, i])
+                w[:, i] = self._apply(b, un[:, i], self.input_range[i])
         return np.ascontiguousarray(w)
 
     def block_outputs(self, z: np.ndarray) -> np.ndarray:
@@ -380,7 +400,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
         y = np.array(z, dtype=float)
         for j, b in enumerate(self.output_blocks):
             if b is not None:
-                y[:, j] = b.run(z[:, j])
+                y[:, j] = self._apply(b, z[:, j], self.output_range[j])
         return y + self.output_bias
 
     def run(
@@ -410,7 +430,9 @@ class BlockStateSpace(ForwardSensitivities, Model):
         cols, chans = [], []
         for i, b in enumerate(self.input_blocks):
             if b is not None:
-                G = b.jacobian(un[:, i])
+                edge = self._edge(b, un[:, i], self.input_range[i])
+                # beyond a recorded range: the parameters' effect at the range's end
+                G = b.jacobian(un[:, i] if edge is None else edge)
                 cols.append(G)
                 chans += [i] * G.shape[1]
         p_in = len(chans)
@@ -430,16 +452,17 @@ class BlockStateSpace(ForwardSensitivities, Model):
         J[:, : Pc - ny] = Jc[:, : Pc - ny]  # the core's F (last ny) is unused: zero
         J[:, Pc : Pc + p_in] = Jin.reshape(n * ny, p_in)
         J[:, P:] = Jc[:, Pc:]
-        y = np.array(z)
+        y = self.block_outputs(z) - self.output_bias
         k = Pc + p_in
         for j, b in enumerate(self.output_blocks):
             rows = slice(j, None, ny)
             if b is not None:
-                own = np.full(b.to_vector().size, -1, dtype=np.int64)
-                y[:, j], S_j = b.forward(z[:, j], J[rows, :], own)
-                J[rows, :] = S_j
-                J[rows, k : k + own.size] = b.jacobian(z[:, j])
-                k += own.size
+                edge = self._edge(b, z[:, j], self.output_range[j])
+                at = z[:, j] if edge is None else edge  # the tangent's slope beyond the range
+                J[rows, :] *= b.derivative(at)[:, None]
+                n = b.to_vector().size
+                J[rows, k : k + n] = b.jacobian(at)
+                k += n
             J[rows, Pc + p_in + p_out + j] = 1.0
         return y + self.output_bias, J
 
