@@ -47,6 +47,9 @@ def mutmut_section(config: dict) -> str:
     """The ``[tool.mutmut]`` table for the snapshot's pyproject.toml."""
     packages = config["packages"].values()
     only = sorted({f for p in packages for f in p["files"]})
+    # files a package leaves out are not mutated at all (the export runtime is copied
+    # into exported modules as text: mutmut's trampolines must not be in it)
+    excluded = sorted({f for p in packages for f in p.get("exclude", [])})
     args = list(config["pytest_args"])
     for test in config.get("deselect", []):
         args += ["--deselect", test]
@@ -54,6 +57,7 @@ def mutmut_section(config: dict) -> str:
         "source_paths": ["src"],
         "also_copy": ["docs"],  # tests/test_docs_extending.py runs docs/extending.md
         "only_mutate": only,
+        "do_not_mutate": excluded,
         "pytest_add_cli_args": args,
         "pytest_add_cli_args_test_selection": config["tests"],
         "timeout_multiplier": config["timeout_multiplier"],
