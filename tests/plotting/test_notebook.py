@@ -116,6 +116,19 @@ def test_an_arx_fit_has_no_blocks_but_its_dynamics(hammerstein_fit):
     assert "y / u: static gain" in page.all_text
 
 
+def test_a_block_model_of_several_channels_shows_a_panel_per_block_and_its_core():
+    from reference import mimo_hw_record
+
+    data, _ = mimo_hw_record(n=600)
+    fit = fit_model(data, "block-state-space", nx=3, input_block="polynomial",
+                    output_block={"y2": "polynomial"})  # fmt: skip
+    figures = fit.plot(data)
+    assert list(figures) == ["output", "blocks", "linear"]
+    titles = [ax.get_title() for ax in figures["blocks"].axes]
+    assert titles == ["input block on u1 (polynomial)", "input block on u2 (polynomial)",
+                      "output block on y2 (polynomial)"]  # fmt: skip
+
+
 def test_importing_the_displays_does_not_import_matplotlib():
     code = (
         "import sys, blockid.plotting.notebook, blockid.reporting.notebook\n"

@@ -46,7 +46,7 @@ from blockid._kernels.state_space import channel_response, pnlss_jacobian
 from blockid.blocks.base import Block, StaticBlock, block_from_dict
 from blockid.errors import DataError, ModelFileError, OrderError
 from blockid.models.base import Model, excursion
-from blockid.models.state_space import ForwardSensitivities, PolynomialStateSpace
+from blockid.models.state_space import ForwardSensitivities, PolynomialStateSpace, StateSpace
 
 __all__ = ["BlockStateSpace", "channel_blocks"]
 
@@ -220,6 +220,14 @@ class BlockStateSpace(ForwardSensitivities, Model):
 
     def poles(self) -> np.ndarray:
         return self.core.poles()
+
+    def linear_part(self) -> StateSpace:
+        """The linear core from the blocks' outputs ``w`` to the output blocks'
+        arguments ``z`` (normalised units; signals named ``w <input>``, ``z <output>``)."""
+        return StateSpace(
+            [f"w {c}" for c in self.inputs], [f"z {c}" for c in self.outputs], self.A, self.B,
+            self.C, self.D, sampling_time=self.sampling_time,
+        )  # fmt: skip
 
     def is_stable(self, margin: float = 0.0) -> bool:
         return self.core.is_stable(margin)

@@ -102,16 +102,18 @@ def transfer_functions(model: Any) -> list[dict[str, Any]]:
     >>> transfer_functions(LinearBlock(2, 1, 1, a=[-1.2, 0.35], b=[0.5]))
     [{'num': [0.5, 0.0], 'den': [1.0, -1.2, 0.35], 'dt': None}]
     """
+    from blockid.models.block_state_space import BlockStateSpace
     from blockid.models.state_space import PolynomialStateSpace
 
     if getattr(model, "role", None) == "linear":
         return [_tf(model, None)]
     dt = getattr(model, "sampling_time", None)
-    if isinstance(model, PolynomialStateSpace):  # every input-output pair of A, B, C, D
+    if isinstance(model, PolynomialStateSpace | BlockStateSpace):
+        # every input-output pair of A, B, C, D (a block model's: of its linear core)
         linear = model.linear_part()
         out = []
-        for i, name_y in enumerate(model.outputs):
-            for j, name_u in enumerate(model.inputs):
+        for i, name_y in enumerate(linear.outputs):
+            for j, name_u in enumerate(linear.inputs):
                 num, den = linear.transfer_function(i, j)
                 out.append({"num": num.tolist(), "den": den.tolist(), "dt": dt,
                             "input": name_u, "output": name_y})  # fmt: skip

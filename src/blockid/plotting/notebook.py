@@ -227,8 +227,15 @@ def model_figures(
         simulated = evaluate(model, data, "simulation")
         bands, _ = output_bands(fit, simulated, draws) if fit is not None else ([], "")
         out["output"] = rf.validation_figure(simulated, 0, bands, "given data")
+    from blockid.models.block_state_space import BlockStateSpace
+
     blocks = getattr(model, "blocks", None)
-    if "blocks" in wanted and blocks and any(b.role != "linear" for b in blocks):
+    if "blocks" in wanted and isinstance(model, BlockStateSpace) and data is not None:
+        u = np.vstack([x.u for x in data.experiments])
+        curves = model.static_curves(u)
+        if curves:
+            out["blocks"] = rf.curves_figure(curves)
+    elif "blocks" in wanted and blocks and any(b.role != "linear" for b in blocks):
         u = None
         if data is not None and len(getattr(model, "inputs", ())) == 1:
             u = np.concatenate([x.u[:, 0] for x in data.experiments])
