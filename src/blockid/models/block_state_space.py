@@ -32,7 +32,14 @@ the simulated output to every parameter and to ``x(0)``, walked forward in time:
 core's by :func:`~blockid._kernels.state_space.pnlss_jacobian` (the bias ``e`` is its
 constant monomial), an input block's through the core by
 :func:`~blockid._kernels.state_space.channel_response`, and an output block's by the
-chain rule (:meth:`~blockid.blocks.base.StaticBlock.forward`).
+chain rule (the block's ``derivative`` times the core's sensitivity, plus its own
+``jacobian``).
+
+**Beyond the estimation range.** A block that extrapolates unreliably (a polynomial:
+``warn_extrapolation``) continues along its tangent beyond the range its argument
+covered in estimation (``input_range``, ``output_range``, recorded by the fit), as the
+chains' polynomial blocks do: a cubic would run away on an input a little larger than
+any it was fitted on. Inside the ranges the blocks are exactly themselves.
 """
 
 from __future__ import annotations
