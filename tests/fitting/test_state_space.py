@@ -222,3 +222,22 @@ def test_collinear_inputs_are_refused_naming_them(structure):
     free = Dataset.from_arrays(np.c_[u1, rng.standard_normal(400), u3], y,
                                ["u1", "u2", "u3"], ["y"])  # fmt: skip
     assert list(fit_model(free, "state-space", nx=2).model.inputs) == ["u1", "u2", "u3"]
+
+
+def test_the_refinement_rejects_a_start_that_explodes_and_says_so():
+    """A start whose free run is finite but far off the data (here B scaled by 1e5: the
+    squared residual is 1e10 times the output's variance) is the penalty, not a point to
+    step from, and an exploding start is refused with the reason."""
+    from blockid.errors import EstimationError
+    from blockid.fitting.state_space import _normalised, _Problem, refine_state_space
+
+    plant = next(iter(SYSTEMS.values()))
+    data = _record(plant, 300)
+    start = fit_state_space(data, nx=plant.nx, refine=False).model
+    wild = start.replace(B=start.B * 1e5)
+    problem = _Problem(wild, _normalised(data), feedthrough=False)
+    theta = np.concatenate([wild.free_parameters()[problem.free], np.zeros(wild.nx)])
+    r = problem.residuals(theta)
+    assert r is problem.penalty
+    with pytest.raises(EstimationError, match="unstable or its simulation explodes"):
+        refine_state_space(wild, data, initial_states=[np.zeros(wild.nx)])

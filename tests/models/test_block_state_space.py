@@ -194,3 +194,26 @@ def test_beyond_its_recorded_range_a_polynomial_block_follows_its_tangent():
     for start in (None, y[:10]):
         np.testing.assert_allclose(namespace["simulate"](u, start), m.simulate(u, start),
                                    rtol=0, atol=1e-10)  # fmt: skip
+
+
+def test_only_a_fit_with_feedthrough_moves_d_and_the_state_bias_is_held():
+    m = _model()
+    names = m.free_parameter_names()
+    for feedthrough in (False, True):
+        mask = m.parameter_mask(feedthrough)
+        assert mask.dtype == bool and mask.size == len(names)
+        d = [k for k, n in enumerate(names) if n.startswith("D[")]
+        assert d and all(mask[k] == feedthrough for k in d)
+        assert not any(mask[k] for k, n in enumerate(names) if n.startswith("e["))
+        assert all(mask[k] for k, n in enumerate(names) if n.startswith(("A[", "B[", "h[")))
+
+
+def test_a_panel_for_every_block_even_after_a_channel_without_one():
+    m = _model(input_blocks={"u2": DeadZone(-0.2, 0.3, 1.0, 0.8)}, output_blocks=None)
+    curves = m.static_curves(_inputs(100))
+    assert [c["title"] for c in curves] == ["input block on u2 (dead-zone)"]
+
+
+def test_measured_outputs_of_the_wrong_shape_are_named():
+    with pytest.raises(DataError, match=r"2 output\(s\) \['y1', 'y2'\]"):
+        _model().initial_state(_inputs(20), np.zeros((20, 3)))
