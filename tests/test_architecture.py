@@ -159,3 +159,58 @@ def test_the_docs_state_the_floors_of_the_table():
         for name in re.findall(r"[_a-z]+", line[7:26]):
             stated[name] = floor
     assert stated == FLOORS
+
+
+def _import_graph() -> dict[str, set[str]]:
+    """Every import of a blockid module by another, at the top of a module or inside a
+    function, less the two kinds that cannot close a circle at run time: imports only for
+    type checking (``if TYPE_CHECKING:``) and the allowed hand-off of ``.plot()`` methods
+    to ``blockid.plotting`` from the floors below it."""
+    modules = set(_modules())
+    graph: dict[str, set[str]] = {}
+    for module in modules:
+        tree = ast.parse(Path(importlib.util.find_spec(module).origin).read_text())
+        typing_only = {
+            id(n)
+            for node in ast.walk(tree)
+            if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+            for n in ast.walk(node)
+        }
+        deps = set()
+        for node in ast.walk(tree):
+            if id(node) in typing_only or not isinstance(node, ast.ImportFrom):
+                continue
+            if not (node.module or "").startswith("blockid") or node.level:
+                continue
+            for alias in node.names:
+                sub = f"{node.module}.{alias.name}"
+                deps.add(sub if sub in modules else node.module)
+        plot_floor = LAYERS["plotting"]
+        graph[module] = {
+            d for d in deps & modules
+            if d != module
+            and not (d.startswith("blockid.plotting") and (_layer(module) or 0) < plot_floor)
+        }  # fmt: skip
+    return graph
+
+
+def test_no_import_circle():
+    """No module imports, even lazily inside a function, one that imports it back (issue
+    19: circles hid inside fitting/ through imports within functions)."""
+    graph = _import_graph()
+    seen: dict[str, int] = {}  # 1: on the current path, 2: done
+    circles = []
+
+    def visit(node: str, path: list[str]) -> None:
+        seen[node] = 1
+        for nxt in sorted(graph[node]):
+            if seen.get(nxt) == 1:
+                circles.append(path[path.index(nxt) :] + [nxt])
+            elif nxt not in seen:
+                visit(nxt, [*path, nxt])
+        seen[node] = 2
+
+    for module in sorted(graph):
+        if module not in seen:
+            visit(module, [module])
+    assert not circles, [" -> ".join(c) for c in circles]

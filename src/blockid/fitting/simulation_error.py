@@ -83,7 +83,7 @@ from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.levenberg_marquardt import levenberg_marquardt
 from blockid.fitting.result import FitResult
 from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
-from blockid.models.sensitivities import chunkable, sensitivity_chunks
+from blockid.models.sensitivities import sensitivity_chunks
 
 __all__ = [
     "LARGE_JACOBIAN",
@@ -290,6 +290,15 @@ class _Problem:
                 errs.append(s.y[s.n_fit :] - sim)
         err = np.concatenate(errs)
         return float(np.mean(err**2)) if np.all(np.isfinite(err)) else np.inf
+
+
+def chunkable(model: Any) -> bool:
+    """Whether :func:`~blockid.models.sensitivities.sensitivity_chunks` can walk the
+    model in pieces: a chain of static and linear blocks (a dynamic block such as a
+    backlash starts from rest and is run over the whole record)."""
+    return isinstance(model, ChainModel) and all(
+        b.role in ("static", "linear") for b in model.blocks
+    )
 
 
 def _describe(model: ChainModel) -> dict[str, Any]:

@@ -10,14 +10,16 @@ records. The fitters (:mod:`blockid.fitting.simulation_error`) and the standard 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from blockid.errors import ParameterError
-from blockid.models.block import ChainModel
 
-__all__ = ["chain_sensitivities", "chunkable", "sensitivity_chunks"]
+if TYPE_CHECKING:  # the chain imports this module; a type, not an import circle
+    from blockid.models.block import ChainModel
+
+__all__ = ["chain_sensitivities", "sensitivity_chunks"]
 
 
 def chain_sensitivities(
@@ -97,15 +99,6 @@ def _initial_state(
     return x0, S0
 
 
-def chunkable(model: Any) -> bool:
-    """Whether :func:`sensitivity_chunks` can walk the model in pieces: a chain of
-    static and linear blocks (a dynamic block such as a backlash starts from rest and
-    is run over the whole record)."""
-    return isinstance(model, ChainModel) and all(
-        b.role in ("static", "linear") for b in model.blocks
-    )
-
-
 def sensitivity_chunks(
     model: ChainModel, u: Any, y_initial: Any = None, rows: int = 1 << 16
 ) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
@@ -115,9 +108,11 @@ def sensitivity_chunks(
     same values as the whole-record function, holding one piece at a time. A linear
     block continues from its last ``max_lag`` inputs and outputs (and their
     sensitivities) of the previous piece, which is exactly the recursion's state; a
-    static block needs no state. Only for :func:`chunkable` models.
+    static block needs no state. Only for a chain of static and linear blocks
+    (:func:`blockid.fitting.simulation_error.chunkable`).
     """
-    if not chunkable(model):
+    blocks = getattr(model, "blocks", None)
+    if blocks is None or not all(b.role in ("static", "linear") for b in blocks):
         raise ParameterError("sensitivity_chunks needs a chain of static and linear blocks")
     u_arr, _ = model._check_signals(u)
     signal = u_arr[:, 0] - model.input_offset
