@@ -380,3 +380,25 @@ def test_a_boolean_flag_and_its_negation_reach_the_command():
     assert runner.invoke(app, ["--no-normalize"]).output == "False None\n"
     assert runner.invoke(app, ["--normalize", "--max-nfev", "7"]).output == "True '7'\n"
     assert runner.invoke(app, []).output == "None None\n"
+
+
+def test_the_docs_flag_table_has_a_row_for_every_generated_flag_and_no_other():
+    """docs/cli.md's table of estimator flags names every flag the registry generates,
+    and no flag the registry does not have (a removed or renamed option leaves no stale
+    row behind)."""
+    import re
+    from pathlib import Path
+
+    from blockid.fitting.registry import option_flag
+
+    doc = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
+    start = doc.index("| flag | meaning |")
+    rows = doc[start : doc.index("\n\n", start)].splitlines()[2:]
+    documented = set()
+    for row in rows:
+        first = re.match(r"^\|(.*?)(?<!\\)\|", row).group(1)
+        documented |= {f.removeprefix("--no-") for f in re.findall(r"--[a-z0-9-]+", first)}
+    documented = {f if f.startswith("--") else f"--{f}" for f in documented}
+    generated = {option_flag(o.name) for o in cli_options()}
+    assert generated - documented == set(), "flags without a row in docs/cli.md"
+    assert documented - generated == set(), "rows in docs/cli.md for flags that do not exist"
