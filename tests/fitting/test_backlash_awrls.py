@@ -190,14 +190,28 @@ def test_repeated_passes_that_do_not_settle_are_reported():
     ("kwargs", "error", "match"),
     [
         (dict(nk=0), ParameterError, "nk=0 must be a whole number >= 1"),
-        (dict(eps1=0.0), ParameterError, "eps1 must be a positive"),
-        (dict(passes=0), ParameterError, "passes=0"),
+        (dict(eps1=-1.0), ParameterError, "eps1 must be >= 0"),
+        (dict(eps2=0.0), ParameterError, "eps2 must be > 0"),
+        (dict(passes=0), ParameterError, "passes must be a whole number >= 1"),
         (dict(initial_parameters=[0.1, 0.2]), ParameterError, "6 finite values"),
     ],
 )
 def test_bad_settings_name_the_parameter(kwargs, error, match):
     with pytest.raises(error, match=match):
         fit_backlash_aw_rls(_data(_levels(200)), **kwargs)
+
+
+def test_eps1_zero_is_allowed_as_its_declaration_and_the_maths_say():
+    """lambda = eps1 s + eps2 stays positive with eps1 = 0 (eps2 > 0): the registry, the
+    ARX AW-RLS and this fitter now agree (it refused eps1 = 0, which fit_model passed on:
+    issue 19). Whether the recursion then converges is the data's matter: the fit may
+    still be refused, by its convergence check, never for the setting."""
+    try:
+        fit = fit_backlash_aw_rls(_data(_levels(2000), snr_db=40), eps1=0.0)
+    except EstimationError as exc:
+        assert "eps1" not in str(exc) and "did not converge" in str(exc)
+    else:
+        assert fit.settings["eps1"] == 0.0
 
 
 def test_needs_one_input_and_one_output():

@@ -265,9 +265,9 @@ def test_single_pass_is_not_checked_for_convergence_but_for_the_model():
     [
         ("narx", {}, ParameterError, "unknown structure 'narx'"),
         ("wiener", dict(r2=1), ParameterError, "r2=1 must be a whole number >= 2"),
-        ("hammerstein", dict(r1=0), ParameterError, "r1=0"),
-        ("arx", dict(passes=0), ParameterError, "passes=0"),
-        ("arx", dict(tol=-1.0), ParameterError, "tol must be a positive"),
+        ("hammerstein", dict(r1=0), ParameterError, "r1 must be a whole number >= 1"),
+        ("arx", dict(passes=0), ParameterError, "passes must be a whole number >= 1"),
+        ("arx", dict(tol=-1.0), ParameterError, "tol must be > 0"),
         ("arx", dict(forgetting="0.98:x"), ParameterError, "cannot read forgetting"),
         ("arx", dict(initial_parameters=[1.0]), ParameterError, "finite values"),
         ("hammerstein-wiener", dict(nk=200), OrderError, "looks back"),

@@ -282,3 +282,46 @@ def test_count_refuses_text_that_is_not_a_whole_number_with_its_message():
 def test_an_undeclared_option_kind_is_an_internal_error_naming_it():
     with pytest.raises(AssertionError, match=r"^unknown option kind 'nope'$"):
         _convert("nope", 1)
+
+
+#: Ranges checked outside the registry on purpose, each a minimum of its own (not the
+#: option's range restated): orders a structure needs (a backlash needs a delay; every
+#: structure with an input block at least one input coefficient), key-term RLS needing a
+#: nonlinear output block (r2 >= 2), and a block's or a model's own constructor whose
+#: argument only shares a name with an option (``degree`` of a polynomial block).
+_OWN_MINIMA = {
+    ("fitting/backlash.py", "na"), ("fitting/backlash.py", "nb"), ("fitting/backlash.py", "nk"),
+    ("fitting/key_term.py", "na"), ("fitting/key_term.py", "nb"), ("fitting/key_term.py", "nk"),
+    ("fitting/key_term.py", "r2"), ("fitting/online.py", "na"), ("fitting/online.py", "nb"),
+    ("fitting/online.py", "nk"), ("fitting/online.py", "r2"), ("fitting/initial.py", "r2"),
+    ("blocks/polynomial.py", "degree"), ("models/state_space.py", "degree"),
+    ("fitting/feedback.py", "feedback_block"), ("fitting/recursive.py", "initial_parameters"),
+}  # fmt: skip
+
+
+def test_no_fitter_restates_an_options_range():
+    """Each option's range is written once, in its declaration (``OPTIONS``); a fitter
+    called directly checks its arguments with ``checked(name, value)``, never with a range
+    of its own. Seen failing on the contradictions issue 19 found: the backlash AW-RLS
+    refused ``eps1 = 0``, which the registry and the ARX AW-RLS allow (lambda = eps1 s +
+    eps2 > 0), and the simulation-error fit allowed ``tail_fraction`` up to 1, the registry
+    up to 0.9."""
+    import re
+    from pathlib import Path
+
+    import blockid
+
+    src = Path(blockid.__file__).parent
+    found = set()
+    for path in src.rglob("*.py"):
+        rel = path.relative_to(src).as_posix()
+        if rel == "fitting/registry.py":
+            continue
+        text = path.read_text()
+        for name in OPTIONS:
+            pattern = (
+                rf'["\']{name}(=\{{[^}}]*\}})? must be|(int_at_least|positive_number)\("{name}"'
+            )
+            if re.search(pattern, text):
+                found.add((rel, name))
+    assert found - _OWN_MINIMA == set(), sorted(found - _OWN_MINIMA)

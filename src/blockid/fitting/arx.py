@@ -45,6 +45,7 @@ from blockid.estimators import (
 )
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.evaluation.metrics import metrics_by_output
+from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
 
@@ -342,8 +343,7 @@ def fit_arx(
         raise ParameterError(
             f"unknown method {method!r} for ARX; choose one of {', '.join(ARX_METHODS)}"
         )
-    if int(passes) != passes or passes < 1:
-        raise ParameterError(f"passes={passes!r} must be a whole number >= 1")
+    passes = checked("passes", passes)  # the options' one declaration
     schedule = ForgettingSchedule.parse(forgetting)  # once, not per output and chunk
     u_off = y_off = None
     if center:

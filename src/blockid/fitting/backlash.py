@@ -47,8 +47,8 @@ from blockid.fitting.recursive import (
     int_at_least,
     largest_lag,
     normalised_signals,
-    positive_number,
 )
+from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.models.block import BacklashModel
 
@@ -320,11 +320,10 @@ def fit_backlash_aw_rls(
     na = int_at_least("na", na, 0)
     nb = int_at_least("nb", nb, 1)
     nk = int_at_least("nk", nk, 1)
-    passes = int_at_least("passes", passes, 1)
-    tol = positive_number("tol", tol)
-    eps1 = positive_number("eps1", eps1)
-    eps2 = positive_number("eps2", eps2)
-    mu = positive_number("initial_covariance", initial_covariance)
+    # ranges from the options' one declaration (eps1 = 0 is allowed: lambda = eps2 > 0)
+    passes, tol = checked("passes", passes), checked("tol", tol)
+    eps1, eps2 = checked("eps1", eps1), checked("eps2", eps2)
+    mu = checked("initial_covariance", initial_covariance)
     data.check_orders(
         largest_lag(na, nb, nk),
         len(_names(na, nb)),

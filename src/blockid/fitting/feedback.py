@@ -50,6 +50,7 @@ from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import BlockidError, EstimationError, ParameterError
 from blockid.fitting.checks import simulation_mse
 from blockid.fitting.initial import _lagged, _least_squares, _stabilise
+from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.simulation_error import refine
 from blockid.models.feedback import LinearFeedback
@@ -293,8 +294,7 @@ def fit_feedback(
     >>> np.allclose(fit.model.free_parameters(), plant.free_parameters())
     True
     """
-    if isinstance(r, bool) or not isinstance(r, int | np.integer) or r < 1:
-        raise ParameterError(f"r must be a whole number >= 1, got {r!r}", parameter="r")
+    r = checked("r", r)  # the options' one declaration
     if feedback_block is not None and getattr(feedback_block, "role", None) != "static":
         raise ParameterError(
             f"feedback_block must be a static block (dead-zone, saturation, "

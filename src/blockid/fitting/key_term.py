@@ -64,9 +64,8 @@ from blockid.fitting.recursive import (
     int_at_least,
     largest_lag,
     normalised_signals,
-    positive_number,
 )
-from blockid.fitting.registry import get_structure
+from blockid.fitting.registry import checked, get_structure
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
 from blockid.models.block import BlockModel
@@ -362,11 +361,11 @@ def fit_key_term_rls(
     na = int_at_least("na", na, 0)
     nb = int_at_least("nb", nb, 1)
     nk = int_at_least("nk", nk, 0)
-    r1 = int_at_least("r1", r1, 1) if has_in else 0
+    r1 = checked("r1", r1) if has_in else 0
+    # the method's own minimum: key-term separation needs a nonlinear output block
     r2 = int_at_least("r2", r2, 2) if has_out else 1
-    passes = int_at_least("passes", passes, 1)
-    tol = positive_number("tol", tol)
-    mu = positive_number("initial_covariance", initial_covariance)
+    passes, tol = checked("passes", passes), checked("tol", tol)  # one declaration
+    mu = checked("initial_covariance", initial_covariance)
     n = len(_layout(structure, na, nb, r1, r2))
     data.check_orders(
         largest_lag(na, nb, nk), n, what=f"key-term RLS {structure} na={na}, nb={nb}, nk={nk}"

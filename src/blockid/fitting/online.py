@@ -85,6 +85,7 @@ from blockid.fitting.recursive import (
     largest_lag,
     positive_number,
 )
+from blockid.fitting.registry import checked
 from blockid.models.arx import ARX
 
 __all__ = ["ONLINE_OPTIONS", "OnlineEstimator", "online_estimator"]
@@ -557,9 +558,9 @@ class _OnlineKeyTerm(_PaperOnline):
         na = int_at_least("na", opts["na"], 0)
         nb = int_at_least("nb", opts["nb"], 1)
         nk = int_at_least("nk", opts["nk"], 0)
-        r1 = int_at_least("r1", opts["r1"], 1) if has_in else 0
-        r2 = int_at_least("r2", opts["r2"], 2) if has_out else 1
-        mu = positive_number("initial_covariance", opts["initial_covariance"])
+        r1 = checked("r1", opts["r1"]) if has_in else 0
+        r2 = int_at_least("r2", opts["r2"], 2) if has_out else 1  # key-term's own minimum
+        mu = checked("initial_covariance", opts["initial_covariance"])
         schedule = ForgettingSchedule.parse(opts["forgetting"])
         signals = _signals(scales)
         algorithm = KeyTermRLS(structure, (na, nb, nk, r1, r2), schedule, mu, signals)
@@ -668,8 +669,8 @@ class _OnlineBacklash(_PaperOnline):
         na = int_at_least("na", opts["na"], 0)
         nb = int_at_least("nb", opts["nb"], 1)
         nk = int_at_least("nk", opts["nk"], 1)
-        eps = (positive_number("eps1", opts["eps1"]), positive_number("eps2", opts["eps2"]))
-        mu = positive_number("initial_covariance", opts["initial_covariance"])
+        eps = (checked("eps1", opts["eps1"]), checked("eps2", opts["eps2"]))
+        mu = checked("initial_covariance", opts["initial_covariance"])
         signals = _signals(scales)
         algorithm = BacklashAWRLS((na, nb, nk), eps, signals)
         self.su, self.sy = signals.u_map[1], signals.y_map[1]

@@ -58,6 +58,7 @@ __all__ = [
     "Option",
     "Structure",
     "check_compared",
+    "checked",
     "get_structure",
     "option_flag",
     "parse_orders",
@@ -474,6 +475,20 @@ OPTIONS: dict[str, Option] = _options(
     Option("xtol", "real", "Simulation-error fit: step tolerance.", low=0.0, open_low=True),
     Option("gtol", "real", "Simulation-error fit: gradient tolerance.", low=0.0, open_low=True),
 )
+
+
+def checked(name: str, value: Any) -> Any:
+    """``value`` of option ``name`` converted and checked against its one declaration in
+    :data:`OPTIONS` (type, range, open or closed ends), for a fitter called directly from
+    Python: the same check and message as through :func:`resolve_options`, never a second
+    range written in the fitter. None stays None.
+
+    >>> checked("margin", 0.5)
+    0.5
+    >>> checked("eps1", 0.0)
+    0.0
+    """
+    return OPTIONS[name].convert(value)
 
 
 def option_flag(name: str) -> str:

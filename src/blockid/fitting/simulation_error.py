@@ -81,6 +81,7 @@ from blockid.errors import BlockidError, DataError, EstimationError, ParameterEr
 from blockid.fitting.checks import STABILITY_MARGIN, check_model, simulation_mse
 from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.levenberg_marquardt import levenberg_marquardt
+from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
 from blockid.models.sensitivities import sensitivity_chunks
@@ -383,11 +384,8 @@ def refine(
             f"refinement on simulation error works on block-oriented models, got "
             f"{type(model).__name__}; fit an ARX model with method batch instead"
         )
-    if not 0.0 <= float(tail_fraction) < 1.0:
-        raise ParameterError(f"tail_fraction must be in [0, 1), got {tail_fraction!r}")
-    for name, value in (("max_nfev", max_nfev), ("patience", patience)):
-        if int(value) != value or value < 1:
-            raise ParameterError(f"{name} must be a whole number >= 1, got {value!r}")
+    tail_fraction = checked("tail_fraction", tail_fraction)  # the options' one declaration
+    max_nfev, patience = checked("max_nfev", max_nfev), checked("patience", patience)
     if tuple(data.inputs) != model.inputs or tuple(data.outputs) != model.outputs:
         raise DataError(
             f"the model maps {list(model.inputs)} to {list(model.outputs)} but the data have "

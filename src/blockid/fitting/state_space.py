@@ -63,6 +63,7 @@ from blockid.errors import DataError, EstimationError, OrderError, ParameterErro
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.checks import STABILITY_MARGIN
 from blockid.fitting.levenberg_marquardt import levenberg_marquardt
+from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
 
@@ -647,10 +648,7 @@ def fit_polynomial_state_space(
     max_nfev, ftol, xtol, gtol
         Of each refinement (the linear start's and the nonlinear one's).
     """
-    if not 1 <= degree <= 5:
-        raise ParameterError(f"degree must be from 1 to 5, got {degree}", parameter="degree")
-    if not margin >= 0:
-        raise ParameterError(f"margin must be >= 0, got {margin}", parameter="margin")
+    degree, margin = checked("degree", degree), checked("margin", margin)  # one declaration
     t0 = time.perf_counter()
     linear = fit_state_space(
         data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
