@@ -234,3 +234,15 @@ def test_aw_rls_estimator_gets_both_weights():
     low = fit_arx(noisy, method="aw-rls", eps2=0.1).model.parameter_vector(0)
     high = fit_arx(noisy, method="aw-rls", eps2=5.0).model.parameter_vector(0)
     assert np.max(np.abs(low - high)) > 1e-6
+
+
+def test_the_aw_rls_takes_the_initial_covariance_it_is_given():
+    """A tiny P(0) keeps AW-RLS near its start theta(0) = 0.01 over a short record; the
+    default (1e5) learns the plant's b = 1 (mutation run 3: the given value was
+    dropped)."""
+    data = Dataset.from_arrays(*_arx_data(n=60), ["u"], ["y"])
+    learned = fit_arx(data, 1, 1, 1, method="aw-rls", max_mse_ratio=None)
+    held = fit_arx(data, 1, 1, 1, method="aw-rls", initial_covariance=1e-6, max_mse_ratio=None)
+    b_learned = np.asarray(learned.model.b["y"]["u"])
+    b_held = np.asarray(held.model.b["y"]["u"])
+    assert np.abs(b_held - 0.01).max() < 0.005 and np.abs(b_learned - 1.0).max() < 0.05

@@ -190,6 +190,7 @@ def test_repeated_passes_that_do_not_settle_are_reported():
     ("kwargs", "error", "match"),
     [
         (dict(nk=0), ParameterError, "nk=0 must be a whole number >= 1"),
+        (dict(nb=0), ParameterError, "nb=0 must be a whole number >= 1"),
         (dict(eps1=-1.0), ParameterError, "eps1 must be >= 0"),
         (dict(eps2=0.0), ParameterError, "eps2 must be > 0"),
         (dict(passes=0), ParameterError, "passes must be a whole number >= 1"),

@@ -79,6 +79,10 @@ def test_orders_the_data_cannot_hold_are_refused_before_any_work():
         assert time.perf_counter() - t0 < 1.0
     with pytest.raises(OrderError, match="nx=400"):
         fit_model(data, "state-space", nx=400)
+    # every coefficient counts, na's and nb's: 150 + 149 on 300 samples of lag 150 leave
+    # 150 regression rows for 299 parameters (mutation run 3: nb left out of the count)
+    with pytest.raises(OrderError, match="has 299 parameters and needs at least 299"):
+        fit_model(data, "arx", na=150, nb=149, nk=1)
 
 
 # ---------------------------------------------------- found by mutation testing (docs/testing.md)
