@@ -132,3 +132,11 @@ def test_network_option_that_does_not_fit_is_named_with_the_subsystem_options():
         match=r"^subsystem S1: an option value does not fit \(na=1 nb=1 nk=1 method=rls\): ",
     ):
         fit_network(_network_data(), [SubsystemSpec("S1", ["u"], ["v"], "arx", None, opts)])
+
+
+def test_a_block_per_channel_in_a_subsystem_string_keeps_its_channel():
+    """``input-block=v2=polynomial`` splits at the first ``=`` (the option's name), so the
+    value keeps its channel (mutation run 3: a split at the last gave the key
+    ``input-block=v2``)."""
+    s = parse_subsystem("S3: v1,v2 -> y1,y2 | block-state-space input-block=v2=polynomial:degree=3")
+    assert s.options == {"input_block": "v2=polynomial:degree=3"}

@@ -398,6 +398,8 @@ def _dataset_siso(u, y):
         ("arx", "rls", ARX(["u"], ["y"], 2, 2, 1, a={"y": {"y": [-1.2, 0.35]}},
                            b={"y": {"u": [1.0, 0.4]}}), {"na": 3, "nb": 1}),
         ("arx", "rls", ARX(["u"], ["y"], 2, 2, 1), {"na": 1}),
+        ("arx", "rls", ARX(["u"], ["y"], 2, 2, 1), {"nb": 1}),
+        ("arx", "rls", ARX(["u"], ["y"], 2, 2, 1), {"nk": 2}),
         ("hammerstein-wiener", "key-term-rls", PLANTS["hammerstein-wiener"], {"nk": 2}),
         ("hammerstein-wiener", "key-term-rls", PLANTS["hammerstein-wiener"], {"r2": 2}),
     ],
@@ -410,6 +412,13 @@ def test_orders_given_beside_a_starting_model_must_be_its_own(structure, method,
         online_estimator(structure, method, {**given, "initial": start}, ["u"], ["y"])
     own = {k: getattr(start, k) for k in ("na", "nb", "nk")}
     online_estimator(structure, method, {**own, "initial": start}, ["u"], ["y"])  # its own: fine
+    # none given: every order is the starting model's own (mutation run 3: nb, nk fell
+    # back to the defaults, which then differed from the model's)
+    online_estimator(structure, method, {"initial": start}, ["u"], ["y"])
+    if structure == "arx":  # a delay that is not the default's
+        delayed = ARX(["u"], ["y"], 2, 2, 3)
+        est = online_estimator(structure, method, {"initial": delayed}, ["u"], ["y"])
+        assert np.all(np.asarray(est.template.nk) == 3)
 
 
 # ---------------------------------------------------- found by mutation testing (docs/testing.md)

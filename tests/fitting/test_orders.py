@@ -164,6 +164,9 @@ def test_noisy_data_without_a_pass_fall_back_to_the_knee():
     assert loose.percent.sum() < ev.percent.sum()
     # ...and the estimated allowance (the default) finds a passing order
     assert false_nearest_neighbours(data, max_na=3, max_nb=3, max_nk=2, threshold=0.1).passed
+    # a pass mark of exactly 0 is allowed (only an order with no false neighbour passes)
+    strict = false_nearest_neighbours(data, max_na=3, max_nb=3, max_nk=2, threshold=0.0)
+    assert strict.pass_mark == pytest.approx(strict.percent.min()) or strict.pass_mark == 0.0
 
 
 @pytest.mark.parametrize(
