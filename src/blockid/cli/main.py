@@ -176,8 +176,18 @@ app.add_typer(
 app.command("example-data", short_help=SHORT_HELP["example-data"])(examples.example_data)
 
 
+def _terminated(signum: int, frame: Any) -> None:
+    """SIGTERM (a job killed, a CI step timed out) ends the command as Ctrl-C does: by an
+    exception, so that open ``with`` blocks close (identify's worker processes are shut
+    down and its shared memory freed; without this they outlived the command)."""
+    raise SystemExit(128 + signum)
+
+
 def main() -> None:
     """Console-script entry point."""
+    import signal
+
+    signal.signal(signal.SIGTERM, _terminated)
     app()
 
 
