@@ -2,6 +2,7 @@
 conventional linear model, and the actuator parameters are recovered."""
 
 import json
+from functools import cache
 
 import pytest
 from typer.testing import CliRunner
@@ -10,12 +11,20 @@ from blockid.cli.main import app
 from blockid.workflows.reproduce_windtunnel import reproduce_windtunnel
 
 DEFAULT = "default (LS, simulation error, LS)"
+
+
+@cache
+def _reproduction(seed):
+    """One reproduction per seed for the tests of this file (each takes seconds)."""
+    return reproduce_windtunnel(seed=seed)
+
+
 BLOCK_S3 = "S3 block model (LS, simulation error, block state space)"
 
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_block_oriented_beats_conventional_and_recovers_actuators(seed):
-    result = reproduce_windtunnel(seed=seed)
+    result = _reproduction(seed)
     rows = {(r["condition"], r["model"], r["estimator"]): r for r in result.table}
     for condition in ("110kPa", "130kPa"):
         conv = rows[(condition, "conventional", "least squares")]
@@ -33,7 +42,7 @@ def test_block_oriented_beats_conventional_and_recovers_actuators(seed):
 
 
 def test_failed_paper_estimator_is_shown_not_hidden():
-    result = reproduce_windtunnel(seed=0)
+    result = _reproduction(0)
     paper_rows = [r for r in result.table if r["estimator"].startswith("paper")]
     assert len(paper_rows) == 2
     for row in paper_rows:  # either a full row of numbers or the reason it failed
