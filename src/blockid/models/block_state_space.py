@@ -51,7 +51,7 @@ import numpy as np
 
 from blockid._kernels.state_space import channel_response, pnlss_jacobian
 from blockid.blocks.base import Block, StaticBlock, block_from_dict
-from blockid.errors import DataError, ModelFileError, OrderError
+from blockid.errors import ModelFileError, OrderError
 from blockid.models.base import Model, excursion
 from blockid.models.state_space import ForwardSensitivities, PolynomialStateSpace, StateSpace
 
@@ -368,20 +368,6 @@ class BlockStateSpace(ForwardSensitivities, Model):
         return rows
 
     # ------------------------------------------------------------------ signals
-    def normalised_input(self, u: Any) -> np.ndarray:
-        u, _ = self._check_signals(u)
-        return np.ascontiguousarray((u - self.input_offset) / self.input_scale)
-
-    def normalised_output(self, y: Any) -> np.ndarray:
-        y = np.asarray(y, dtype=float)
-        y = y.reshape(-1, 1) if y.ndim == 1 else y
-        if y.ndim != 2 or y.shape[1] != len(self.outputs):
-            raise DataError(
-                f"the model has {len(self.outputs)} output(s) {list(self.outputs)} but got an "
-                f"output array of shape {np.shape(y)}"
-            )
-        return (y - self.output_offset) / self.output_scale
-
     @staticmethod
     def _edge(block: StaticBlock, s: np.ndarray, seen: np.ndarray) -> np.ndarray | None:
         """``s`` clipped to the range ``seen`` for a block that extrapolates unreliably

@@ -116,10 +116,25 @@ class ForwardSensitivities:
     a piece of a record and ``∂y_n/∂[θ, x(0)]``, rows ``k * ny + i``, the carried
     state and sensitivities updated in place), ``_sensitivity_start(x0)`` (what to
     carry from ``x0``), ``linear_in_state`` and the usual ``nx``, ``outputs``,
-    ``free_parameters``, ``normalised_input``/``normalised_output``, ``output_scale``,
-    ``output_offset`` and ``max_lag``. :class:`PolynomialStateSpace` and
+    ``free_parameters``, ``input_offset``/``input_scale``, ``output_offset``/
+    ``output_scale`` and ``max_lag``; the signals' normalisation is here too.
+    :class:`PolynomialStateSpace` and
     :class:`~blockid.models.block_state_space.BlockStateSpace` are such models.
     """
+
+    def normalised_input(self, u: Any) -> np.ndarray:
+        u, _ = self._check_signals(u)
+        return np.ascontiguousarray((u - self.input_offset) / self.input_scale)
+
+    def normalised_output(self, y: Any) -> np.ndarray:
+        y = np.asarray(y, dtype=float)
+        y = y.reshape(-1, 1) if y.ndim == 1 else y
+        if y.ndim != 2 or y.shape[1] != len(self.outputs):
+            raise DataError(
+                f"the model has {len(self.outputs)} output(s) {list(self.outputs)} but got an "
+                f"output array of shape {np.shape(y)}"
+            )
+        return (y - self.output_offset) / self.output_scale
 
     def initial_state(self, u: Any, y_initial: Any) -> np.ndarray:
         """``x(0)`` fitted to the measured outputs ``y_initial`` (their number ``n``; the
@@ -451,20 +466,6 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
                 np.ascontiguousarray(self.lower), np.ascontiguousarray(self.upper))  # fmt: skip
 
     # ------------------------------------------------------------------ signals
-    def normalised_input(self, u: Any) -> np.ndarray:
-        u, _ = self._check_signals(u)
-        return np.ascontiguousarray((u - self.input_offset) / self.input_scale)
-
-    def normalised_output(self, y: Any) -> np.ndarray:
-        y = np.asarray(y, dtype=float)
-        y = y.reshape(-1, 1) if y.ndim == 1 else y
-        if y.ndim != 2 or y.shape[1] != len(self.outputs):
-            raise DataError(
-                f"the model has {len(self.outputs)} output(s) {list(self.outputs)} but got an "
-                f"output array of shape {np.shape(y)}"
-            )
-        return (y - self.output_offset) / self.output_scale
-
     def run(self, un: np.ndarray, x0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Free run on a normalised input from ``x0`` (default 0): normalised outputs
         (N, ny) and the state after the last sample."""

@@ -37,7 +37,16 @@ from blockid.fitting.network import SubsystemSpec, fit_network, subset
 
 __all__ = ["ESTIMATORS", "PAPER_TABLE", "WindTunnelReproduction", "reproduce_windtunnel"]
 
-#: Subsystem specifications of the two estimator sets.
+#: S1 and S2 by blockid's default estimators (least squares; simulation error).
+_DEFAULT_ACTUATORS = (
+    SubsystemSpec("S1", ["u1"], ["v1"], "arx", "batch", {"na": 1, "nb": 1, "nk": 1}),
+    SubsystemSpec(
+        "S2", ["u2"], ["v2"], "backlash", "simulation-error", {"na": 2, "nb": 1, "nk": 1}
+    ),
+)
+
+#: Subsystem specifications of the three estimator sets.
+
 ESTIMATORS: dict[str, list[SubsystemSpec]] = {
     "paper (RLS, AW-RLS, H-RLS)": [
         SubsystemSpec("S1", ["u1"], ["v1"], "arx", "rls", {"na": 1, "nb": 1, "nk": 1}),
@@ -59,10 +68,7 @@ ESTIMATORS: dict[str, list[SubsystemSpec]] = {
         ),
     ],
     "default (LS, simulation error, LS)": [
-        SubsystemSpec("S1", ["u1"], ["v1"], "arx", "batch", {"na": 1, "nb": 1, "nk": 1}),
-        SubsystemSpec(
-            "S2", ["u2"], ["v2"], "backlash", "simulation-error", {"na": 2, "nb": 1, "nk": 1}
-        ),
+        *_DEFAULT_ACTUATORS,
         SubsystemSpec(
             "S3",
             ["v1", "v2"],
@@ -75,10 +81,7 @@ ESTIMATORS: dict[str, list[SubsystemSpec]] = {
     # S3 as a block model of two inputs and two outputs: a cubic per input around a
     # linear state space whose order the data choose (issue 18)
     "S3 block model (LS, simulation error, block state space)": [
-        SubsystemSpec("S1", ["u1"], ["v1"], "arx", "batch", {"na": 1, "nb": 1, "nk": 1}),
-        SubsystemSpec(
-            "S2", ["u2"], ["v2"], "backlash", "simulation-error", {"na": 2, "nb": 1, "nk": 1}
-        ),
+        *_DEFAULT_ACTUATORS,
         SubsystemSpec(
             "S3",
             ["v1", "v2"],
