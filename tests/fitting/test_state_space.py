@@ -241,3 +241,68 @@ def test_the_refinement_rejects_a_start_that_explodes_and_says_so():
     assert r is problem.penalty
     with pytest.raises(EstimationError, match="unstable or its simulation explodes"):
         refine_state_space(wild, data, initial_states=[np.zeros(wild.nx)])
+
+
+@pytest.mark.parametrize("helper", [False, True])
+def test_the_normal_equations_are_the_dense_jacobian_s_with_or_without_the_helper_thread(
+    helper, monkeypatch
+):
+    """``J^T J`` (the upper triangle by a rank-k update, mirrored) and ``-J^T r``, summed
+    over pieces of two experiments, equal those of the whole Jacobian stacked at once;
+    the helper thread that adds the pieces changes nothing, bit for bit."""
+    from blockid.fitting import state_space as ss
+
+    plant = SYSTEMS["2 in, 2 out, 3 states"]
+    from blockid.data.dataset import Experiment
+
+    rec = [_record(plant, 700, seed=s).experiments[0] for s in (0, 1)]
+    data = Dataset(list(plant.inputs), list(plant.outputs), None,
+                   [Experiment(f"e{i}", r.u, r.y) for i, r in enumerate(rec)])  # fmt: skip
+    start = fit_polynomial_state_space(data, nx=3, degree=2, max_nfev=2).model
+    monkeypatch.setattr(ss, "CHUNK", 256)  # several pieces per experiment
+    sig = ss._normalised(data)
+    problem = ss._Problem(start, sig, feedthrough=True)
+    x0s = [np.full(3, 0.1), np.full(3, -0.2)]
+    theta = np.concatenate([start.free_parameters()[problem.free], *x0s])
+    with ss.helper_threads(helper):
+        H, g = problem.normal_equations(theta)
+    with ss.helper_threads(not helper):
+        H2, g2 = problem.normal_equations(theta)
+    assert np.array_equal(H, H2) and np.array_equal(g, g2)
+    # the reference: each experiment's whole Jacobian in one piece
+    nm, nx = problem.n_model, 3
+    kept = np.r_[np.flatnonzero(problem.free), problem.full.size + np.arange(nx)]
+    J_all = np.zeros((0, nm + 2 * nx))
+    r_all = np.zeros(0)
+    for e, (u, y, x0) in enumerate(zip(sig.u, sig.y, x0s, strict=True)):
+        out, J = start.jacobian_piece(u, *start._sensitivity_start(x0))
+        block = np.zeros((J.shape[0], nm + 2 * nx))
+        block[:, :nm] = J[:, kept[:nm]]
+        block[:, nm + e * nx : nm + (e + 1) * nx] = J[:, kept[nm:]]
+        J_all = np.vstack([J_all, block])
+        r_all = np.r_[r_all, (y - out).reshape(-1)]
+    assert np.allclose(H, J_all.T @ J_all, rtol=1e-10, atol=1e-9 * np.abs(H).max())
+    assert np.allclose(g, -J_all.T @ r_all, rtol=1e-10, atol=1e-9 * np.abs(g).max())
+    assert np.array_equal(H, H.T)
+
+
+def test_the_states_of_a_free_run_are_those_of_a_walk_sample_by_sample():
+    """``states`` (one run whose output is the state) against the state map applied one
+    sample at a time, from rest and from a given state."""
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 500)
+    model = fit_polynomial_state_space(data, nx=2, degree=3, max_nfev=3).model
+    u = data.experiments[0].u
+    un = model.normalised_input(u)
+    A, B, _, _, E, _, expo, lo, hi = model._arrays()
+    from blockid._kernels.state_space import monomials
+
+    for x0 in (None, np.array([0.3, -0.1])):
+        x = np.zeros(2) if x0 is None else x0.copy()
+        expected = np.empty((u.shape[0], 2))
+        zeta = np.empty(expo.shape[0])
+        for k in range(u.shape[0]):
+            expected[k] = x
+            monomials(np.r_[x, un[k]], expo, lo, hi, zeta)
+            x = A @ x + B @ un[k] + E @ zeta
+        assert np.allclose(model.states(u, x0), expected, rtol=1e-12, atol=1e-12)

@@ -129,7 +129,7 @@ def pnlss_simulate(A, B, C, D, E, F, expo, lo, hi, u, x, y):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def pnlss_jacobian(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J):
     """Free run and ``∂y/∂[θ, x(0)]`` over a piece of a record, carrying the state.
 
@@ -227,7 +227,7 @@ def pnlss_jacobian(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J):
                 S[i, p] = Sn[i, p]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def channel_response(A, B, C, D, chans, G, X, out):
     """Response of the linear system ``(A, B, C, D)`` to each column of ``G`` entering
     the input channel ``chans[q]``, carrying the states.

@@ -34,7 +34,12 @@ singular values (on a mildly nonlinear second-order plant: 0.9997, 0.986, 0.43 a
 initial state are refined together by Levenberg-Marquardt on the free-run simulation
 error (:mod:`blockid.fitting.levenberg_marquardt`), the Jacobian computed forward in
 time by a compiled kernel (:mod:`blockid._kernels.state_space`) and summed into
-``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole.
+``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole:
+its upper triangle by a symmetric rank-k update (half a matrix product's work), added
+in a helper thread while the kernel walks the next piece (:data:`helper_thread`: the
+same operations in the same order, so the same result; on the WH 2009 record, 100 000
+samples, a 5-state degree-2 model: 15.3 s -> 10.4 s for 8 evaluations,
+``docs/performance.md``).
 The parameters are unique only up to the state basis; the damping keeps the steps
 defined. A candidate with an eigenvalue of ``A`` outside the circle of radius
 ``1 - STABILITY_MARGIN``, or a non-finite or exploding run, is rejected (the damping
@@ -52,6 +57,8 @@ are the model's bounds (:class:`~blockid.models.state_space.PolynomialStateSpace
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -401,27 +408,104 @@ class _Problem:
         return r
 
     def normal_equations(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``J^T J`` and ``J^T r`` summed piece by piece. The walk of the Jacobian is
+        sequential in time; while it computes one piece a helper thread (when
+        :data:`helper_thread` allows) adds the previous one into ``J^T J``: the same
+        operations in the same order either way, so the result does not depend on it."""
         model, x0s = self.split(theta)
         assert model is not None, "the Jacobian is taken at accepted iterates only"
         n_exp, nm, nx = len(self.sig.u), self.n_model, self.nx
         kept = np.r_[np.flatnonzero(self.free), self.full.size + np.arange(nx)]
-        H = np.zeros((nm + nx * n_exp, nm + nx * n_exp))
-        g = np.zeros(nm + nx * n_exp)
-        cost = 0.0
-        for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
-            carried = model._sensitivity_start(x0)
-            cols = np.r_[np.arange(nm), nm + e * nx + np.arange(nx)]
-            for k0 in range(0, u.shape[0], CHUNK):
-                with np.errstate(all="ignore"):
-                    out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried)
-                J = J[:, kept]
-                r = (y[k0 : k0 + CHUNK] - out).reshape(-1)
-                cost += float(r @ r)
-                H[np.ix_(cols, cols)] += J.T @ J
-                g[cols] -= J.T @ r
+        sums = _NormalSums(nm + nx * n_exp)
+        with _PieceQueue(sums.add) as queue:
+            for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
+                carried = model._sensitivity_start(x0)
+                cols = np.r_[np.arange(nm), nm + e * nx + np.arange(nx)]
+                for k0 in range(0, u.shape[0], CHUNK):
+                    with np.errstate(all="ignore"):
+                        out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried)
+                    queue.put(J, kept, y[k0 : k0 + CHUNK] - out, cols)
+        H, g = sums.result()
         self.tracker.njev += 1
-        self.tracker.cost.append(cost / self.size)
+        self.tracker.cost.append(sums.cost / self.size)
         return H, g
+
+
+#: Whether the refinement may add the normal equations in a second thread while it walks
+#: the Jacobian (one core more; the results are the same). Identify's worker processes,
+#: which share the cores already, turn it off (:mod:`blockid.workflows.parallel`).
+helper_thread = True
+
+
+@contextmanager
+def helper_threads(allowed: bool) -> Iterator[None]:
+    """:data:`helper_thread` set to ``allowed`` inside the block (``jobs=1``: one core)."""
+    global helper_thread
+    before, helper_thread = helper_thread, bool(allowed)
+    try:
+        yield
+    finally:
+        helper_thread = before
+
+
+class _NormalSums:
+    """The upper triangle of ``J^T J`` (a symmetric rank-k update: half a product's
+    work), ``-J^T r`` and ``r^T r``, added piece after piece."""
+
+    def __init__(self, n: int) -> None:
+        self.upper = np.zeros((n, n), order="F")
+        self.g = np.zeros(n)
+        self.cost = 0.0
+
+    def add(self, J: np.ndarray, kept: np.ndarray, r: np.ndarray, cols: np.ndarray) -> None:
+        from scipy.linalg.blas import dsyrk
+
+        J = J[:, kept]
+        r = r.reshape(-1)
+        self.cost += float(r @ r)
+        # J is C-ordered, so J.T is a Fortran-ordered array: J.T (J.T)^T = J^T J, no copy
+        block = dsyrk(1.0, J.T, trans=0, lower=0)
+        if cols.size == self.g.size:
+            self.upper += block
+        else:
+            self.upper[np.ix_(cols, cols)] += block
+        self.g[cols] -= J.T @ r
+
+    def result(self) -> tuple[np.ndarray, np.ndarray]:
+        upper = np.triu(self.upper)
+        return upper + np.triu(upper, 1).T, self.g
+
+
+class _PieceQueue:
+    """Hands pieces to ``add`` in order: in one helper thread when :data:`helper_thread`
+    allows, at most two pieces waiting (memory: a few pieces), else at once."""
+
+    def __init__(self, add: Any) -> None:
+        self.add = add
+        self.pool: Any = None
+        self.waiting: list[Any] = []
+
+    def __enter__(self) -> _PieceQueue:
+        if helper_thread:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="blockid-sums")
+        return self
+
+    def put(self, *piece: Any) -> None:
+        if self.pool is None:
+            self.add(*piece)
+            return
+        self.waiting.append(self.pool.submit(self.add, *piece))
+        if len(self.waiting) > 2:
+            self.waiting.pop(0).result()
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.pool is not None:
+            for future in self.waiting:
+                if exc[0] is None:
+                    future.result()
+            self.pool.shutdown(wait=True, cancel_futures=exc[0] is not None)
 
 
 def refine_state_space(

@@ -488,22 +488,30 @@ def _orders_of(score: Score) -> tuple[int, int, int]:
 
 
 def _refit(
-    candidate: Candidate, data: Dataset, cv_rmse: float, n_init: int, notes: list[str]
+    candidate: Candidate,
+    data: Dataset,
+    cv_rmse: float,
+    n_init: int,
+    notes: list[str],
+    jobs: int = 1,
 ) -> Any:
     """The candidate fitted with its own options on all estimation data, and checked.
 
     A fit stopped by its evaluation limit whose free run on its own data is more than
     ``REFIT_SLACK`` times the candidate's cross-validated RMSE is fitted again with
     ``REFIT_MORE`` times the evaluations (the folds showed what the structure reaches;
-    a longer record can need more iterations to get there), and the better kept."""
+    a longer record can need more iterations to get there), and the better kept. With
+    ``jobs`` > 1 a state-space fit adds its normal equations in a second thread
+    (:data:`~blockid.fitting.state_space.helper_thread`; the same result)."""
     from blockid.evaluation.validate import evaluate
     from blockid.fitting.dispatch import fit_model
+    from blockid.fitting.state_space import helper_threads
     from blockid.workflows.parallel import _single_threaded
 
     def own_rmse(fit: Any) -> float:
         return _pooled(evaluate(fit.model, data, "simulation", initial_samples=n_init), data)[0]
 
-    with _single_threaded(), np.errstate(all="ignore"):
+    with _single_threaded(), helper_threads(jobs > 1), np.errstate(all="ignore"):
         fit = fit_model(data, candidate.structure, **candidate.options)
         nfev = candidate.options.get("max_nfev")
         stopped = "max_nfev" in str(fit.settings.get("stop_reason", ""))
@@ -626,7 +634,7 @@ def identify(
         if progress is not None:
             progress("refit", 0, 1, s.candidate.label)
         try:
-            fit = _refit(s.candidate, data, s.rmse, search.n_init, notes)
+            fit = _refit(s.candidate, data, s.rmse, search.n_init, notes, jobs)
         except BlockidError as exc:
             notes.append(f"{s.candidate.label} failed on all estimation data ({_reason(exc)}); "
                          "the next candidate was fitted instead")  # fmt: skip

@@ -106,6 +106,9 @@ def _start_worker(memory_name: str, data_meta: tuple[Any, ...]) -> None:
     _WORKER_MEMORY = shared_memory.SharedMemory(name=memory_name)
     _WORKER_DATA = _views(_WORKER_MEMORY.buf, data_meta)
     _single_threaded()  # for the life of the worker (the environment already says so)
+    from blockid.fitting import state_space
+
+    state_space.helper_thread = False  # the workers share the cores already
 
 
 def _call(fn: Callable[[Dataset, Any], Any], item: Any) -> Any:
@@ -195,7 +198,9 @@ class TaskRunner:
         """
         results: list[Any] = [None] * len(items)
         if self._pool is None:
-            with _single_threaded():
+            from blockid.fitting.state_space import helper_threads
+
+            with _single_threaded(), helper_threads(False):
                 for i, item in enumerate(items):
                     if deadline is not None and time.monotonic() > deadline:
                         break
