@@ -12,7 +12,7 @@ import json
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Any
 
 import typer
 from rich.console import Console
@@ -23,16 +23,6 @@ from blockid.fitting.registry import OPTIONS, option_flag
 
 __all__ = [
     "busy",
-    "DataPaths",
-    "ExperimentColumn",
-    "Force",
-    "Inputs",
-    "Json",
-    "Outputs",
-    "Quiet",
-    "SamplingTime",
-    "Seed",
-    "TimeColumn",
     "cli_errors",
     "error_line",
     "flag",
@@ -113,53 +103,6 @@ def cli_errors(fn: Callable[..., Any]) -> Callable[..., Any]:
             raise typer.Exit(code=130) from None
 
     return wrapper
-
-
-DataPaths = Annotated[
-    list[Path],
-    typer.Argument(metavar="DATA", help="Data file(s): .csv, .tsv, .txt, .parquet or .mat."),
-]
-Inputs = Annotated[
-    list[str],
-    typer.Option("--input", "-u", metavar="NAME", help="Input column; repeat for several inputs."),
-]
-Outputs = Annotated[
-    list[str],
-    typer.Option(
-        "--output", "-y", metavar="NAME", help="Output column; repeat for several outputs."
-    ),
-]
-SamplingTime = Annotated[
-    float | None,
-    typer.Option("--ts", metavar="SECONDS", help="Sampling time in seconds.", show_default=False),
-]
-TimeColumn = Annotated[
-    str | None,
-    typer.Option(
-        "--time-column", metavar="NAME", help="Column of sample times (sampling time inferred)."
-    ),
-]
-ExperimentColumn = Annotated[
-    str | None,
-    typer.Option(
-        "--experiment-column", metavar="NAME", help="Column labelling the experiment of each row."
-    ),
-]
-Force = Annotated[bool, typer.Option("--force", help="Replace an existing output file.")]
-Json = Annotated[bool, typer.Option("--json", help="Print one JSON document on stdout.")]
-#: ``--quiet`` of every command that shows progress (:func:`busy`, :func:`progress_bar`).
-Quiet = Annotated[
-    bool,
-    typer.Option(
-        "--quiet",
-        "-q",
-        help="No progress on stderr (there is none when stderr is not a terminal, nor "
-        "with --json).",
-    ),
-]
-Seed = Annotated[
-    int, typer.Option(metavar="N", help="Random seed: the same seed gives the same run.")
-]
 
 
 def progress_shown(quiet: bool) -> bool:

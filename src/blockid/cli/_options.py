@@ -17,6 +17,7 @@ from typing import Annotated, Any
 
 import typer
 
+from blockid.cli._flags import shared
 from blockid.fitting.registry import COMPARED_BY_DEFAULT, OPTIONS, STRUCTURES, Option, option_flag
 
 __all__ = [
@@ -109,37 +110,37 @@ DEFAULT_STRUCTURE = next(iter(STRUCTURES))
 
 Structure = Annotated[
     str,
-    typer.Option(
-        metavar="NAME",
-        help=f"Model structure: {', '.join(STRUCTURES)} (see below).",
-        show_default=True,
+    shared(
+        "structure", f"Model structure: {', '.join(STRUCTURES)} (see below).", show_default=True
     ),
 ]
 Method = Annotated[
     str | None,
-    typer.Option(
-        metavar="NAME",
-        help="Estimator, one of the structure's methods (see below); default: its first.",
+    shared(
+        "method",
+        "Estimator, one of the structure's methods (see below); default: its first.",
         show_default=False,
     ),
 ]
 
 
 #: The options ``compare`` and ``report`` share (the structures, their ranges, a method).
-EstimationRange = Annotated[str, typer.Option(metavar="START:STOP", help="Estimation samples.")]
-ValidationRange = Annotated[str, typer.Option(metavar="START:STOP", help="Validation samples.")]
+EstimationRange = Annotated[
+    str, shared("estimation", "Estimation samples (0-based, stop excluded).")
+]
+ValidationRange = Annotated[
+    str, shared("validation", "Validation samples (0-based, stop excluded).")
+]
 ComparedStructures = Annotated[
     str | None,
-    typer.Option(
-        metavar="NAME,NAME..",
-        help=f"Comma-separated structures to compare, of {', '.join(STRUCTURES)} "
+    shared(
+        "structures",
+        f"Comma-separated structures to compare, of {', '.join(STRUCTURES)} "
         f"(default: {', '.join(COMPARED_BY_DEFAULT)}).",
         show_default=False,
     ),
 ]
 SharedMethod = Annotated[
     str | None,
-    typer.Option(
-        metavar="NAME", help="Method for the structures that offer it (others: their default)."
-    ),
+    shared("method", "Method for the structures that offer it (others: their default)."),
 ]

@@ -10,18 +10,9 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import (
-    Force,
-    Json,
-    Quiet,
-    Seed,
-    busy,
-    cli_errors,
-    print_json,
-    refuse_to_overwrite,
-    stdout,
-)
+from blockid.cli._common import busy, cli_errors, print_json, refuse_to_overwrite, stdout
 from blockid.cli._data import check_arguments
+from blockid.cli._flags import FolderForce, Force, Json, Quiet, Seed, shared
 from blockid.cli._tables import print_electrohydraulic as _print_electrohydraulic
 from blockid.workflows.examples import EXAMPLES, check_example
 
@@ -35,17 +26,13 @@ reproduce_app = typer.Typer(
 
 FiguresDir = Annotated[
     Path | None,
-    typer.Option("--plot", metavar="DIR", help="Folder for the PNG figures.", show_default=False),
+    shared("plot", "Folder for the PNG figures.", show_default=False),
 ]
 #: ``--figures``, the flag's old name, kept (hidden) so that scripts do not break.
 OldFiguresDir = Annotated[Path | None, typer.Option("--figures", hidden=True)]
 #: What the spinner says while the papers' experiments run (demo and reproduce).
 _ELECTROHYDRAULIC = "paper B's experiment: simulating the arm, fitting 4 structures 2 ways"
 _WINDTUNNEL = "paper A's experiment: simulating the tunnel, fitting the networks"
-
-FolderForce = Annotated[
-    bool, typer.Option("--force", help="Write into a folder that is not empty (files replaced).")
-]
 
 
 def _folder(new: Path | None, old: Path | None, default: str, force: bool) -> Path:
@@ -69,15 +56,14 @@ def _folder(new: Path | None, old: Path | None, default: str, force: bool) -> Pa
 def demo(
     plot: Annotated[
         Path | None,
-        typer.Option(
-            "--plot",
-            metavar="DIR",
-            help="Folder for the data, models and figures [default: demo-output].",
+        shared(
+            "plot",
+            "Folder for the data, models and figures [default: demo-output].",
             show_default=False,
         ),
     ] = None,
     output_dir: Annotated[Path | None, typer.Option("--output-dir", hidden=True)] = None,
-    seed: Annotated[int, typer.Option(metavar="N", help="Random seed of the simulated plant.")] = 0,
+    seed: Seed = 0,
     force: FolderForce = False,
     quiet: Quiet = False,
     json_out: Json = False,
@@ -238,9 +224,7 @@ def _bandwidth(text: str) -> float | None:
 @cli_errors
 def example_data(
     name: Annotated[str, typer.Argument(metavar="NAME", help=f"One of: {', '.join(EXAMPLES)}.")],
-    out: Annotated[
-        Path, typer.Option("--out", "-o", metavar="FILE", help="File to write (.csv/.parquet).")
-    ],
+    out: Annotated[Path, shared("out", "File to write (.csv/.parquet).")],
     seed: Seed = 0,
     force: Force = False,
 ) -> None:

@@ -12,15 +12,9 @@ from typing import Annotated
 
 import typer
 
-from blockid.cli._common import (
-    Force,
-    Json,
-    cli_errors,
-    print_json,
-    refuse_to_overwrite,
-    stdout,
-)
+from blockid.cli._common import cli_errors, print_json, refuse_to_overwrite, stdout
 from blockid.cli._data import check_arguments
+from blockid.cli._flags import Force, Json, shared
 
 __all__ = ["export"]
 
@@ -44,7 +38,7 @@ def export(
     ] = "python",
     out: Annotated[
         Path | None,
-        typer.Option("--out", "-o", metavar="FILE", help="File to write (default: print it)."),
+        shared("out", "File to write (default: print it)."),
     ] = None,
     force: Force = False,
     json_out: Json = False,

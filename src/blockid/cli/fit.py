@@ -13,15 +13,6 @@ from typing import Annotated, Any
 import typer
 
 from blockid.cli._common import (
-    DataPaths,
-    ExperimentColumn,
-    Force,
-    Inputs,
-    Json,
-    Outputs,
-    Quiet,
-    SamplingTime,
-    TimeColumn,
     busy,
     cli_errors,
     metrics_table,
@@ -33,6 +24,21 @@ from blockid.cli._common import (
     stdout,
 )
 from blockid.cli._data import check_arguments, load_data
+from blockid.cli._flags import (
+    DataPaths,
+    Estimation,
+    ExperimentColumn,
+    Force,
+    Inputs,
+    Json,
+    ModelOut,
+    Outputs,
+    PlotDir,
+    Quiet,
+    ReportFile,
+    SamplingTime,
+    TimeColumn,
+)
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     ComparedStructures,
@@ -45,23 +51,9 @@ from blockid.cli._options import (
     structures_help,
     with_fit_options,
 )
-from blockid.cli.report import ReportFile, write_report_option
+from blockid.cli.report import write_report_option
 
 __all__ = ["compare", "fit", "fit_network"]
-
-Estimation = Annotated[
-    str | None,
-    typer.Option(
-        metavar="START:STOP", help="Estimation samples (0-based, stop excluded; default: all)."
-    ),
-]
-ModelOut = Annotated[
-    Path | None, typer.Option("--out", "-o", metavar="FILE", help="Model file to write.")
-]
-PlotDir = Annotated[
-    Path | None,
-    typer.Option("--plot", metavar="DIR", help="Write PNG figures to this folder."),
-]
 
 
 def _check_output(out: Path | None, json_out: bool, force: bool) -> None:

@@ -15,21 +15,9 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import (
-    Force,
-    Inputs,
-    Json,
-    Outputs,
-    Quiet,
-    SamplingTime,
-    TimeColumn,
-    cli_errors,
-    print_json,
-    progress_bar,
-    stderr,
-    stdout,
-)
+from blockid.cli._common import cli_errors, print_json, progress_bar, stderr, stdout
 from blockid.cli._data import check_arguments
+from blockid.cli._flags import Force, Inputs, Json, Outputs, Quiet, SamplingTime, TimeColumn, shared
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     Method,
@@ -51,7 +39,7 @@ Patterns = Annotated[
 ]
 OutDir = Annotated[
     Path,
-    typer.Option("--out", "-o", metavar="DIR", help="Folder of the model files and summary."),
+    shared("out", "Folder of the model files and summary.", metavar="DIR"),
 ]
 Workers = Annotated[
     int | None,

@@ -13,15 +13,6 @@ from typing import Annotated, Any
 import typer
 
 from blockid.cli._common import (
-    DataPaths,
-    ExperimentColumn,
-    Force,
-    Inputs,
-    Json,
-    Outputs,
-    Quiet,
-    SamplingTime,
-    TimeColumn,
     busy,
     cli_errors,
     metrics_table,
@@ -33,7 +24,22 @@ from blockid.cli._common import (
     stdout,
 )
 from blockid.cli._data import check_arguments, load_data, select_range
-from blockid.cli.report import ReportFile, write_report_option
+from blockid.cli._flags import (
+    DataPaths,
+    ExperimentColumn,
+    Force,
+    Inputs,
+    Json,
+    ModelOut,
+    Outputs,
+    PlotDir,
+    Quiet,
+    ReportFile,
+    SamplingTime,
+    TimeColumn,
+    shared,
+)
+from blockid.cli.report import write_report_option
 
 __all__ = ["identify"]
 
@@ -70,13 +76,11 @@ def identify(
     outputs: Outputs,
     estimation: Annotated[
         str | None,
-        typer.Option(
-            metavar="START:STOP", help="Estimation samples: the only ones used to choose."
-        ),
+        shared("estimation", "Estimation samples: the only ones used to choose (default: all)."),
     ] = None,
     validation: Annotated[
         str | None,
-        typer.Option(metavar="START:STOP", help="Validation samples of DATA, reported on."),
+        shared("validation", "Validation samples of DATA, reported on."),
     ] = None,
     validation_data: Annotated[
         list[Path] | None,
@@ -84,7 +88,7 @@ def identify(
     ] = None,
     structures: Annotated[
         str | None,
-        typer.Option(metavar="S,S", help="Structures to search (default: all registered)."),
+        shared("structures", "Structures to search (default: all registered)."),
     ] = None,
     effort: Annotated[
         str,
@@ -108,12 +112,8 @@ def identify(
     budget: Annotated[
         float | None, typer.Option(hidden=True, help="Replaced by --effort and --time-limit.")
     ] = None,
-    out: Annotated[
-        Path | None, typer.Option("--out", "-o", metavar="FILE", help="Model file to write.")
-    ] = None,
-    plot: Annotated[
-        Path | None, typer.Option("--plot", metavar="DIR", help="Write PNG figures here.")
-    ] = None,
+    out: ModelOut = None,
+    plot: PlotDir = None,
     report: ReportFile = None,
     ts: SamplingTime = None,
     time_column: TimeColumn = None,

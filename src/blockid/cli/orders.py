@@ -10,18 +10,17 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import (
+from blockid.cli._common import cli_errors, print_json, stdout
+from blockid.cli._data import load_data
+from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
     Inputs,
     Json,
     SamplingTime,
     TimeColumn,
-    cli_errors,
-    print_json,
-    stdout,
+    shared,
 )
-from blockid.cli._data import load_data
 from blockid.errors import BlockidError, ParameterError
 from blockid.fitting.order_defaults import DEFAULTS
 
@@ -40,12 +39,10 @@ def _count(flag: str, what: str) -> Any:
 def orders(
     data_paths: DataPaths,
     inputs: Inputs,
-    output: Annotated[
-        str, typer.Option("--output", "-y", metavar="NAME", help="Output column to test.")
-    ],
+    output: Annotated[str, shared("outputs", "Output column to test.")],
     estimation: Annotated[
         str | None,
-        typer.Option("--estimation", metavar="START:STOP", help="Samples to use (default: all)."),
+        shared("estimation", "Samples to use (default: all)."),
     ] = None,
     ts: SamplingTime = None,
     time_column: TimeColumn = None,

@@ -12,9 +12,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated, Any
 
-import typer
-
-from blockid.cli._common import (
+from blockid.cli._common import busy, cli_errors, print_json, refuse_to_overwrite, stderr, stdout
+from blockid.cli._data import check_arguments, load_data
+from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
     Force,
@@ -24,14 +24,8 @@ from blockid.cli._common import (
     Quiet,
     SamplingTime,
     TimeColumn,
-    busy,
-    cli_errors,
-    print_json,
-    refuse_to_overwrite,
-    stderr,
-    stdout,
+    shared,
 )
-from blockid.cli._data import check_arguments, load_data
 from blockid.cli._options import (
     ComparedStructures,
     EstimationRange,
@@ -41,17 +35,7 @@ from blockid.cli._options import (
     with_fit_options,
 )
 
-__all__ = ["ReportFile", "command_words", "report", "write_report_option"]
-
-#: ``--report FILE`` of ``compare`` and ``identify``.
-ReportFile = Annotated[
-    Path | None,
-    typer.Option(
-        "--report",
-        metavar="FILE",
-        help="Also write a self-contained HTML report (figures embedded) to FILE.",
-    ),
-]
+__all__ = ["command_words", "report", "write_report_option"]
 
 
 def command_words() -> list[str]:
@@ -145,9 +129,7 @@ def report(
     validation: ValidationRange,
     structures: ComparedStructures = None,
     method: SharedMethod = None,
-    out: Annotated[
-        Path, typer.Option("--out", "-o", metavar="FILE", help="HTML report file to write.")
-    ] = Path("report.html"),
+    out: Annotated[Path, shared("out", "HTML report file to write.")] = Path("report.html"),
     ts: SamplingTime = None,
     time_column: TimeColumn = None,
     experiment_column: ExperimentColumn = None,

@@ -9,12 +9,6 @@ from typing import Annotated
 import typer
 
 from blockid.cli._common import (
-    DataPaths,
-    ExperimentColumn,
-    Force,
-    Json,
-    SamplingTime,
-    TimeColumn,
     cli_errors,
     metrics_table,
     print_json,
@@ -24,6 +18,15 @@ from blockid.cli._common import (
     stdout,
 )
 from blockid.cli._data import check_arguments, load_data
+from blockid.cli._flags import (
+    DataPaths,
+    ExperimentColumn,
+    Force,
+    Json,
+    SamplingTime,
+    TimeColumn,
+    shared,
+)
 
 __all__ = ["predict", "simulate"]
 
@@ -35,18 +38,12 @@ Range = Annotated[
 ]
 OutTable = Annotated[
     Path | None,
-    typer.Option(
-        "--out", "-o", metavar="FILE", help="Write data and model output (.csv/.parquet)."
-    ),
+    shared("out", "Write data and model output (.csv/.parquet)."),
 ]
 
 PlotDir = Annotated[
     Path | None,
-    typer.Option(
-        "--plot",
-        metavar="DIR",
-        help="Write a figure (measured vs model output and the error, whole record) here.",
-    ),
+    shared("plot", "Write a figure (measured vs model output and the error, whole record) here."),
 ]
 
 InitialSamples = Annotated[

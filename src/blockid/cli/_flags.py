@@ -1,0 +1,116 @@
+"""The flags that several commands take, each declared once.
+
+:data:`SHARED` holds every such flag's names and placeholder; :func:`shared` is the only
+place that turns one into a ``typer.Option``, and the flags that mean the same on every
+command are declared here whole (``Force``, ``Estimation``, ``ModelOut``...). A flag
+whose meaning depends on the command (``--out`` writes a model, a report, a folder...)
+gets its help from the command, its names from here. ``tests/cli/test_flags.py`` walks
+every command and fails on a flag of this table made anywhere else. Plain typer, no
+NumPy: the command line builds these before it imports anything numerical.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+__all__ = [
+    "SHARED",
+    "DataPaths",
+    "Estimation",
+    "ExperimentColumn",
+    "Force",
+    "FolderForce",
+    "Inputs",
+    "Json",
+    "ModelOut",
+    "Outputs",
+    "PlotDir",
+    "ReportFile",
+    "Quiet",
+    "SamplingTime",
+    "Seed",
+    "TimeColumn",
+    "shared",
+]
+
+#: Flags of several commands: parameter name -> (flag names, placeholder).
+SHARED: dict[str, tuple[tuple[str, ...], str | None]] = {
+    "out": (("--out", "-o"), "FILE"),
+    "plot": (("--plot",), "DIR"),
+    "estimation": (("--estimation",), "START:STOP"),
+    "validation": (("--validation",), "START:STOP"),
+    "seed": (("--seed",), "N"),
+    "force": (("--force",), None),
+    "structure": (("--structure",), "NAME"),
+    "structures": (("--structures",), "NAME,NAME.."),
+    "method": (("--method",), "NAME"),
+    "outputs": (("--output", "-y"), "NAME"),
+    "inputs": (("--input", "-u"), "NAME"),
+    "json_out": (("--json",), None),
+    "quiet": (("--quiet", "-q"), None),
+    "ts": (("--ts",), "SECONDS"),
+    "time_column": (("--time-column",), "NAME"),
+    "experiment_column": (("--experiment-column",), "NAME"),
+    "report": (("--report",), "FILE"),
+}
+
+#: (parameter name, help) of every option :func:`shared` made: the test's evidence that
+#: a command's shared flag came from here.
+MADE: set[tuple[str, str]] = set()
+
+
+def shared(name: str, help: str, *, metavar: str | None = None, **kwargs: Any) -> Any:
+    """The ``typer.Option`` of shared flag ``name`` (:data:`SHARED`) with this command's
+    ``help`` (and ``metavar`` where the command's value differs: ``--out DIR``)."""
+    names, placeholder = SHARED[name]
+    MADE.add((name, help))
+    if metavar or placeholder:
+        kwargs["metavar"] = metavar or placeholder
+    return typer.Option(*names, help=help, **kwargs)
+
+
+# ---------------------------------------------------------------- the same on every command
+DataPaths = Annotated[
+    list[Path],
+    typer.Argument(metavar="DATA", help="Data file(s): .csv, .tsv, .txt, .parquet or .mat."),
+]
+Inputs = Annotated[list[str], shared("inputs", "Input column; repeat for several inputs.")]
+Outputs = Annotated[list[str], shared("outputs", "Output column; repeat for several outputs.")]
+SamplingTime = Annotated[
+    float | None, shared("ts", "Sampling time in seconds.", show_default=False)
+]
+TimeColumn = Annotated[
+    str | None, shared("time_column", "Column of sample times (sampling time inferred).")
+]
+ExperimentColumn = Annotated[
+    str | None, shared("experiment_column", "Column labelling the experiment of each row.")
+]
+Force = Annotated[bool, shared("force", "Replace an existing output file.")]
+#: ``--force`` of the commands that write a folder of results.
+FolderForce = Annotated[
+    bool, shared("force", "Write into a folder that is not empty (files replaced).")
+]
+Json = Annotated[bool, shared("json_out", "Print one JSON document on stdout.")]
+#: ``--quiet`` of every command that shows progress.
+Quiet = Annotated[
+    bool,
+    shared(
+        "quiet",
+        "No progress on stderr (there is none when stderr is not a terminal, nor with --json).",
+    ),
+]
+Seed = Annotated[int, shared("seed", "Random seed: the same seed gives the same run.")]
+Estimation = Annotated[
+    str | None,
+    shared("estimation", "Estimation samples (0-based, stop excluded; default: all)."),
+]
+ModelOut = Annotated[Path | None, shared("out", "Model file to write.")]
+PlotDir = Annotated[Path | None, shared("plot", "Write PNG figures to this folder.")]
+#: ``--report FILE`` of ``compare`` and ``identify``.
+ReportFile = Annotated[
+    Path | None,
+    shared("report", "Also write a self-contained HTML report (figures embedded) to FILE."),
+]
