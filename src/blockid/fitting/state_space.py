@@ -34,12 +34,10 @@ singular values (on a mildly nonlinear second-order plant: 0.9997, 0.986, 0.43 a
 initial state are refined together by Levenberg-Marquardt on the free-run simulation
 error (:mod:`blockid.fitting.levenberg_marquardt`), the Jacobian computed forward in
 time by a compiled kernel (:mod:`blockid._kernels.state_space`) and summed into
-``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole:
-its upper triangle by a symmetric rank-k update (half a matrix product's work), added
-in a helper thread while the kernel walks the next piece (:data:`helper_thread`: the
-same operations in the same order, so the same result; on the WH 2009 record, 100 000
-samples, a 5-state degree-2 model: 15.3 s -> 10.4 s for 8 evaluations,
-``docs/performance.md``).
+``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole,
+each piece added in a helper thread while the kernel walks the next one
+(:data:`helper_thread`: the same operations in the same order, so the same result,
+bit for bit; ``docs/performance.md`` has the time it saves).
 The parameters are unique only up to the state basis; the damping keeps the steps
 defined. A candidate with an eigenvalue of ``A`` outside the circle of radius
 ``1 - STABILITY_MARGIN``, or a non-finite or exploding run, is rejected (the damping
@@ -109,9 +107,12 @@ def _normalised(data: Dataset) -> _Signals:
     y_all = np.vstack([e.y for e in data.experiments])
     u_off, y_off = u_all.mean(axis=0), y_all.mean(axis=0)
     u_sc, y_sc = u_all.std(axis=0), y_all.std(axis=0)
-    for names, scale, what in ((data.inputs, u_sc, "input"), (data.outputs, y_sc, "output")):
-        for name, s in zip(names, scale, strict=True):
-            if not s > 0:
+    for names, scale, mean, what in (
+        (data.inputs, u_sc, u_off, "input"),
+        (data.outputs, y_sc, y_off, "output"),
+    ):
+        for name, s, m in zip(names, scale, mean, strict=True):
+            if not s > 1e-12 * max(1.0, abs(m)):  # a constant's spread is rounding only
                 raise DataError(
                     f"{what} '{name}' is constant over the estimation data; a state-space "
                     "model needs every signal to vary (choose another range or column)"
@@ -449,31 +450,22 @@ def helper_threads(allowed: bool) -> Iterator[None]:
 
 
 class _NormalSums:
-    """The upper triangle of ``J^T J`` (a symmetric rank-k update: half a product's
-    work), ``-J^T r`` and ``r^T r``, added piece after piece."""
+    """``J^T J``, ``-J^T r`` and ``r^T r``, added piece after piece."""
 
     def __init__(self, n: int) -> None:
-        self.upper = np.zeros((n, n), order="F")
+        self.H = np.zeros((n, n))
         self.g = np.zeros(n)
         self.cost = 0.0
 
     def add(self, J: np.ndarray, kept: np.ndarray, r: np.ndarray, cols: np.ndarray) -> None:
-        from scipy.linalg.blas import dsyrk
-
         J = J[:, kept]
         r = r.reshape(-1)
         self.cost += float(r @ r)
-        # J is C-ordered, so J.T is a Fortran-ordered array: J.T (J.T)^T = J^T J, no copy
-        block = dsyrk(1.0, J.T, trans=0, lower=0)
-        if cols.size == self.g.size:
-            self.upper += block
-        else:
-            self.upper[np.ix_(cols, cols)] += block
+        self.H[np.ix_(cols, cols)] += J.T @ J
         self.g[cols] -= J.T @ r
 
     def result(self) -> tuple[np.ndarray, np.ndarray]:
-        upper = np.triu(self.upper)
-        return upper + np.triu(upper, 1).T, self.g
+        return self.H, self.g
 
 
 class _PieceQueue:
