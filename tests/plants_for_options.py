@@ -244,6 +244,8 @@ CASES = {
             mean=0.2,
             snr_db=50.0,
         ),
+        Case("block-state-space", "batch", 400, {"na": 2, "nb": 2, "nk": 1}, snr_db=50.0),
+        Case("block-state-space", "rls", 400, {"na": 2, "nb": 2, "nk": 1}, snr_db=50.0),
     )
 }
 

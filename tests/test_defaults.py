@@ -72,7 +72,7 @@ def test_a_method_default_left_open_is_the_tables():
 
 #: docs/models.md "Methods in detail": (method, structures column) -> estimator
 DOC_ROWS = {
-    ("rls", "arx"): "rls",
+    ("rls", "arx, block-state-space (on the input powers)"): "rls",
     ("aw-rls", "arx"): "aw-rls",
     ("hierarchical-rls", "arx"): "hierarchical-rls",
     ("key-term-rls", "hammerstein, wiener, hammerstein-wiener"): "key-term-rls",

@@ -411,3 +411,42 @@ def test_sigterm_writes_the_model_and_the_learner_state(tmp_path):
                             str(resumed)], input="\n".join([head, *rows[300:]]))  # fmt: skip
     assert r.exit_code == 0, r.output
     assert _model_text(resumed) == _model_text(whole)
+
+
+def test_a_block_model_of_two_inputs_and_outputs_streams_to_the_learners_model(tmp_path):
+    """``--structure block-state-space --method rls``: the model written at the end is
+    the online learner's of the same samples, its cubic blocks those of the plant."""
+    from blockid.fitting.online import online_estimator
+
+    rng = np.random.default_rng(7)
+    u = rng.uniform(-1.5, 1.5, (800, 2))
+    w = np.column_stack([u[:, 0] + 0.3 * u[:, 0] ** 2, u[:, 1] - 0.4 * u[:, 1] ** 3])
+    y = np.zeros((800, 2))
+    for t in range(1, 800):
+        y[t] = [
+            0.5 * y[t - 1, 0] + w[t - 1, 0] + 0.2 * w[t - 1, 1],
+            0.3 * y[t - 1, 1] + w[t - 1, 1],
+        ]
+    text = "u1,u2,y1,y2\n" + "\n".join(",".join(map(repr, row)) for row in np.c_[u, y].tolist())
+    out = tmp_path / "live.json"
+    args = ["stream", "-u", "u1", "-u", "u2", "-y", "y1", "-y", "y2", "--structure",
+            "block-state-space", "--method", "rls", "--na", "1", "--nb", "1", "--nk", "1",
+            "-o", str(out)]  # fmt: skip
+    r = runner.invoke(app, args, input=text + "\n")
+    assert r.exit_code == 0, r.output
+    online = online_estimator("block-state-space", "rls", {"na": 1, "nb": 1, "nk": 1},
+                              ["u1", "u2"], ["y1", "y2"])  # fmt: skip
+    online.partial_fit(u, y)
+    saved = load_model(out)
+    assert saved.to_dict() == online.model().to_dict()
+    np.testing.assert_allclose(saved.input_blocks[0].coefficients, [0, 1, 0.3, 0], atol=1e-6)
+    np.testing.assert_allclose(saved.input_blocks[1].coefficients, [0, 1, 0, -0.4], atol=1e-6)
+    assert _lines(r.stdout)[-1]["parameters"]["nx"] == 2 + 2  # y(t-1) and w(t-1)
+
+
+def test_a_stream_that_learned_nothing_writes_no_model(tmp_path):
+    """Every row refused (here: a column of text): the end writes no model of zeros."""
+    out = tmp_path / "m.json"
+    r = runner.invoke(app, ["stream", *ARX_ARGS, "-o", str(out)], input="u,y\nx,1\ny,2\n")
+    assert r.exit_code == 2 and "no sample was learned" in r.stderr
+    assert not out.exists()

@@ -637,8 +637,52 @@ def _params() -> list[Any]:
     ]
 
 
+#: The regression methods of block-state-space: each option's change and its check
+#: (their numbers against the truth: tests/fitting/test_block_arx.py).
+REGRESSION = {"block-state-space/batch", "block-state-space/rls"}
+_REGRESSION_CHANGES = {
+    "input_block": "polynomial:degree=2",
+    "na": 3,
+    "nb": 3,
+    "nk": 2,
+    "forgetting": 0.99,
+    "initial_covariance": 10.0,
+    "passes": 3,
+}
+
+
+def _check_regression(case: Case, option: str) -> None:
+    from blockid.errors import ParameterError
+
+    data = case.data()
+    default = fit_model(data, case.structure, method=case.method, **case.options)
+    if option == "output_block":  # the regression holds input blocks only: refused
+        with pytest.raises(ParameterError) as refused:
+            fit_model(data, case.structure, method=case.method, **case.options,
+                      output_block="polynomial")  # fmt: skip
+        assert refused.value.parameter == "output_block"
+        return
+    value = _REGRESSION_CHANGES[option]
+    changed = fit_model(data, case.structure, method=case.method, **{**case.options, option: value})
+    _differs(default, changed)
+    if option == "input_block":
+        assert [b.coefficients.size for b in default.model.input_blocks] == [4]
+        assert [b.coefficients.size for b in changed.model.input_blocks] == [3]
+    elif option in ("na", "nb", "nk"):
+        o = {**case.options, option: value}
+        assert changed.settings[option] == value
+        assert changed.model.nx == o["na"] + o["nk"] + o["nb"] - 1  # one input, one output
+    else:  # the recursion's own settings
+        assert changed.settings["regression"][option] == (
+            str(value) if option == "forgetting" else value
+        )
+
+
 @pytest.mark.parametrize(("structure", "method", "option"), _params())
 def test_option_off_its_default_changes_the_fit(structure, method, option):
+    if f"{structure}/{method}" in REGRESSION:
+        _check_regression(CASES[f"{structure}/{method}"], option)
+        return
     case = CASES[f"{structure}/{method}"]
     expect = EXPECT.get(option)
     if expect is None:

@@ -296,6 +296,8 @@ _OWN_MINIMA = {
     ("fitting/online.py", "nk"), ("fitting/online.py", "r2"), ("fitting/initial.py", "r2"),
     ("blocks/polynomial.py", "degree"), ("models/state_space.py", "degree"),
     ("fitting/feedback.py", "feedback_block"), ("fitting/recursive.py", "initial_parameters"),
+    # nb >= 1 of the block model on an ARX core (the inputs must enter; an ARX allows 0)
+    ("fitting/block_arx.py", "nb"),
 }  # fmt: skip
 
 

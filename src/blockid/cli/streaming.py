@@ -15,15 +15,9 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import (
-    Force,
-    Inputs,
-    Outputs,
-    cli_errors,
-    refuse_to_overwrite,
-    stderr,
-)
+from blockid.cli._common import cli_errors, refuse_to_overwrite, stderr
 from blockid.cli._data import check_arguments
+from blockid.cli._flags import Force, Inputs, Outputs, shared
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     given,
@@ -44,9 +38,9 @@ _FLAGS = {
 
 StreamMethod = Annotated[
     str | None,
-    typer.Option(
-        metavar="NAME",
-        help="Recursive estimator of the structure (rls, aw-rls, hierarchical-rls, "
+    shared(
+        "method",
+        "Recursive estimator of the structure (rls, aw-rls, hierarchical-rls, "
         "key-term-rls); default: the structure's first recursive method.",
         show_default=False,
     ),
@@ -73,9 +67,9 @@ CheckpointEvery = Annotated[
 ]
 StreamStructure = Annotated[
     str | None,
-    typer.Option(
-        metavar="NAME",
-        help="Model structure (default arx, or the resumed file's; see below).",
+    shared(
+        "structure",
+        "Model structure (default arx, or the resumed file's; see below).",
         show_default=False,
     ),
 ]
@@ -87,12 +81,7 @@ Every = Annotated[
 ]
 FinalModel = Annotated[
     Path | None,
-    typer.Option(
-        "--out",
-        "-o",
-        metavar="FILE",
-        help="Model file to write at the end of input (and at checkpoints, and on Ctrl-C).",
-    ),
+    shared("out", "Model file to write at the end of input (and at checkpoints, and on Ctrl-C)."),
 ]
 Format = Annotated[
     str,
@@ -249,6 +238,11 @@ def stream(
         raise typer.Exit(code=1)
     if out is None:
         return
+    if event.n_samples == 0:
+        raise EstimationError(
+            f"no model written to {out}: no sample was learned (every row was refused; "
+            "the lines on stdout say why)"
+        )
     if event.model is None:
         raise EstimationError(f"no model written to {out}: {event.note}")
     save(*session.saved())

@@ -76,6 +76,13 @@ from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.fitting.arx import fit_arx, make_estimator, regressor_scale, signal_scales
 from blockid.fitting.backlash import BacklashAWRLS, fit_backlash_aw_rls
+from blockid.fitting.block_arx import (
+    arx_core_model,
+    fit_block_arx,
+    input_basis,
+    regression_orders,
+    scalar_orders,
+)
 from blockid.fitting.dispatch import resolve_options
 from blockid.fitting.key_term import KEY_TERM_STRUCTURES, KeyTermRLS, fit_key_term_rls
 from blockid.fitting.recursive import (
@@ -88,7 +95,7 @@ from blockid.fitting.recursive import (
 from blockid.fitting.registry import checked
 from blockid.models.arx import ARX
 
-__all__ = ["ONLINE_OPTIONS", "OnlineEstimator", "online_estimator"]
+__all__ = ["model_parameters", "ONLINE_OPTIONS", "OnlineEstimator", "online_estimator"]
 
 #: Options only online learning takes (not in the registry, not used by offline fits).
 ONLINE_OPTIONS = ("initial", "input_scale", "output_scale")
@@ -168,8 +175,20 @@ def online_estimator(
         fit_arx: _OnlineARX,
         fit_key_term_rls: _OnlineKeyTerm,
         fit_backlash_aw_rls: _OnlineBacklash,
+        fit_block_arx: _OnlineBlockARX,
     }[decl.method(method).function()]
     return backend(structure, method, opts, names, scales, initial)
+
+
+def model_parameters(model: Any) -> dict[str, Any]:
+    """A model's numbers as its file holds them: the ``parameters`` entry of a chain's
+    file; a state-space model's file, whose matrices and blocks are at the top, less
+    its signal names and structure."""
+    doc = model.to_dict()
+    if "parameters" in doc:
+        return doc["parameters"]
+    return {k: v for k, v in doc.items() if k not in ("structure", "inputs", "outputs",
+                                                      "sampling_time")}  # fmt: skip
 
 
 def _check_orders_against(initial: Any, opts: dict[str, Any]) -> None:
@@ -335,8 +354,8 @@ class OnlineEstimator(ABC):
         return self._step(u, y)
 
     def parameters(self) -> dict[str, Any]:
-        """The current estimate by name, as in model files (``to_dict()["parameters"]``)."""
-        return self.model().to_dict()["parameters"]
+        """The current estimate by name, as in model files (:func:`model_parameters`)."""
+        return model_parameters(self.model())
 
     @abstractmethod
     def model(self) -> Any:
@@ -934,4 +953,103 @@ class _OnlineARX(OnlineEstimator):
                 theta = np.empty_like(out["theta"])
                 theta[out["perm"]] = out["theta"]
                 model.set_parameter_vector(i, theta / out["scale"])
+        return model
+
+
+class _OnlineBlockARX(_OnlineARX):
+    """A Hammerstein model of several inputs and outputs on an ARX core, online: the ARX
+    recursion on the input blocks' basis functions and a constant
+    (:mod:`blockid.fitting.block_arx`),
+    split into blocks and core when :meth:`model` is asked for. The ranges the inputs
+    covered so far are the blocks' ranges (a polynomial continues along its tangent
+    beyond them)."""
+
+    def __init__(self, structure, method, opts, names, scales, initial) -> None:
+        if initial is not None:
+            raise ParameterError(
+                "a block model on an ARX core learns online from no model (its regression "
+                "holds products of block and core coefficients that a model file does not "
+                "give); leave --model out",
+                parameter="initial",
+            )
+        opts = dict(opts)
+        self.basis = input_basis(opts.pop("input_block", None), opts.pop("output_block", None))
+        inputs, outputs = (tuple(n) for n in names)
+        orders = _defaults(fit_block_arx, opts, ("na", "nb", "nk"))
+        na, nb, nk = scalar_orders(orders["na"], orders["nb"], orders["nk"])
+        NA, NB, NK = regression_orders(len(outputs), len(inputs), self.basis.size, na, nb, nk)
+        opts.update(na=NA.tolist(), nb=NB.tolist(), nk=NK.tolist())
+        if scales is not None:  # a basis function's column is scaled by its value at the
+            # input's scale (a power p by s^p), the constant by 1
+            su = np.broadcast_to(np.asarray(scales[0], dtype=float), (len(inputs),))
+            parts = [np.abs(self.basis.functions(np.array([s])))[0] for s in su]
+            su = np.r_[np.concatenate(parts), 1.0]
+            su[su == 0] = 1.0
+            scales = (su, scales[1])
+        virtual = self.basis.inputs(inputs)
+        super().__init__("arx", method, opts, (virtual, outputs), scales, None)
+        self.names = _Names(inputs, outputs)
+        self._nu = len(inputs)
+        self._range = np.tile([np.inf, -np.inf], (len(inputs), 1))
+
+    def state(self) -> dict[str, Any]:
+        return {**super().state(), "_range": _encode(self._range)}
+
+    def restore(self, state: dict[str, Any]) -> _OnlineBlockARX:
+        if "_range" not in state:
+            raise ParameterError("the saved learner state is of another model (no input ranges)")
+        super().restore(state)
+        _decode_into(self, "_range", state["_range"])
+        return self
+
+    def _powers(self, u: np.ndarray) -> np.ndarray:
+        return self.basis.expanded(u)
+
+    def _widen(self, u: np.ndarray) -> None:
+        if u.shape[0]:
+            self._range[:, 0] = np.minimum(self._range[:, 0], u.min(axis=0))
+            self._range[:, 1] = np.maximum(self._range[:, 1], u.max(axis=0))
+
+    def partial_fit(self, u: Any, y: Any) -> _OnlineBlockARX:
+        u, y = self._check(u, y)
+        self.predictions_ = self._learn(self._powers(u), y) if u.shape[0] else np.zeros_like(y)
+        self._widen(u)
+        return self
+
+    def update(self, u: Any, y: Any) -> np.ndarray:
+        u = np.asarray(u, dtype=float).reshape(-1)
+        y = np.asarray(y, dtype=float).reshape(-1)
+        values = u.tolist() + y.tolist()
+        if u.size != self._nu or y.size != self._ny or not all(map(math.isfinite, values)):
+            self._check(u[None, :], y[None, :])  # raises the full explanation
+        prediction = self._step(self._powers(u[None, :])[0], y)
+        self._widen(u[None, :])
+        return prediction
+
+    def _arx(self) -> ARX:
+        model = ARX(self.template.inputs, self.template.outputs, self.template.na,
+                    self.template.nb, self.template.nk)  # fmt: skip
+        for i, out in enumerate(self.outputs):
+            theta = np.empty_like(out["theta"])
+            theta[out["perm"]] = out["theta"]
+            model.set_parameter_vector(i, theta / out["scale"])
+        return model
+
+    def estimate(self) -> dict[str, float]:
+        """The regression's coefficients by name (``b[y1][u1[coefficients_2]][0]``: the
+        product of the block's and the core's coefficients), as the ARX on the basis
+        functions names them."""
+        arx = self._arx()
+        return {
+            name: float(value)
+            for i in range(len(arx.outputs))
+            for name, value in zip(arx.parameter_names(i), arx.parameter_vector(i), strict=True)
+        }
+
+    def model(self) -> Any:
+        seen = np.all(np.isfinite(self._range))
+        model, _ = arx_core_model(
+            self._arx(), self.names.inputs, self.basis,
+            input_range=self._range if seen else None,
+        )  # fmt: skip
         return model

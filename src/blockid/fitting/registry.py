@@ -798,6 +798,33 @@ STRUCTURES: dict[str, Structure] = {
                     "linear state-space start with every block near the identity, then "
                     "every parameter refined on the free-run error (exact Jacobian)",
                 ),
+                Method(
+                    "batch",
+                    "blockid.fitting.block_arx:fit_block_arx",
+                    ("input_block", "output_block", "na", "nb", "nk"),
+                    "Hammerstein on a matrix-ARX core: least squares on the input powers, "
+                    "each channel's block split off by a rank-1 approximation",
+                    passes=("method",),
+                ),
+                Method(
+                    "rls",
+                    "blockid.fitting.block_arx:fit_block_arx",
+                    (
+                        "input_block",
+                        "output_block",
+                        "na",
+                        "nb",
+                        "nk",
+                        "forgetting",
+                        "initial_covariance",
+                        "passes",
+                    ),
+                    "Hammerstein on a matrix-ARX core: RLS on the input powers (online: "
+                    "stream, partial_fit), each channel's block split off by a rank-1 "
+                    "approximation",
+                    recursive=True,
+                    passes=("method",),
+                ),
             ),
             block_oriented=False,
             orders="state",

@@ -234,7 +234,9 @@ def _read_back(online: Any) -> tuple[dict[str, Any] | None, Any, dict | None, st
         model = online.model()
     except BlockidError as exc:
         return None, None, online.estimate(), " ".join(str(exc).split())
-    return model.to_dict()["parameters"], model, None, None
+    from blockid.fitting.online import model_parameters
+
+    return model_parameters(model), model, None, None
 
 
 class Checkpoint(NamedTuple):
