@@ -303,6 +303,26 @@ def test_a_refit_stopped_short_of_the_cross_validated_score_is_fitted_longer():
     assert own < 0.95 * first.estimation_metrics["rmse"]["y"]  # measured 0.00982 vs 0.01057
 
 
+def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stopped_it():
+    """Own-data error more than twice the cross-validated one after every retry: the
+    refit did not find what the folds found (Bouc-Wen: 164 um against 15 um, stopped by
+    ftol at its linear start), so it is refused with the numbers, whatever stopped it;
+    identify then fits the next candidate."""
+    from blockid.errors import EstimationError
+    from blockid.workflows.identify import _refit
+    from blockid.workflows.search_space import Candidate
+
+    data = dead_zone_record()
+    converged = Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1, "input_block": "dead-zone",
+                                          "max_nfev": 30})  # fmt: skip
+    fit = _refit(converged, data, 0.0098, 10, [])
+    assert "max_nfev" not in str(fit.settings.get("stop_reason"))  # it converged
+    own = fit.estimation_metrics["rmse"]["y"]
+    with pytest.raises(EstimationError, match="did not find what the folds found"):
+        _refit(converged, data, own / 2.5, 10, [])
+    assert _refit(converged, data, own / 1.5, 10, []) is not None  # within the factor
+
+
 def test_a_two_input_two_output_hammerstein_wiener_plant_gets_blocks_per_channel():
     """Several inputs and outputs: the block state-space candidates are searched, and on
     a Hammerstein-Wiener plant (a cubic per input, a cubic per output, 40 dB) one with
