@@ -378,7 +378,11 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
         "removed: identify's forked workers each kept an OpenBLAS thread spinning beside "
         "every fit ([identify](identify.md)). Re-run after it with the same models: WH "
         "2009 848 -> 645 s, Silverbox 273 -> 201 s, Bouc-Wen 543 -> 226 s; the others' "
-        "times are from the older runs (each row's commit is in its results file).",
+        "times are from the older runs (each row's commit is in its results file). The "
+        "three long records were run again on 2026-11-27 (commit `372f87c`): the same "
+        "models bit for bit, in 681, 239 and 289 s; the stages whose code did not change "
+        "(the chain structures) took up to 35 % longer too: on this shared 2-core machine "
+        "the same work varies that much from one hour to the next.",
         "",
         "## Single-output sets",
         "",
@@ -476,6 +480,11 @@ def _quick_section(
             lines.append(f"| {r['title']} | {t['name']} | {_f(t['rmse'])} {r['unit']} | {standard} "
                          f"| `{r['selected']['label']}` | {_f(r['selected']['cv_rmse'])} | "
                          f"{r['search_seconds']:.0f} | {r['load_before']} |")  # fmt: skip
+    notes = [(r["title"], n) for r in ok.values() for n in r.get("identify_notes", [])
+             if not n.startswith("no validation data")]  # fmt: skip
+    if notes:
+        lines += ["", "identify's notes in these runs:", ""]
+        lines += [f"- {title}: {note}" for title, note in notes]
     return lines
 
 
