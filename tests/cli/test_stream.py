@@ -116,6 +116,7 @@ ARX_OPTS = {"na": 1, "nb": 2, "nk": 0}
 
 
 # ----------------------------------------------------------------------------- the claim
+@pytest.mark.slow  # 50 000 samples through a real pipe; the shorter stream tests stay
 def test_a_piped_hw_record_ends_with_the_one_pass_fit(tmp_path):
     """50 000 samples through a real pipe; final estimates = ``fit --passes 1`` (1e-9)."""
     csv = tmp_path / "hw.csv"

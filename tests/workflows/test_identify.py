@@ -81,6 +81,7 @@ def test_one_worker_or_two_give_the_same_model_bit_for_bit():
     assert one.search["jobs"] == 1 and two.search["jobs"] == 2
 
 
+@pytest.mark.slow  # it runs a process burning a core: beside make test's other worker too
 def test_a_busy_machine_gives_the_same_model_bit_for_bit():
     """A process burning a core beside the search changes nothing: the search is a fixed
     amount of work, not a time budget."""

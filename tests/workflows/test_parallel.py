@@ -3,6 +3,7 @@
 import time
 
 import numpy as np
+import pytest
 
 from blockid.data import Dataset
 from blockid.workflows.parallel import TaskRunner
@@ -56,6 +57,7 @@ def _fit_cpu_share(data, item):
     return (time.process_time() - c0) / max(time.thread_time() - t0, 1e-9)
 
 
+@pytest.mark.slow  # a measurement of CPU time, disturbed by and disturbing the other tests
 def test_no_thread_of_a_worker_spins_beside_its_fit():
     """Workers forked from this process kept an OpenBLAS thread spinning beside every fit
     (process CPU 1.5-2.0 times the fitting thread's; two workers were slower than
