@@ -324,6 +324,21 @@ def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stop
     assert _refit(converged, data, own / 1.5, 10, []) is not None  # within the factor
 
 
+def test_when_every_refit_falls_short_the_first_is_returned_with_a_note(monkeypatch):
+    """The refusal must not turn a search into an error: with the factor set so that every
+    refit falls short, the best candidate's refit comes back, said so in the notes."""
+    from blockid.workflows import identify as module
+
+    monkeypatch.setattr(module, "REFIT_FAILED", 1e-9)
+    data = dead_zone_record(600)
+    result = identify(data, structures=["hammerstein"], effort=SMALL, jobs=1)
+    refused = [n for n in result.notes if "did not find what the folds found" in n]
+    assert refused[0].startswith(result.selected.candidate.label)  # the first one tried
+    assert result.selected.candidate.structure == "hammerstein"
+    assert any("every candidate's refit failed" in n for n in result.notes)
+    assert sum("did not find what the folds found" in n for n in result.notes) >= 2
+
+
 def test_a_two_input_two_output_hammerstein_wiener_plant_gets_blocks_per_channel():
     """Several inputs and outputs: the block state-space candidates are searched, and on
     a Hammerstein-Wiener plant (a cubic per input, a cubic per output, 40 dB) one with

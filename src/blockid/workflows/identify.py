@@ -46,7 +46,8 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
    stopped by its evaluation limit more than ``REFIT_SLACK`` worse on its own data than
    the candidate's cross-validated score is fitted again with ``REFIT_MORE`` times the
    evaluations, and the better kept; one still more than ``REFIT_FAILED`` times worse
-   (whatever stopped it) is refused, with a note, and the next candidate fitted.
+   than the folds' pooled error (whatever stopped it) is refused, with a note, and the
+   next candidate fitted (if all are, the first of them is returned, with a note).
 
 **Deterministic.** The search is a fixed amount of work: no stage depends on the
 clock, so the same data, options and version give the same model, bit for bit, on a
@@ -502,6 +503,7 @@ def _refit(
     n_init: int,
     notes: list[str],
     jobs: int = 1,
+    fold_rmse: float | None = None,
 ) -> Any:
     """The candidate fitted with its own options on all estimation data, and checked.
 
@@ -539,17 +541,35 @@ def _refit(
                     + ("" if second < first else " (not better: the first fit kept)")
                 )
                 first = min(first, second)
-        if first is not None and first > REFIT_FAILED * cv_rmse:
-            raise EstimationError(
-                f"its fit on all estimation data simulates its own data with an RMSE of "
-                f"{first:.4g}, more than {REFIT_FAILED:g} times its cross-validated "
-                f"{cv_rmse:.4g} (stopped: {fit.settings.get('stop_reason', '?')}): the fit "
-                "did not find what the folds found"
-            )
         trust = assess(fit.model, data)
     if trust.reasons:
         raise EstimationError(trust.reasons[0])
+    held_back = cv_rmse if fold_rmse is None else fold_rmse
+    if first is not None and first > REFIT_FAILED * held_back:
+        raise RefitFellShort(
+            f"its fit on all estimation data simulates its own data with an RMSE of "
+            f"{first:.4g}, more than {REFIT_FAILED:g} times the folds' {held_back:.4g} on "
+            f"data they never saw (stopped: {fit.settings.get('stop_reason', '?')}): the "
+            "fit did not find what the folds found",
+            fit,
+        )
     return fit
+
+
+class RefitFellShort(EstimationError):
+    """A refit that simulates its own data far worse than the folds simulated data they
+    never saw (:data:`REFIT_FAILED`); ``fit`` is kept, for when every candidate's does."""
+
+    def __init__(self, message: str, fit: Any) -> None:
+        super().__init__(message)
+        self.fit = fit
+
+
+def _fold_rmse(score: Score) -> float:
+    """The folds' errors pooled (root mean square): the held-back error a refit's error
+    on its own data is compared with (the score's geometric mean weighs a poor fold less,
+    and a refit's pooled error does not)."""
+    return float(np.sqrt(np.mean([f.rmse**2 for f in score.folds]))) if score.folds else math.inf
 
 
 def identify(
@@ -646,17 +666,26 @@ def identify(
     if not eligible:
         raise EstimationError(_nothing_fitted(search, chosen))
     fit, selected = None, None
+    short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
     for s in eligible:
         if progress is not None:
             progress("refit", 0, 1, s.candidate.label)
         try:
-            fit = _refit(s.candidate, data, s.rmse, search.n_init, notes, jobs)
+            fit = _refit(s.candidate, data, s.rmse, search.n_init, notes, jobs, _fold_rmse(s))
         except BlockidError as exc:
+            if isinstance(exc, RefitFellShort) and short is None:
+                short = (s, exc.fit)
             notes.append(f"{s.candidate.label} failed on all estimation data ({_reason(exc)}); "
                          "the next candidate was fitted instead")  # fmt: skip
             continue
         selected = s
         break
+    if (fit is None or selected is None) and short is not None:
+        selected, fit = short
+        notes.append(
+            f"every candidate's refit failed; {selected.candidate.label}'s, which fell short "
+            "of its folds but was trusted, is returned"
+        )
     if fit is None or selected is None:
         raise EstimationError(_nothing_fitted(search, chosen))
     if progress is not None:
