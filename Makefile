@@ -25,7 +25,11 @@ demo: $(STAMP)
 
 # One BLAS and numba thread per test worker: with two workers on two cores, each
 # worker's BLAS threads spun against the other's (CPU time 7 min 47 s, 5 min 9 s alone).
-TEST_ENV := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 NUMBA_NUM_THREADS=1
+# PYTHONDONTWRITEBYTECODE (set on this project's machines) also stops pytest from caching
+# its rewritten test modules: each worker rewrote every assert of every test file on every
+# run (7 of its 16 s of collection); unset for the tests, the second run reads the cache.
+TEST_ENV := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 NUMBA_NUM_THREADS=1 \
+            PYTHONDONTWRITEBYTECODE=
 
 # The tests on every core (pytest-xdist), without the long studies (marked slow); an idle
 # worker takes queued tests from the busy one (worksteal), so no core waits at the end...

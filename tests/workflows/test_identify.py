@@ -57,8 +57,8 @@ def test_a_dead_zone_plant_gets_its_structure_and_beats_the_linear_model():
 
 
 def test_validation_data_never_change_the_choice():
-    data = dead_zone_record()
-    val1 = dead_zone_record(seed=1)
+    data = dead_zone_record(600)
+    val1 = dead_zone_record(600, seed=1)
     val2 = Dataset.from_arrays(
         val1.experiments[0].u, 10 * val1.experiments[0].y, ["u"], ["y"]
     )  # a wildly different record
@@ -71,7 +71,7 @@ def test_validation_data_never_change_the_choice():
 
 
 def test_one_worker_or_two_give_the_same_model_bit_for_bit():
-    data = dead_zone_record(800)
+    data = dead_zone_record(500)
     one = identify(data, structures=["arx", "hammerstein"], effort=SMALL, jobs=1)
     two = identify(data, structures=["arx", "hammerstein"], effort=SMALL, jobs=2)
     assert one.selected.candidate == two.selected.candidate
@@ -123,7 +123,7 @@ def test_a_time_limit_cuts_the_search_and_says_so():
     ],
 )
 def test_no_candidate_is_fitted_twice(structures):
-    data = dead_zone_record(800)
+    data = dead_zone_record(500)
     result = identify(data, structures=structures, effort=SMALL, jobs=1)
     keys = [s.candidate.key for s in result.ranked + result.rejected]
     assert len(keys) == len(set(keys))
