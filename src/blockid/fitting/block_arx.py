@@ -44,7 +44,7 @@ from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
-from blockid.fitting.state_space import _check, _normalised
+from blockid.fitting.state_space import _check, signal_statistics
 from blockid.models.arx import ARX
 from blockid.models.block_state_space import BlockStateSpace
 
@@ -55,6 +55,7 @@ __all__ = [
     "fit_block_arx",
     "input_basis",
     "regression_orders",
+    "scalar_orders",
 ]
 
 #: Below this share of the block's coefficient norm the first basis function's
@@ -277,7 +278,7 @@ def fit_block_arx(
 
     basis = input_basis(input_block, output_block)
     na, nb, nk = scalar_orders(na, nb, nk)
-    _normalised(data)  # every input and output must move, inputs not collinear: named
+    signal_statistics(data)  # every signal must move, inputs not together: else named
     names = basis.inputs(tuple(data.inputs))
     expanded = Dataset(
         list(names), list(data.outputs), data.sampling_time,

@@ -346,12 +346,17 @@ class OnlineEstimator(ABC):
         the block-oriented models it uses the internal estimates ``x_hat, w_hat`` the
         recursion carries.
         """
+        return self._step(*self._sample(u, y))
+
+    def _sample(self, u: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+        """One sample as flat float arrays, checked (the lean test first, the full
+        explanation of :meth:`_check` only when it fails)."""
         u = np.asarray(u, dtype=float).reshape(-1)
         y = np.asarray(y, dtype=float).reshape(-1)
         values = u.tolist() + y.tolist()
         if u.size != self._nu or y.size != self._ny or not all(map(math.isfinite, values)):
             self._check(u[None, :], y[None, :])  # raises the full explanation
-        return self._step(u, y)
+        return u, y
 
     def parameters(self) -> dict[str, Any]:
         """The current estimate by name, as in model files (:func:`model_parameters`)."""
@@ -933,21 +938,23 @@ class _OnlineARX(OnlineEstimator):
         return pred
 
     def estimate(self) -> dict[str, float]:
-        model = self.model()
+        """The recursion's coefficients by name, as the ARX it fits names them (for the
+        block model on an ARX core, ``b[y1][u1[coefficients_2]][0]``: the product of a
+        block's and the core's coefficients)."""
+        arx = self._arx()
         return {
             name: float(value)
-            for i in range(len(model.outputs))
-            for name, value in zip(model.parameter_names(i), model.parameter_vector(i), strict=True)
+            for i in range(len(arx.outputs))
+            for name, value in zip(arx.parameter_names(i), arx.parameter_vector(i), strict=True)
         }
 
-    def model(self) -> ARX:
-        model = ARX(
-            self.names.inputs,
-            self.names.outputs,
-            self.template.na,
-            self.template.nb,
-            self.template.nk,
-        )
+    def model(self) -> Any:
+        return self._arx()
+
+    def _arx(self) -> ARX:
+        """The ARX of the current estimate, on the regressors' own signals."""
+        t = self.template
+        model = ARX(t.inputs, t.outputs, t.na, t.nb, t.nk)
         for i, out in enumerate(self.outputs):
             if out["theta"].size:
                 theta = np.empty_like(out["theta"])
@@ -1002,9 +1009,6 @@ class _OnlineBlockARX(_OnlineARX):
         _decode_into(self, "_range", state["_range"])
         return self
 
-    def _powers(self, u: np.ndarray) -> np.ndarray:
-        return self.basis.expanded(u)
-
     def _widen(self, u: np.ndarray) -> None:
         if u.shape[0]:
             self._range[:, 0] = np.minimum(self._range[:, 0], u.min(axis=0))
@@ -1012,39 +1016,16 @@ class _OnlineBlockARX(_OnlineARX):
 
     def partial_fit(self, u: Any, y: Any) -> _OnlineBlockARX:
         u, y = self._check(u, y)
-        self.predictions_ = self._learn(self._powers(u), y) if u.shape[0] else np.zeros_like(y)
+        learned = self._learn(self.basis.expanded(u), y) if u.shape[0] else np.zeros_like(y)
+        self.predictions_ = learned
         self._widen(u)
         return self
 
     def update(self, u: Any, y: Any) -> np.ndarray:
-        u = np.asarray(u, dtype=float).reshape(-1)
-        y = np.asarray(y, dtype=float).reshape(-1)
-        values = u.tolist() + y.tolist()
-        if u.size != self._nu or y.size != self._ny or not all(map(math.isfinite, values)):
-            self._check(u[None, :], y[None, :])  # raises the full explanation
-        prediction = self._step(self._powers(u[None, :])[0], y)
+        u, y = self._sample(u, y)
+        prediction = self._step(self.basis.expanded(u[None, :])[0], y)
         self._widen(u[None, :])
         return prediction
-
-    def _arx(self) -> ARX:
-        model = ARX(self.template.inputs, self.template.outputs, self.template.na,
-                    self.template.nb, self.template.nk)  # fmt: skip
-        for i, out in enumerate(self.outputs):
-            theta = np.empty_like(out["theta"])
-            theta[out["perm"]] = out["theta"]
-            model.set_parameter_vector(i, theta / out["scale"])
-        return model
-
-    def estimate(self) -> dict[str, float]:
-        """The regression's coefficients by name (``b[y1][u1[coefficients_2]][0]``: the
-        product of the block's and the core's coefficients), as the ARX on the basis
-        functions names them."""
-        arx = self._arx()
-        return {
-            name: float(value)
-            for i in range(len(arx.outputs))
-            for name, value in zip(arx.parameter_names(i), arx.parameter_vector(i), strict=True)
-        }
 
     def model(self) -> Any:
         seen = np.all(np.isfinite(self._range))

@@ -77,6 +77,7 @@ __all__ = [
     "fit_state_space",
     "fit_subspace",
     "refine_state_space",
+    "signal_statistics",
     "subspace",
 ]
 
@@ -103,6 +104,17 @@ class _Signals:
 
 
 def _normalised(data: Dataset) -> _Signals:
+    u_off, u_sc, y_off, y_sc = signal_statistics(data)
+    return _Signals(
+        [np.ascontiguousarray((e.u - u_off) / u_sc) for e in data.experiments],
+        [np.ascontiguousarray((e.y - y_off) / y_sc) for e in data.experiments],
+        u_off, u_sc, y_off, y_sc,
+    )  # fmt: skip
+
+
+def signal_statistics(data: Dataset) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Means and spreads of the inputs and outputs over every experiment, refusing a
+    signal that never moves and inputs that move together (each named)."""
     u_all = np.vstack([e.u for e in data.experiments])
     y_all = np.vstack([e.y for e in data.experiments])
     u_off, y_off = u_all.mean(axis=0), y_all.mean(axis=0)
@@ -119,11 +131,7 @@ def _normalised(data: Dataset) -> _Signals:
                 )
     if data.n_inputs > 1:
         _check_independent_inputs((u_all - u_off) / u_sc, data.inputs)
-    return _Signals(
-        [np.ascontiguousarray((e.u - u_off) / u_sc) for e in data.experiments],
-        [np.ascontiguousarray((e.y - y_off) / y_sc) for e in data.experiments],
-        u_off, u_sc, y_off, y_sc,
-    )  # fmt: skip
+    return u_off, u_sc, y_off, y_sc
 
 
 #: Smallest singular value, relative to the largest, of the standardised inputs below
