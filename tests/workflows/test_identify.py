@@ -356,3 +356,53 @@ def test_a_two_input_two_output_hammerstein_wiener_plant_gets_blocks_per_channel
     linear = min(s.rmse for s in result.ranked if s.candidate.structure in ("arx", "state-space"))
     assert result.selected.rmse < 0.5 * linear
     assert result.fit.model.kind == "hammerstein-wiener"
+
+
+def _scored(structure, relative, **options):
+    """A Score with the given folds' relative errors (no fit behind it)."""
+    from blockid.workflows.identify import FoldScore, Score
+    from blockid.workflows.search_space import Candidate
+
+    folds = [FoldScore(rmse=r, relative=r, n_parameters=4) for r in relative]
+    return Score(Candidate(structure, {"na": 2, "nb": 2, "nk": 1, **options}), "structures",
+                 folds, rmse=float(np.exp(np.mean(np.log(relative)))), n_parameters=4)  # fmt: skip
+
+
+def test_a_model_beyond_linear_is_chosen_only_when_the_folds_agree():
+    from blockid.workflows.identify import _earned
+
+    arx = _scored("arx", [0.49, 0.07, 0.27])
+    # EMPS's pattern: the best score, but one fold far worse than the linear model's
+    lucky = _scored("hammerstein", [0.12, 0.28, 0.16], input_block="polynomial:degree=3")
+    order, info = _earned([lucky, arx])
+    assert order == [arx, lucky] and info["linear_chosen"] and info["folds_won"] == 2
+    assert info["mean_log_ratio"] < 0 < info["mean_log_ratio"] + info["standard_error"]
+    # better on every fold by a steady margin: it stays first
+    steady = _scored("hammerstein", [0.30, 0.05, 0.20], input_block="polynomial:degree=3")
+    order, info = _earned([steady, arx])
+    assert order == [steady, arx] and not info["linear_chosen"]
+    # an integrator is beyond linear too; a linear best, or no linear model, stands
+    drifting = _scored("output-error", [0.1, 0.5, 0.2], integrator=1)
+    assert _earned([drifting, arx])[0] == [arx, drifting]
+    assert _earned([arx, lucky]) == ([arx, lucky], None)
+    assert _earned([lucky, steady]) == ([lucky, steady], None)
+
+
+def test_identify_says_when_the_linear_model_is_chosen_over_a_better_score(monkeypatch):
+    from blockid.workflows import identify as module
+
+    real = module._earned
+
+    def inconsistent(eligible):
+        order, info = real(eligible)
+        if info is not None:
+            info = {**info, "linear_chosen": True}
+            base = next(s for s in eligible if not module._beyond_linear(s))
+            order = [base] + [s for s in eligible if s is not base]
+        return order, info
+
+    monkeypatch.setattr(module, "_earned", inconsistent)
+    result = identify(dead_zone_record(600), effort=SMALL, jobs=1)
+    assert result.selected.candidate.structure in ("arx", "output-error", "state-space")
+    assert any("linear model is chosen" in n for n in result.notes)
+    assert result.to_dict()["search"]["beyond_linear"]["linear_chosen"] is True

@@ -533,6 +533,9 @@ class Structure:
     #: Fit around the operating point unless told otherwise.
     center_default: bool = False
     block_oriented: bool = True
+    #: A linear model (no static block, no state monomials): ``identify`` chooses a
+    #: model beyond linear only when it beats the best linear one consistently.
+    linear: bool = False
     #: Place in ``identify``'s default search (smaller first); None: searched only when
     #: asked for by name. The search list is this field, never a list of names.
     search_rank: int | None = None
@@ -657,6 +660,7 @@ STRUCTURES: dict[str, Structure] = {
                 ),
             ),
             block_oriented=False,
+            linear=True,
             search_rank=0,
         ),
         Structure(
@@ -723,6 +727,7 @@ STRUCTURES: dict[str, Structure] = {
             # an input offset: the velocity of an integrating plant need not vanish at
             # the mean input, so the start carries an affine input block
             integrator_start=("hammerstein", {"input_block": "polynomial:degree=1"}),
+            linear=True,
             search_rank=1,
         ),
         Structure(
@@ -764,6 +769,7 @@ STRUCTURES: dict[str, Structure] = {
                 ),
             ),
             block_oriented=False,
+            linear=True,
             orders="state",
             search_rank=8,
         ),
