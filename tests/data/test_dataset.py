@@ -62,6 +62,11 @@ def test_from_arrays_length_mismatch_names_both_lengths():
         Dataset.from_arrays(np.zeros(10), np.zeros(9))
 
 
+def test_from_arrays_ragged_rows_say_what_to_give():
+    with pytest.raises(DataError, match=r"u is not a rectangular array.*one Experiment each"):
+        Dataset.from_arrays([np.zeros(10), np.zeros(9)], np.zeros(2))
+
+
 def test_from_arrays_name_count_mismatch():
     with pytest.raises(DataError, match=r"u has 2 columns but 1 names were given \('a'\)"):
         Dataset.from_arrays(np.zeros((4, 2)), np.zeros(4), inputs=["a"])

@@ -40,7 +40,13 @@ def _frozen_2d(values: Any, what: str) -> np.ndarray:
     A caller's writable array is copied, so that the record cannot change behind the
     dataset's back; an array that is already read-only float64 is used as it is.
     """
-    arr = np.asarray(values)
+    try:
+        arr = np.asarray(values)
+    except ValueError as exc:  # a ragged list: rows of unequal length
+        raise DataError(
+            f"{what} is not a rectangular array ({exc}); give one array of samples x "
+            "signals (several records: one Experiment each)"
+        ) from None
     if arr.dtype.kind == "c":
         raise DataError(f"{what} is complex; blockid needs real-valued signals")
     try:

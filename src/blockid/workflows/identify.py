@@ -22,8 +22,10 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
 
 **The stages** (``effort`` sets their sizes, :data:`EFFORTS`):
 
-1. ``delay`` -- ARX models with ``na = nb = 4`` over the delays ``0 .. max_delay``; the
-   two best delays and the false-nearest-neighbours test's
+1. ``delay`` -- ARX models with ``na = nb = 4`` over the delays ``0 .. max_delay``
+   (with several inputs or outputs, also with each pair's own delay where the pairs'
+   differ, :func:`~blockid.fitting.delays.channel_delays`); the two best delays and the
+   false-nearest-neighbours test's
    (:mod:`blockid.fitting.orders`, noise allowance estimated) carry on.
 2. ``linear orders`` -- ARX ``na = 1 .. max_order``, ``nb <= na + 1`` at those delays;
    the best order sets carry on, and output-error models around the best one (the
@@ -479,7 +481,7 @@ def _combine_folds(relative: np.ndarray, rule: str) -> float:
 
 def _delay(score: Score) -> int:
     nk = score.candidate.options.get("nk", 0)
-    return int(nk) if isinstance(nk, int) else 0
+    return int(nk) if isinstance(nk, int) else int(np.min(nk)) if isinstance(nk, tuple) else 0
 
 
 def _iterations(nfev: int) -> dict[str, Any]:
@@ -503,9 +505,11 @@ def _integrations(data: Dataset, orders: Sequence[tuple[int, int, int]]) -> int:
     return min(count, 2)
 
 
-def _orders_of(score: Score) -> tuple[int, int, int]:
+def _orders_of(score: Score) -> tuple[int, int, Any]:
+    """``(na, nb, nk)``; ``nk`` a per-pair matrix (nested tuples) where it is one."""
     o = score.candidate.orders()
-    return int(o["na"]), int(o["nb"]), int(o["nk"])
+    nk = o["nk"]
+    return int(o["na"]), int(o["nb"]), nk if isinstance(nk, tuple) else int(nk)
 
 
 def _refit(
@@ -813,14 +817,17 @@ def _stages(
     the structures were named by the caller (searched even where the default search
     leaves them out)."""
     eff = search.effort
-    # 1. delay
-    delays_scored = search.run(
-        "delay", delay_candidates(eff.max_delay, min(4, eff.max_order)), False, capped=False
-    )
+    # 1. delay: one for every channel, and with several, each pair's own
+    probe = min(4, eff.max_order)
+    first = delay_candidates(eff.max_delay, probe)
+    per_pair = _per_pair_delays(search, notes)
+    if per_pair is not None:
+        first.append(Candidate(LINEAR, {"na": probe, "nb": probe, "nk": per_pair, "center": True}))
+    delays_scored = search.run("delay", first, False, capped=False)
     by_delay = search.ranked(delays_scored)
-    delays: list[int] = []
+    delays: list[Any] = []
     for s in by_delay:
-        nk = int(s.candidate.options["nk"])
+        nk = s.candidate.options["nk"]
         if nk not in delays:
             delays.append(nk)
         if len(delays) >= 2:
@@ -837,7 +844,7 @@ def _stages(
             "no linear model of any order in the grid simulates stably on the held-back "
             "folds; check the data (input and output columns, sampling) or give more data"
         )
-    orders: list[tuple[int, int, int]] = []
+    orders: list[tuple[int, int, Any]] = []
     for s in arx:
         if _orders_of(s) not in orders:
             orders.append(_orders_of(s))
@@ -874,6 +881,30 @@ def _stages(
         if not better:
             break
         current = min(better, key=lambda s: (s.rmse, s.candidate.label))
+
+
+def _per_pair_delays(search: _Search, notes: list[str]) -> tuple[tuple[int, ...], ...] | None:
+    """With several inputs or outputs, each pair's delay by the least-squares scan
+    (:func:`~blockid.fitting.delays.channel_delays`) when the pairs differ, else None."""
+    data = search.data
+    if data.n_inputs * data.n_outputs == 1:
+        return None
+    from blockid.fitting.delays import channel_delays
+
+    try:
+        found = channel_delays(data, search.effort.max_delay)
+    except BlockidError as exc:
+        notes.append(f"per-pair delays not scanned: {exc}")
+        return None
+    option = found.as_option()
+    if isinstance(option, int):
+        return None
+    notes.append(
+        f"per-pair delays from the least-squares scan, nk = {found.nk.tolist()} (rows: "
+        f"{', '.join(found.outputs)}; columns: {', '.join(found.inputs)}), scored beside "
+        "one common delay"
+    )
+    return option
 
 
 def _with_iterations(candidate: Candidate, iterations: dict[str, Any]) -> Candidate:

@@ -113,10 +113,10 @@ def delay_candidates(max_delay: int, probe: int) -> list[Candidate]:
 
 
 def order_grid(
-    recommended: tuple[int, int, int] | None, delays: Sequence[int], max_order: int
+    recommended: tuple[int, int, int] | None, delays: Sequence[Any], max_order: int
 ) -> list[Candidate]:
-    """ARX ``(na, nb, nk)`` with ``nb <= na + 1`` for the given delays; the order test's
-    neighbourhood first."""
+    """ARX ``(na, nb, nk)`` with ``nb <= na + 1`` for the given delays (a number, or a
+    per-pair matrix as nested tuples); the order test's neighbourhood first."""
     grid = [
         (na, nb, nk) for nk in delays for na in range(1, max_order + 1) for nb in range(1, na + 2)
     ]
