@@ -199,3 +199,45 @@ def _feedback(c, **kwargs):
         feedback=Polynomial(c, constant=False),
         **kwargs,
     )
+
+
+def mimo_lure_record(n=3000, seed=1, noise=0.01):
+    """A two-input two-output Lur'e plant: a coupled second-order core whose outputs are
+    fed back through a cubic each (``x+ = A x + B u - F y**3``, ``y = x``), driven by
+    held uniform inputs; estimation (first 2/3, output noise ``noise`` of each output's
+    spread) and noise-free validation (last third) data sets."""
+    A, B = np.array([[0.7, 0.2], [-0.1, 0.6]]), np.array([[1.0, 0.3], [0.2, 0.8]])
+    F = np.diag([0.3, 0.25])
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, (n // 3, 2)), 3, axis=0)
+    x, y = np.zeros(2), np.zeros((u.shape[0], 2))
+    for k in range(u.shape[0]):
+        y[k] = x
+        x = A @ x + B @ u[k] - F @ y[k] ** 3
+    return _two_parts(u, y, rng, noise)
+
+
+def mimo_wiener_hammerstein_record(n=3000, seed=2, noise=0.01):
+    """A two-input two-output Wiener-Hammerstein plant: a diagonal first linear block fed
+    by both inputs, a static ``v + 0.3 v**3`` per channel, a coupled second linear block;
+    estimation and validation sets as :func:`mimo_lure_record`."""
+    A1, B1 = np.diag([0.6, 0.5]), np.array([[1.0, 0.4], [0.3, 1.0]])
+    A2 = np.array([[0.5, 0.2], [0.0, 0.4]])
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, (n // 3, 2)), 3, axis=0)
+    x1, x2, y = np.zeros(2), np.zeros(2), np.zeros((u.shape[0], 2))
+    for k in range(u.shape[0]):
+        y[k] = x2
+        x1, x2 = A1 @ x1 + B1 @ u[k], A2 @ x2 + x1 + 0.3 * x1**3
+    return _two_parts(u, y, rng, noise)
+
+
+def _two_parts(u, y, rng, noise):
+    from blockid.data import Dataset
+
+    cut = 2 * u.shape[0] // 3
+    noisy = y + noise * y.std(axis=0) * rng.standard_normal(y.shape)
+    names = (["u1", "u2"], ["y1", "y2"])
+    return Dataset.from_arrays(u[:cut], noisy[:cut], *names), Dataset.from_arrays(
+        u[cut:], y[cut:], *names
+    )

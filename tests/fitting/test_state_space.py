@@ -305,3 +305,25 @@ def test_the_states_of_a_free_run_are_those_of_a_walk_sample_by_sample():
             monomials(np.r_[x, un[k]], expo, lo, hi, zeta)
             x = A @ x + B @ un[k] + E @ zeta
         assert np.allclose(model.states(u, x0), expected, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("record", ["lure", "wiener-hammerstein"])
+def test_multivariable_feedback_and_wiener_hammerstein_plants_are_polynomial_state_spaces(
+    record,
+):
+    """A static block fed back around a linear core, or between two linear blocks, makes
+    the state update polynomial in the state: the polynomial state space holds these
+    block models of several channels (with more parameters than the structure needs)."""
+    from reference import mimo_lure_record, mimo_wiener_hammerstein_record
+
+    make, nx = {"lure": (mimo_lure_record, 2),
+                "wiener-hammerstein": (mimo_wiener_hammerstein_record, 4)}[record]  # fmt: skip
+    data, fresh = make()
+    from blockid.evaluation.validate import evaluate
+
+    def fit_percent(structure, **options):
+        model = fit_model(data, structure, nx=nx, **options).model
+        return min(evaluate(model, fresh, "simulation").metrics["fit_percent"].values())
+
+    assert fit_percent("polynomial-state-space", degree=3, monomials="states") > 99.5
+    assert fit_percent("state-space") < 90.0

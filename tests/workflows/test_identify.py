@@ -18,7 +18,12 @@ from blockid.data import Dataset
 from blockid.models import ARX, ChainModel, Hammerstein
 from blockid.workflows.identify import EFFORTS, Effort, identify
 
-from reference import mimo_hw_record, squared_state_record
+from reference import (
+    mimo_hw_record,
+    mimo_lure_record,
+    mimo_wiener_hammerstein_record,
+    squared_state_record,
+)
 
 #: A small search for tests: 3 folds, orders up to 3, delays up to 2, 3 block families.
 SMALL = Effort("small", 3, 2, 3, 2, 1, 3, 15, 10_000, 2, 40, 1)
@@ -430,3 +435,17 @@ def test_a_plant_whose_inputs_act_with_different_delays_gets_each_pairs_delay():
     best = min(common, key=lambda s: s.rmse)
     assert result.selected.rmse < 1.02 * best.rmse
     assert result.selected.n_parameters < best.n_parameters
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("make", [mimo_lure_record, mimo_wiener_hammerstein_record])
+def test_multivariable_feedback_and_wiener_hammerstein_plants_get_a_polynomial_state_space(make):
+    """identify finds the polynomial state space that holds a Lur'e or Wiener-Hammerstein
+    plant of two inputs and two outputs, and it simulates fresh data within 0.5 %."""
+    from blockid.evaluation.validate import evaluate
+
+    data, fresh = make()
+    result = identify(data, effort="quick", jobs=1)
+    assert result.selected.candidate.structure == "polynomial-state-space"
+    fit = evaluate(result.model, fresh, "simulation").metrics["fit_percent"]
+    assert min(fit.values()) > 99.5
