@@ -649,39 +649,56 @@ WHY_BLOCK: dict[str, str] = {
 
 WHY: dict[str, str] = {
     "emps": (
-        "The integrating Hammerstein model won the three folds (cross-validated 18.2 mm "
-        "against 21.3 mm for the best ARX) and drifts on the test record (47.7 mm; our ARX "
-        "8.84 mm). A model that integrates accumulates its velocity error: each fold is "
-        "8 280 samples, the test record 24 841 simulated from 20 samples, so the folds "
-        "under-state an integrating model's error at the test's horizon. Not tuned away: "
-        "a rule that favours the ARX here would have to be justified on estimation data "
-        "alone, and one was not found in this round (open in issue 20)."
+        "The integrating Hammerstein model scores best in the folds (18.2 mm against 21.3 "
+        "for ARX(4, 2, 8)) but not consistently: fold by fold 12, 28 and 16 mm against 49, "
+        "7 and 27 (mean log ratio -0.16, standard error 0.82), so identify keeps the linear "
+        "model (its one-standard-error rule, docs/identify.md); before that rule it chose "
+        "the Hammerstein model, which tested 47.7 mm (the pulses record drives the input to "
+        "-7.9..9.0 against -4.3..4.1 in estimation, where its cubic extrapolates and its "
+        "integrator accumulates the error). What is left is the linear model space: the "
+        "ARX tests 8.84 mm against the published LTI state space's 5.53; our linear "
+        "state-space fits on all estimation data test 41, 36 and 216 mm (2, 3, 4 states) "
+        "and every linear candidate's folds err by 5 to 63 mm, so the folds cannot rank "
+        "linear models to the 5 mm the test separates (open in issue 20)."
     ),
     "daisy_ballbeam": (
-        "Same pattern as the EMPS: an output-error model with an integrator won the folds "
-        "(0.0557 against 0.0785 for the best ARX, each fold 125 samples) and drifts over "
-        "the 500-sample test half (0.232 against 0.0706)."
+        "An output-error model with an integrator beats the best ARX on every one of the "
+        "four folds (0.031/0.039/0.042/0.054 against 0.040/0.089/0.051/0.066) and the best "
+        "linear model without integrator, output-error(4, 5, 14), consistently (mean log "
+        "ratio -0.32, standard error 0.06, so the linear-unless-consistent rule keeps it), "
+        "and on its own 500 estimation samples after the refit (0.049 against the ARX's "
+        "0.065), yet drifts over the 500-sample test half (0.232 against 0.0706). One "
+        "estimation-only check points the other way: fitted on the first 80 % and "
+        "simulated over the last 20 % (100 samples) it errs 0.096 against the ARX's 0.057; "
+        "the folds, each 125 samples, are the criterion the rule study chose because such "
+        "single tails were the noisier judge on the other sets (open in issue 20)."
     ),
     "daisy_heating_system": (
-        "The estimation half's folds favour the 4-state linear state-space model 3.4 to 1 "
-        "over the best ARX (16.3 against 55.3), the test half favours the ARX 4 to 1 (10.6 "
-        "against 44.1): 400 estimation samples in four folds of 100, whose evidence the "
-        "second half does not bear out. Choosing by the test would be tuning on it."
+        "The 4-state linear state space scored best in the folds (16.3 against 18.8 for 3 "
+        "states) but its refit on all 400 estimation samples simulated its own data 8.5 "
+        "times worse than the folds had held-back data: refused (identify's refit check), "
+        "the 3-state model fitted instead, which tests 3.44 against the ARX's 10.6 (before "
+        "that check: the 4-state refit, 44.1)."
     ),
     "daisy_flexible_robot_arm": (
         "The Hammerstein-Wiener model (28 parameters) scored 0.0071 in the folds against "
-        "0.0080 for ARX(8, 9) and tests 0.0104 against 0.0082: with 512 estimation samples "
-        "the folds (128 each) do not separate them reliably."
+        "0.0080 for ARX(8, 9) but won only 3 of 4 folds, not consistently (mean log ratio "
+        "-0.13, standard error 0.15): the ARX is chosen and tests 0.0082 (the "
+        "Hammerstein-Wiener model: 0.0104). With 512 estimation samples nothing beyond "
+        "linear earns its parameters."
     ),
     "box_jenkins_gas_furnace": (
-        "A tie in the folds (0.425 against 0.420 for ARX(7, 5, 2), within the 2 % near-tie "
-        "band), where the parsimony rule takes the candidate with fewer parameters; the test "
-        "half (148 samples) gives 1.27 against 1.23 (3 %): the 296-sample record cannot "
+        "A tie in the folds (0.425 for a Hammerstein-Wiener model against 0.420 for "
+        "ARX(7, 5, 2); mean log ratio +0.01, standard error 0.05): the ARX is chosen and "
+        "tests 1.23 (the Hammerstein-Wiener model: 1.27): the 296-sample record cannot "
         "support more than a linear model."
     ),
     "daisy_dryer": (
-        "A tie (0.117 against 0.116): the hair dryer is close to linear, and the search "
-        "found no nonlinearity worth its parameters (cross-validated 0.1105 against 0.1114)."
+        "The hair dryer is close to linear: a saturation Hammerstein model scored 0.1105 "
+        "against 0.1118 for ARX(3, 4, 3), winning 2 of 4 folds (mean log ratio -0.01, "
+        "standard error 0.02), so the ARX is chosen: 0.1174 on the test half against "
+        "0.1162 for the ARX(8, 8, 2) of the reference column and 0.1169 for the "
+        "Hammerstein model."
     ),
     "wh_process_noise": (
         "Linear output-error chosen (cross-validated 87.9 mV against 88.9 for the best "
