@@ -27,6 +27,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from blockid._kernels import writable
 from blockid._kernels.backlash import backlash_run
 from blockid._kernels.simulation import backlash_sensitivity
 from blockid.blocks.base import DynamicBlock
@@ -234,7 +235,7 @@ class Backlash(DynamicBlock):
             bad = int(np.flatnonzero(~np.isfinite(arr))[0])
             raise DataError(f"u contains a non-finite value at index {bad}; remove or fill it")
         x_start = _check_parameter("x0", x0, positive=None)
-        return backlash_run(np.ascontiguousarray(arr), self.to_vector(), x_start)
+        return backlash_run(writable(arr), self.to_vector(), x_start)
 
 
 def _check_parameter(name: str, value: Any, positive: bool | None) -> float:

@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from blockid._kernels import writable
 from blockid._kernels.arx import arx_simulate
 from blockid._kernels.simulation import allpole_run
 from blockid.blocks.base import Block
@@ -187,7 +188,7 @@ class LinearBlock(Block):
             k = min(n0, x0.size)
             x[:k, 0] = x0[:k]
         A, B = self._lag_arrays()
-        arx_simulate(A, B, w, x, n0)
+        arx_simulate(A, B, writable(w), x, n0)
         return x[:, 0]
 
     def predict(self, w: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -246,7 +247,7 @@ class LinearBlock(Block):
                 fx[d:, 0] += self.b[i] * w[: N - d]
                 F[d:] += self.b[i] * S_in[: N - d]
         xs = x[:, None].copy()
-        allpole_run(np.ascontiguousarray(self.a), fx, xs, start)
+        allpole_run(writable(self.a), fx, xs, start)
         x[:] = xs[:, 0]
         for j in range(1, self.na + 1):
             col = own[j - 1]
@@ -256,4 +257,4 @@ class LinearBlock(Block):
             col, d = own[self.na + i], self.nk + i
             if col >= 0 and d < N:
                 F[d:, col] = w[: N - d]
-        allpole_run(np.ascontiguousarray(self.a), F, S, start)
+        allpole_run(writable(self.a), F, S, start)

@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from blockid._kernels import rls as _k
+from blockid._kernels import writable
 from blockid.defaults import RECURSIVE
 from blockid.errors import EstimationError, ParameterError
 from blockid.estimators._base import Interval, RegressionEstimator, check_regression
@@ -182,4 +183,4 @@ class RecursiveLeastSquares(RecursiveEstimator):
 
     def _kernel(self, theta, P, Phi, y, e, start) -> int:
         lam = self._schedule.factors(start, Phi.shape[0])
-        return _k.rls_run(theta, P, Phi, y, lam, self._trace_max(Phi.shape[1]), e)
+        return _k.rls_run(theta, P, Phi, writable(y), lam, self._trace_max(Phi.shape[1]), e)

@@ -178,7 +178,7 @@ class BacklashAWRLS(RecursiveAlgorithm):
             self.switching.clear()
         self.switching.append((u, f1, f2))
         status, reason = _k.backlash_aw_rls_run(
-            theta, P, u, v, orders, self.params, x, f1, f2, hist
+            theta, P, u, v, orders, self.params, x, f1, f2, hist, np.empty(N)
         )
         return status, reason, ""
 

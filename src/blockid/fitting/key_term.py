@@ -162,7 +162,9 @@ class KeyTermRLS(RecursiveAlgorithm):
             [r1, nb, na, r2, nk, self.has_in, self.has_out, n0, stride], dtype=np.int64
         )
         w, x = np.empty(N), np.empty(N)
-        status, reason = _k.key_term_run(theta, P, u, y, lam, orders, self.limits, w, x, hist)
+        status, reason = _k.key_term_run(
+            theta, P, u, y, lam, orders, self.limits, w, x, hist, np.empty(N)
+        )
         detail = ""
         if status != OK and self.has_out:
             x_max = float(np.max(np.abs(x[:status]), initial=0.0)) * self.sy

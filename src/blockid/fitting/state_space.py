@@ -62,6 +62,7 @@ from typing import Any
 
 import numpy as np
 
+from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_simulate
 from blockid.data.dataset import Dataset
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
@@ -233,8 +234,8 @@ def _bd_x0(
 
     def response(B1: np.ndarray, u1: np.ndarray, x0: np.ndarray) -> np.ndarray:
         out = np.zeros((u1.shape[0], l))
-        pnlss_simulate(A, B1, C, np.zeros((l, 1)), zero_e, zero_f, no_expo, -lims, lims,
-                       np.ascontiguousarray(u1), x0, out)  # fmt: skip
+        pnlss_simulate(writable(A), writable(B1), writable(C), np.zeros((l, 1)), zero_e, zero_f,
+                       no_expo, -lims, lims, writable(u1), x0, out)  # fmt: skip
         return out
 
     for e, (u, y) in enumerate(zip(sig.u, sig.y, strict=True)):

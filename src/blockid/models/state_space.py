@@ -38,6 +38,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_jacobian, pnlss_simulate
 from blockid.errors import DataError, ModelFileError, OrderError
 from blockid.models.base import Model, excursion
@@ -462,8 +463,9 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         return cls(self.inputs, self.outputs, **kwargs)
 
     def _arrays(self) -> tuple[np.ndarray, ...]:
-        return (self.A, self.B, self.C, self.D, self.E, self.F, self.exponents,
-                np.ascontiguousarray(self.lower), np.ascontiguousarray(self.upper))  # fmt: skip
+        arrays = (self.A, self.B, self.C, self.D, self.E, self.F, self.exponents, self.lower,
+                  self.upper)  # fmt: skip
+        return tuple(writable(a) for a in arrays)
 
     # ------------------------------------------------------------------ signals
     def run(self, un: np.ndarray, x0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -471,7 +473,7 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         (N, ny) and the state after the last sample."""
         x = np.zeros(self.nx) if x0 is None else np.array(x0, dtype=float)
         y = np.zeros((un.shape[0], len(self.outputs)))
-        pnlss_simulate(*self._arrays(), np.ascontiguousarray(un), x, y)
+        pnlss_simulate(*self._arrays(), writable(un), x, y)
         return y, x
 
     def states(self, u: Any, x0: np.ndarray | None = None) -> np.ndarray:
@@ -486,7 +488,7 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         eye, no_d, no_f = np.eye(self.nx), np.zeros((self.nx, nu)), np.zeros((self.nx, nm))
         with np.errstate(all="ignore"):
             pnlss_simulate(A, B, eye, no_d, E, no_f, expo, lo, hi,
-                           np.ascontiguousarray(un), x, out)  # fmt: skip
+                           writable(un), x, out)  # fmt: skip
         return out
 
     def settled_state(self, un0: np.ndarray, samples: int = 1000) -> np.ndarray:
@@ -516,7 +518,7 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         ny = len(self.outputs)
         out = np.zeros((un.shape[0], ny))
         J = np.zeros((un.shape[0] * ny, S.shape[1]))
-        pnlss_jacobian(*self._arrays(), np.ascontiguousarray(un), x, S, out, J)
+        pnlss_jacobian(*self._arrays(), writable(un), x, S, out, J)
         return out, J
 
     @property
@@ -558,7 +560,7 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         one = np.zeros((1, len(self.outputs)))
         for k in range(un.shape[0]):
             before = x.copy()
-            pnlss_simulate(*self._arrays(), np.ascontiguousarray(un[k : k + 1]), x, one)
+            pnlss_simulate(*self._arrays(), writable(un[k : k + 1]), x, one)
             out[k] = one[0]
             x = x + self.K @ (yn[k] - one[0]) if np.all(np.isfinite(before)) else x
         pred = out * self.output_scale + self.output_offset

@@ -44,6 +44,7 @@ from scipy.optimize import brentq
 from scipy.signal import butter, sosfiltfilt
 
 from blockid._kernels import electrohydraulic as _k
+from blockid._kernels import writable
 from blockid.errors import ParameterError
 
 __all__ = [
@@ -488,7 +489,7 @@ def simulate_electrohydraulic(
     p = params.to_array()
     x0 = electrohydraulic_equilibrium(params.initial_position, params)
     states = _k.electrohydraulic_integrate(
-        x0, p, np.ascontiguousarray(u), sample_time / n_sub, n_sub
+        x0, p, writable(np.asarray(u, dtype=float)), sample_time / n_sub, n_sub
     )
     angle, _ = _k.electrohydraulic_angle(np.ascontiguousarray(states[:, 0]), p)
     measured = angle.copy()
