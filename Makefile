@@ -12,12 +12,14 @@ DEMO_DIR ?= demo-output
 # as on this project's machines) every process compiled NumPy, SciPy and pandas again at
 # import (6.0 s against 1.9 s to import blockid's fitting stack). So: install without it,
 # then compile the environment's modules on every core at once (compileall -j 0: 28 s
-# against pip's ~45 s; a module that does not compile only keeps its source).
+# against pip's ~45 s; a module that does not compile only keeps its source), less the
+# packages' own test suites, which nothing imports (2 640 of 7 223 files: 13.4 s, and
+# 12.2 s more with them).
 SITE = $$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --disable-pip-version-check --no-compile -e ".[test]"
-	$(BIN)/python -m compileall -q -j 0 "$(SITE)" src > /dev/null || true
+	$(BIN)/python -m compileall -q -j 0 -x '/tests/' "$(SITE)" src > /dev/null || true
 	touch $(STAMP)
 
 demo: $(STAMP)
