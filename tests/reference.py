@@ -241,3 +241,20 @@ def _two_parts(u, y, rng, noise):
     return Dataset.from_arrays(u[:cut], noisy[:cut], *names), Dataset.from_arrays(
         u[cut:], y[cut:], *names
     )
+
+
+def mimo_delays_record(delays, n=1500, seed=0, noise=0.02):
+    """A coupled 2-input 2-output ARX plant whose inputs act with their own delays
+    (``delays[i][j]``: of input j in output i), driven by held Gaussian inputs, with
+    white output noise (``noise``, absolute)."""
+    from blockid.data import Dataset
+
+    (a, b), (c, d) = delays
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.standard_normal((n // 3, 2)), 3, axis=0)
+    y = np.zeros((n, 2))
+    for t in range(10, n):
+        y[t, 0] = 1.2 * y[t - 1, 0] - 0.4 * y[t - 2, 0] + 0.5 * u[t - a, 0] + 0.3 * u[t - b, 1]
+        y[t, 1] = 0.6 * y[t - 1, 1] + 0.6 * u[t - c, 0] - 0.5 * u[t - d, 1]
+    y += noise * rng.standard_normal(y.shape)
+    return Dataset.from_arrays(u, y, ["u1", "u2"], ["y1", "y2"])

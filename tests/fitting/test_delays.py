@@ -7,18 +7,7 @@ from blockid import errors
 from blockid.data import Dataset, Experiment
 from blockid.fitting.delays import channel_delays
 
-
-def two_by_two(delays, n=1500, seed=0, noise=0.02):
-    """A coupled 2-input 2-output ARX plant; ``delays[i][j]``: of input j in output i."""
-    (a, b), (c, d) = delays
-    rng = np.random.default_rng(seed)
-    u = np.repeat(rng.standard_normal((n // 3, 2)), 3, axis=0)
-    y = np.zeros((n, 2))
-    for t in range(10, n):
-        y[t, 0] = 1.2 * y[t - 1, 0] - 0.4 * y[t - 2, 0] + 0.5 * u[t - a, 0] + 0.3 * u[t - b, 1]
-        y[t, 1] = 0.6 * y[t - 1, 1] + 0.6 * u[t - c, 0] - 0.5 * u[t - d, 1]
-    y += noise * rng.standard_normal(y.shape)
-    return Dataset.from_arrays(u, y, ["u1", "u2"], ["y1", "y2"])
+from reference import mimo_delays_record as two_by_two
 
 
 @pytest.mark.parametrize("delays", [((1, 6), (3, 7)), ((0, 4), (2, 0)), ((5, 1), (1, 9))])
@@ -49,3 +38,32 @@ def test_several_experiments_and_bad_requests():
         channel_delays(d, nb=0)
     with pytest.raises(errors.DataError, match="too short.*smaller max_delay"):
         channel_delays(Dataset.from_arrays(e.u[:12], e.y[:12], ["u1", "u2"], ["y1", "y2"]))
+
+
+def test_a_pair_whose_input_does_not_act_gets_no_delay_of_its_own():
+    """A flat scan's longest 'best' delay means nothing: without evidence a pair takes
+    the median of the pairs that have it (before: 9 and 10 on this diagonal plant)."""
+    rng = np.random.default_rng(3)
+    n = 1500
+    u = np.repeat(rng.standard_normal((n // 3, 2)), 3, axis=0)
+    y = np.zeros((n, 2))
+    for t in range(4, n):
+        y[t, 0] = 0.7 * y[t - 1, 0] + u[t - 2, 0]
+        y[t, 1] = 0.5 * y[t - 1, 1] + 0.8 * u[t - 2, 1]
+    y += 0.02 * rng.standard_normal(y.shape)
+    found = channel_delays(Dataset.from_arrays(u, y, ["u1", "u2"], ["y1", "y2"]))
+    assert found.evidence.tolist() == [[True, False], [False, True]]
+    assert found.nk.tolist() == [[2, 2], [2, 2]] and found.as_option() == 2
+    # an input that never moves, and outputs that are noise: no evidence anywhere
+    u[:, 1] = 0.5
+    noise = rng.standard_normal((n, 2))
+    found = channel_delays(Dataset.from_arrays(u, noise, ["u1", "u2"], ["y1", "y2"]))
+    assert not found.evidence.any() and found.as_option() == 0
+
+
+def test_too_few_rows_for_the_regression_are_refused_not_fitted_exactly():
+    d = two_by_two(((1, 3), (2, 1)), n=30)
+    e = d.experiments[0]
+    short = Dataset.from_arrays(e.u[:16], e.y[:16], ["u1", "u2"], ["y1", "y2"])
+    with pytest.raises(errors.DataError, match="regression rows for 7 coefficients"):
+        channel_delays(short, max_delay=4)

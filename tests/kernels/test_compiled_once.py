@@ -25,7 +25,17 @@ SCRIPT = textwrap.dedent(
     lure.simulate(u)
     hammer = fit_model(data, "hammerstein", na=2, nb=2, nk=1, max_nfev=3).model
     hammer.simulate(u)
+    from blockid._kernels import rls
+    from blockid.estimators import AdaptiveWeightedRLS, RecursiveLeastSquares
+    rng = np.random.default_rng(0)
+    for frozen in (False, True):  # a caller's regressors, writable or read-only
+        Phi, y = rng.standard_normal((50, 3)), rng.standard_normal(50)
+        Phi.flags.writeable = y.flags.writeable = not frozen
+        RecursiveLeastSquares().fit(Phi, y)
+        AdaptiveWeightedRLS().fit(Phi, y)
     kernels = {
+        "rls_run": rls.rls_run,
+        "aw_rls_run": rls.aw_rls_run,
         "pnlss_simulate": state_space.pnlss_simulate,
         "pnlss_jacobian": state_space.pnlss_jacobian,
         "feedback_simulate": feedback.feedback_simulate,
@@ -37,8 +47,10 @@ SCRIPT = textwrap.dedent(
 )
 
 
-def test_each_kernel_the_library_calls_is_compiled_for_one_type():
-    """In a process of its own (``signatures``: the types compiled or loaded from the
+def test_the_kernels_of_fits_simulations_and_estimators_are_compiled_for_one_type():
+    """The free runs and sensitivities of the polynomial state space, the feedback and
+    the chain models, and the RLS kernels behind the regressor-level estimators (fed
+    writable and read-only arrays), in a process of its own (``signatures``: the types compiled or loaded from the
     cache in this process, as the calls asked for them)."""
     import os
     from pathlib import Path

@@ -19,6 +19,7 @@ from blockid.models import ARX, ChainModel, Hammerstein
 from blockid.workflows.identify import EFFORTS, Effort, identify
 
 from reference import (
+    mimo_delays_record,
     mimo_hw_record,
     mimo_lure_record,
     mimo_wiener_hammerstein_record,
@@ -418,19 +419,14 @@ def test_identify_says_when_the_linear_model_is_chosen_over_a_better_score(monke
 def test_a_plant_whose_inputs_act_with_different_delays_gets_each_pairs_delay():
     import dataclasses
 
-    rng = np.random.default_rng(0)
-    n = 1200
-    u = np.repeat(rng.standard_normal((n // 3, 2)), 3, axis=0)
-    y = np.zeros((n, 2))
-    for t in range(6, n):
-        y[t, 0] = 1.2 * y[t - 1, 0] - 0.4 * y[t - 2, 0] + 0.5 * u[t - 1, 0] + 0.3 * u[t - 4, 1]
-        y[t, 1] = 0.6 * y[t - 1, 1] + 0.6 * u[t - 3, 0] - 0.5 * u[t - 1, 1]
-    y += 0.02 * rng.standard_normal(y.shape)
-    data = Dataset.from_arrays(u, y, ["u1", "u2"], ["y1", "y2"])
+    data = mimo_delays_record(((1, 4), (3, 1)), n=1200)
     effort = dataclasses.replace(SMALL, max_delay=4)
     result = identify(data, structures=["arx"], effort=effort, jobs=1)
     assert result.selected.candidate.options["nk"] == ((1, 4), (3, 1))
     assert any("per-pair delays" in n and "[[1, 4], [3, 1]]" in n for n in result.notes)
+    doc = json.loads(json.dumps(result.to_dict()))
+    assert doc["selected"]["orders"]["nk"] == [[1, 4], [3, 1]]
+    assert doc["models"][0]["options"]["nk"] == [[1, 4], [3, 1]]  # a list, not its text
     # one common delay needs a longer input window to reach every lag: more parameters
     # for no better score
     common = [s for s in result.ranked if isinstance(s.candidate.options["nk"], int)]

@@ -109,11 +109,12 @@ class RecursiveEstimator(RegressionEstimator):
     def _run(self, Phi: np.ndarray, Y: np.ndarray, E: np.ndarray, start: int) -> int:
         P0 = self.covariance_
         status = _k.OK
+        Phi = writable(Phi)  # read-only regressors would compile the kernels again
         for k in range(Y.shape[1]):
             P = P0.copy() if k < Y.shape[1] - 1 else P0
             theta = np.ascontiguousarray(self._theta[:, k])
             e = np.empty(Y.shape[0])
-            st = self._kernel(theta, P, Phi, np.ascontiguousarray(Y[:, k]), e, start)
+            st = self._kernel(theta, P, Phi, writable(Y[:, k]), e, start)
             self._theta[:, k] = theta
             E[:, k] = e
             if st != _k.OK:
@@ -183,4 +184,4 @@ class RecursiveLeastSquares(RecursiveEstimator):
 
     def _kernel(self, theta, P, Phi, y, e, start) -> int:
         lam = self._schedule.factors(start, Phi.shape[0])
-        return _k.rls_run(theta, P, Phi, writable(y), lam, self._trace_max(Phi.shape[1]), e)
+        return _k.rls_run(theta, P, Phi, y, lam, self._trace_max(Phi.shape[1]), e)

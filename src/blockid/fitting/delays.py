@@ -9,9 +9,19 @@ over ``0 .. max_delay`` first with that input alone, then once more with every o
 input at the delay found for it (an input that explains part of the output would
 otherwise pull the others' losses). The delay is the longest whose residual is within
 chance of the smallest: a window that starts a sample early still holds the true first
-lag, and the one useless coefficient each window has lowers the residual by a chi-square
-share of one degree of freedom, so within ``4 nb / N`` (relative) of the smallest (a
-95 % bound, 3.84, per coefficient), the longer delay is taken.
+lag, and each of a window's ``nb`` coefficients that fits only noise lowers the
+residual by a chi-square share of one degree of freedom, so within ``4 nb / N``
+(relative; 3.84 is the 95 % point of one degree of freedom) of the smallest, the longer
+delay is taken.
+
+**Evidence.** A pair whose input does not act on the output has a flat scan, whose
+longest "best" delay means nothing. So the best delay's residual is tested against the
+residual without that input (the others at their delays): the reduction, ``N`` times
+its relative size, must exceed the chi-square 99.9 % point of ``nb`` degrees of freedom
+(strict, as the smallest of ``max_delay + 1`` residuals is taken). A pair that fails has
+no evidence (``ChannelDelays.evidence``): its delay is the median of the pairs that
+have it (0 if none does), so it does not make a per-pair candidate on its own. Records
+with fewer than five rows per regression coefficient are refused.
 
 Every delay of a pair is scored on the same samples (those that the longest delay
 leaves), regressors never straddle two experiments, and the signals are divided by
@@ -44,12 +54,17 @@ class ChannelDelays:
         ``(n_outputs, n_inputs)`` delays, MATLAB's ``nk`` matrix.
     loss : numpy.ndarray
         ``(n_outputs, n_inputs, max_delay + 1)`` mean squared residual (normalised
-        signals) of each delay of each pair, the others at their chosen delays.
+        signals) of each delay of each pair in the last scan of that pair (the other
+        inputs at the delays found for them by then).
+    evidence : numpy.ndarray of bool
+        ``(n_outputs, n_inputs)``: the pair's input lowers the residual beyond chance
+        (module docstring); where not, ``nk`` holds the median of the pairs that do.
     outputs, inputs : tuple of str
     """
 
     nk: np.ndarray
     loss: np.ndarray
+    evidence: np.ndarray
     outputs: tuple[str, ...]
     inputs: tuple[str, ...]
 
@@ -90,6 +105,14 @@ def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2)
             f"every experiment is too short to scan delays up to {max_delay} "
             f"({start + 2} samples needed); give a smaller max_delay"
         )
+    rows = sum(e.n_samples - start for e in experiments)
+    columns = na + nb * data.n_inputs + 1
+    if rows < 5 * columns:
+        raise DataError(
+            f"{rows} regression rows for {columns} coefficients: too few to scan delays up "
+            f"to {max_delay} (at least {5 * columns} needed); give more data or a smaller "
+            "max_delay"
+        )
     u_all = np.vstack([e.u for e in experiments])
     y_all = np.vstack([e.y for e in experiments])
     u_scale = np.where(u_all.std(axis=0) > 0, u_all.std(axis=0), 1.0)
@@ -101,15 +124,26 @@ def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2)
     ny, nu = data.n_outputs, data.n_inputs
     nk = np.zeros((ny, nu), dtype=int)
     loss = np.full((ny, nu, max_delay + 1), np.inf)
+    evidence = np.zeros((ny, nu), dtype=bool)
+    from scipy.stats import chi2
+
+    bound = float(chi2.ppf(0.999, nb))
     for j in range(ny):
         scan = _Scan(signals, j, start, na, nb)
         for i in range(nu):
             nk[j, i] = scan.best(i, {}, loss[j, i])
-        if nu > 1:
-            for i in range(nu):
-                others = {m: int(nk[j, m]) for m in range(nu) if m != i}
+        for i in range(nu):
+            others = {m: int(nk[j, m]) for m in range(nu) if m != i}
+            if nu > 1:
                 nk[j, i] = scan.best(i, others, loss[j, i])
-    return ChannelDelays(nk, loss, tuple(data.outputs), tuple(data.inputs))
+            without = scan.residual([scan.lagged(m, d) for m, d in others.items()])
+            best = float(loss[j, i, nk[j, i]])
+            evidence[j, i] = scan.target.size * (without - best) / max(best, 1e-300) > bound
+    if evidence.any():
+        nk[~evidence] = int(np.round(np.median(nk[evidence])))
+    else:
+        nk[:] = 0
+    return ChannelDelays(nk, loss, evidence, tuple(data.outputs), tuple(data.inputs))
 
 
 class _Scan:

@@ -558,9 +558,10 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         x = self.initial_state(u, y[: self.max_lag])
         out = np.zeros_like(yn)
         one = np.zeros((1, len(self.outputs)))
+        arrays, un = self._arrays(), writable(un)
         for k in range(un.shape[0]):
             before = x.copy()
-            pnlss_simulate(*self._arrays(), writable(un[k : k + 1]), x, one)
+            pnlss_simulate(*arrays, un[k : k + 1], x, one)
             out[k] = one[0]
             x = x + self.K @ (yn[k] - one[0]) if np.all(np.isfinite(before)) else x
         pred = out * self.output_scale + self.output_offset

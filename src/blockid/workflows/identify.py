@@ -84,7 +84,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset
-from blockid.data.folds import Fold, FoldPlan, fold_plan, materialise
+from blockid.data.folds import Fold, FoldPlan, Segment, fold_plan, materialise
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.trust import Trust, assess
 from blockid.fitting.registry import STRUCTURES, searched_structures
@@ -191,7 +191,12 @@ class Score:
 
 
 def _jsonable(options: dict[str, Any]) -> dict[str, Any]:
-    return {k: v if isinstance(v, int | float | str | bool) else str(v) for k, v in options.items()}
+    def plain(v: Any) -> Any:
+        if isinstance(v, int | float | str | bool):
+            return v
+        return [plain(x) for x in v] if isinstance(v, tuple) else str(v)
+
+    return {k: plain(v) for k, v in options.items()}
 
 
 @dataclass(frozen=True)
@@ -718,13 +723,6 @@ def identify(
     if not eligible:
         raise EstimationError(_nothing_fitted(search, chosen))
     eligible, earned = _earned(eligible)
-    if earned is not None and earned["linear_chosen"]:
-        notes.append(
-            f"{earned['best']} scored best but did not beat the linear {earned['linear']} "
-            f"consistently over the folds (it won {earned['folds_won']} of "
-            f"{earned['folds']}; mean log error ratio {earned['mean_log_ratio']:+.3f}, "
-            f"standard error {earned['standard_error']:.3f}): the linear model is chosen"
-        )
     fit, selected = None, None
     short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
     for s in eligible:
@@ -748,6 +746,19 @@ def identify(
         )
     if fit is None or selected is None:
         raise EstimationError(_nothing_fitted(search, chosen))
+    if earned is not None and earned["linear_chosen"]:
+        chose = selected is eligible[0]
+        notes.append(
+            f"{earned['best']} scored best but did not beat the linear {earned['linear']} "
+            f"consistently over the folds (it won {earned['folds_won']} of "
+            f"{earned['folds']}; mean log error ratio {earned['mean_log_ratio']:+.3f}, "
+            f"standard error {earned['standard_error']:.3f}): "
+            + (
+                "the linear model is chosen"
+                if chose
+                else "the linear model was put first, but its refit failed"
+            )  # fmt: skip
+        )
     if progress is not None:
         progress("refit", 1, 1, selected.candidate.label)
 
@@ -891,6 +902,9 @@ def _per_pair_delays(search: _Search, notes: list[str]) -> tuple[tuple[int, ...]
         return None
     from blockid.fitting.delays import channel_delays
 
+    if search.long:  # the scan's least squares on the first samples of a long record
+        whole = tuple(Segment(i, 0, e.n_samples) for i, e in enumerate(data.experiments))
+        data = materialise(data, whole, search.effort.screen_samples)
     try:
         found = channel_delays(data, search.effort.max_delay)
     except BlockidError as exc:
