@@ -375,7 +375,7 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
         "model on any machine; the times depend on the machine.",
         "",
         "This run (2026-11-27): every single-output set at commit `e076ba6` (identify's "
-        "linear-unless-consistent rule), the multivariable sets again at `009d1e3` (per-pair "
+        "linear-unless-consistent rule), the multivariable sets again at `5552ad3` (per-pair "
         "delays; the single-output search is unchanged by it). Where a set's choice changed "
         "from the run before, its explanation below says so. The search times are not "
         "idle-machine times: during the WH 2009 search other work of ours ran beside it "
