@@ -7,15 +7,18 @@ space's free run was compiled six times in one test run). :func:`writable` gives
 one type every caller passes.
 """
 
+from typing import Any
+
 import numpy as np
 
 __all__ = ["writable"]
 
 
-def writable(array: np.ndarray) -> np.ndarray:
-    """``array`` as the kernels are compiled for: C-contiguous and writable (a read-only
-    or strided array is copied; the kernels never write to an input, so a copy changes
-    nothing but the compiled version used)."""
+def writable(values: Any, dtype: Any = None) -> np.ndarray:
+    """``values`` as the kernels are compiled for (as ``dtype`` when given): a
+    C-contiguous writable array (a read-only or strided one is copied; the kernels never
+    write to an input, so a copy changes nothing but the compiled version used)."""
+    array = np.asarray(values, dtype=dtype)
     if array.flags.writeable and array.flags.c_contiguous:
         return array
     return np.array(array, order="C", copy=True)

@@ -72,7 +72,6 @@ import numpy as np
 from blockid._kernels import backlash_awrls as _kb
 from blockid._kernels import key_term as _kk
 from blockid._kernels import rls as _kr
-from blockid._kernels import writable
 from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.fitting.arx import fit_arx, make_estimator, regressor_scale, signal_scales
@@ -903,7 +902,7 @@ class _OnlineARX(OnlineEstimator):
         else:
             lam = self.schedule.factors(out["updates"], m)
         if self.method == "rls":
-            return _kr.rls_run(theta, P, Phi, writable(target), lam, out["trace"], E)
+            return _kr.rls_run(theta, P, Phi, target, lam, out["trace"], E)
         return _kr.hierarchical_rls_run(theta, P, Phi, target, out["bounds"], lam, out["trace"], E)
 
     def _learn(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:

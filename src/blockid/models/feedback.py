@@ -334,8 +334,8 @@ class LinearFeedback(OneLinearBlock, Model):
     # ------------------------------------------------------------------ dynamics
     def _arrays(self) -> tuple[np.ndarray, np.ndarray]:
         return (
-            writable(np.asarray(self.a, dtype=float)),
-            writable(np.asarray(self.b, dtype=float)),
+            writable(self.a, float),
+            writable(self.b, float),
         )
 
     def _start(self, u: Any, y_initial: Any) -> tuple[np.ndarray, np.ndarray, int]:
@@ -361,13 +361,13 @@ class LinearFeedback(OneLinearBlock, Model):
         """Run the loop in place on ``y`` (rows from ``n0``); returns ``v = u - N(y)``."""
         a, b = self._arrays()
         if self._polynomial:
-            c = writable(np.asarray(self.feedback.coefficients, dtype=float))
+            c = writable(self.feedback.coefficients, float)
             return feedback_simulate(a, b, c, self.nk, s, y, n0)
         table = self.feedback.piecewise_linear()
         if table is not None:
             xs, ys, left, right = table
-            xs = writable(np.asarray(xs, dtype=float))
-            ys = writable(np.asarray(ys, dtype=float))
+            xs = writable(xs, float)
+            ys = writable(ys, float)
             return feedback_simulate_table(
                 a, b, xs, ys, float(left), float(right), self.nk, s, y, n0
             )
@@ -418,7 +418,7 @@ class LinearFeedback(OneLinearBlock, Model):
         s, y, n0 = self._start(u, y_initial)
         a, b = self._arrays()
         if self._polynomial:
-            c = writable(np.asarray(self.feedback.coefficients, dtype=float))
+            c = writable(self.feedback.coefficients, float)
             _, dy = feedback_sensitivity(a, b, c, self.nk, s, y, n0)
             skip = self.na + self.nb  # the row of c_1, fixed to 0
             free = np.concatenate((dy[:skip], dy[skip + 1 :]))

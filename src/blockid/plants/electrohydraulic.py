@@ -488,9 +488,7 @@ def simulate_electrohydraulic(
         raise ParameterError("current contains NaN or inf; pass finite currents in ampere.")
     p = params.to_array()
     x0 = electrohydraulic_equilibrium(params.initial_position, params)
-    states = _k.electrohydraulic_integrate(
-        x0, p, writable(np.asarray(u, dtype=float)), sample_time / n_sub, n_sub
-    )
+    states = _k.electrohydraulic_integrate(x0, p, writable(u, float), sample_time / n_sub, n_sub)
     angle, _ = _k.electrohydraulic_angle(np.ascontiguousarray(states[:, 0]), p)
     measured = angle.copy()
     if noise and params.angle_noise_std > 0.0:

@@ -475,10 +475,15 @@ class _Search:
         return near + [s for s in ordered if s not in near]
 
 
+def _logs(relative: Any) -> np.ndarray:
+    """The logs of the folds' relative errors (an exact fit counts as 1e-300)."""
+    return np.log(np.maximum(relative, 1e-300))
+
+
 def _combine_folds(relative: np.ndarray, rule: str) -> float:
     """One number from the folds' relative errors (:data:`RULES`)."""
     if rule == "geometric-mean":
-        return float(np.exp(np.mean(np.log(np.maximum(relative, 1e-300)))))
+        return float(np.exp(np.mean(_logs(relative))))
     if rule == "median":
         return float(np.median(relative))
     return float(np.mean(relative))
@@ -603,9 +608,7 @@ def _earned(eligible: list[Score]) -> tuple[list[Score], dict[str, Any] | None]:
     base = next((s for s in eligible if not _beyond_linear(s)), None)
     if base is None or len(best.folds) != len(base.folds) or len(best.folds) < 2:
         return eligible, None
-    d = np.log(np.maximum([f.relative for f in best.folds], 1e-300)) - np.log(
-        np.maximum([f.relative for f in base.folds], 1e-300)
-    )
+    d = _logs([f.relative for f in best.folds]) - _logs([f.relative for f in base.folds])
     mean, se = float(np.mean(d)), float(np.std(d, ddof=1) / math.sqrt(len(d)))
     wins = int(np.sum(d < 0))
     info = {
