@@ -246,6 +246,13 @@ CASES = {
         ),
         Case("block-state-space", "batch", 400, {"na": 2, "nb": 2, "nk": 1}, snr_db=50.0),
         Case("block-state-space", "rls", 400, {"na": 2, "nb": 2, "nk": 1}, snr_db=50.0),
+        Case(
+            "block-state-space",
+            "key-term-rls",
+            400,
+            {"input_block": "polynomial:degree=3", "na": 2, "nb": 2, "nk": 1},
+            snr_db=50.0,
+        ),
     )
 }
 

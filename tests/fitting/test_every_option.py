@@ -678,10 +678,75 @@ def _check_regression(case: Case, option: str) -> None:
         )
 
 
+#: Key-term RLS of several inputs: each option's change (its numbers against the truth:
+#: tests/fitting/test_key_term_channels.py). The case is a Hammerstein model (an input
+#: block only), which the recursion converges on.
+KEY_TERM_CHANNELS = "block-state-space/key-term-rls"
+_KEY_TERM_CHANGES = {
+    "input_block": "polynomial:degree=2",
+    "output_block": "polynomial:degree=2",
+    "na": 3,
+    "nb": 3,
+    "nk": 2,
+    "forgetting": 0.99,
+    "passes": 1,
+    "tol": 1e-2,
+    "initial_covariance": 10.0,
+    "initial_parameters": 0.3,
+    "normalize": False,
+    "record_history": True,
+}
+
+
+def _check_key_term_channels(case: Case, option: str) -> None:
+    data = case.data()
+    default = fit_model(data, case.structure, method=case.method, **case.options)
+    value = _KEY_TERM_CHANGES[option]
+    changed = fit_model(data, case.structure, method=case.method, **{**case.options, option: value})
+    if option == "record_history":  # the same fit, its trajectory kept
+        _same(default, changed)
+        assert not default.history and changed.history["theta"].shape[1] == len(
+            changed.history["names"]
+        )
+        # the last row is the estimate: the constant and the cubic's coefficients first
+        np.testing.assert_allclose(
+            changed.history["theta"][-1][:4], changed.model.input_blocks[0].coefficients
+        )
+        return
+    _differs(default, changed)
+    settings = changed.settings
+    if option == "input_block":
+        assert [b.coefficients.size for b in default.model.input_blocks] == [4]
+        assert [b.coefficients.size for b in changed.model.input_blocks] == [3]
+    elif option == "output_block":
+        assert default.model.output_blocks == (None,)
+        assert changed.model.output_blocks[0].degree == 2
+        assert settings["blocks"]["output"] == "polynomial:degree=2"
+    elif option in ("na", "nb"):
+        assert settings[option] == value
+        o = {**case.options, option: value}
+        assert changed.model.nx == o["na"] + o["nk"] + o["nb"] - 1
+    elif option == "nk":
+        assert settings["nk"] == {"u": 2}
+    elif option == "forgetting":
+        assert settings["forgetting"] == str(value)
+    elif option == "passes":
+        assert settings["passes_run"] == 1 < default.settings["passes_run"]
+    elif option == "tol":
+        assert settings["passes_run"] < default.settings["passes_run"]
+    elif option == "normalize":
+        assert settings["normalize"] is False and default.settings["normalize"] is True
+    else:  # initial_covariance, initial_parameters: the start of the recursion
+        assert settings[option] == value
+
+
 @pytest.mark.parametrize(("structure", "method", "option"), _params())
 def test_option_off_its_default_changes_the_fit(structure, method, option):
     if f"{structure}/{method}" in REGRESSION:
         _check_regression(CASES[f"{structure}/{method}"], option)
+        return
+    if f"{structure}/{method}" == KEY_TERM_CHANNELS:
+        _check_key_term_channels(CASES[KEY_TERM_CHANNELS], option)
         return
     case = CASES[f"{structure}/{method}"]
     expect = EXPECT.get(option)

@@ -279,7 +279,8 @@ def test_bad_settings_name_the_parameter(structure, kwargs, error, match):
 
 
 def test_needs_one_input_and_one_output():
-    data = Dataset.from_arrays(np.zeros((50, 2)), np.zeros(50))
+    # several inputs and one output go channel by channel (test_key_term_channels.py)
+    data = Dataset.from_arrays(np.zeros(50), np.zeros((50, 2)))
     with pytest.raises(DataError, match="one input and one output"):
         fit_key_term_rls(data, "arx")
 

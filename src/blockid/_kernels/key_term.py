@@ -112,7 +112,6 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist, err=None):
     phi = np.empty(n)
     g = np.empty(n)
     out = np.empty(2)
-    n_hist = hist.shape[0]
     row = 0
     for k in range(start, N):
         # w_hat(k) from the newest estimates                               (B1, B5)
@@ -135,9 +134,7 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist, err=None):
                 j = k - nk - i
                 if j >= 0:
                     xk += theta[ib + i - b_first] * w[j]
-            for j in range(1, na + 1):
-                if k - j >= 0:
-                    xk -= theta[ia + j - 1] * x[k - j]
+            xk = minus_ar(xk, theta, x, k, na, ia)
             if not (abs(xk) <= x_limit):  # also catches NaN
                 return k, REASON_EXPLODED
             x[k] = xk
@@ -156,25 +153,50 @@ def key_term_run(theta, P, u, y, lam, orders, limits, w, x, hist, err=None):
                 pw *= ud
         for i in range(b_first, nb):
             phi[ib + i - b_first] = w[k - nk - i]
-        for j in range(1, na + 1):
-            phi[ia + j - 1] = -x[k - j]
-        if has_out:
-            pw = x[k]
-            for m in range(2, r2 + 1):
-                pw *= x[k]
-                phi[iq + m - 2] = pw
-        lk = lam[k]
-        bound = trace_max if lk < 1.0 else np.inf
-        ok = rls_step(theta, P, phi, y[k], g, lk, 1.0, 1.0 / lk, bound, out)
-        if not ok or not np.isfinite(out[0]):
+        sizes = (na, ia, iq, r2, n0, stride)
+        row = output_step(theta, P, phi, g, out, x, y[k], k, lam[k], sizes, has_out,
+                          trace_max, err, hist, row)  # fmt: skip
+        if row < 0:
             return k, REASON_STEP
-        if err is not None:
-            err[k] = out[0]
-        if row < n_hist and (k - n0 + 1) % stride == 0:
-            for i in range(n):
-                hist[row, i] = theta[i]
-            row += 1
     return OK, REASON_OK
+
+
+@njit(cache=True)
+def minus_ar(xk, theta, x, k, na, ia):
+    """``xk - Σ_j a_j x(k-j)`` (``a_j = theta[ia + j - 1]``, past values before the record
+    0), subtracted term by term."""
+    for j in range(1, na + 1):
+        if k - j >= 0:
+            xk -= theta[ia + j - 1] * x[k - j]
+    return xk
+
+
+@njit(cache=True)
+def output_step(theta, P, phi, g, out, x, yk, k, lk, sizes, has_out, trace_max, err, hist, row):
+    """The end of one sample of the key-term recursions (this module's and
+    :mod:`blockid._kernels.key_term_channels`): the regressor's output part (``-x(k-j)``,
+    ``x(k)^m``), the RLS step (B5), the a-priori error into ``err`` (if given) and
+    ``theta`` into ``hist`` every ``stride``-th update. ``sizes = (na, ia, iq, r2, n0,
+    stride)``. Returns the next history row, or -1 when the step failed."""
+    na, ia, iq, r2, n0, stride = sizes
+    for j in range(1, na + 1):
+        phi[ia + j - 1] = -x[k - j]
+    if has_out:
+        pw = x[k]
+        for m in range(2, r2 + 1):
+            pw *= x[k]
+            phi[iq + m - 2] = pw
+    bound = trace_max if lk < 1.0 else np.inf
+    ok = rls_step(theta, P, phi, yk, g, lk, 1.0, 1.0 / lk, bound, out)
+    if not ok or not np.isfinite(out[0]):
+        return -1
+    if err is not None:
+        err[k] = out[0]
+    if row < hist.shape[0] and (k - n0 + 1) % stride == 0:
+        for i in range(theta.shape[0]):
+            hist[row, i] = theta[i]
+        row += 1
+    return row
 
 
 @njit(cache=True)

@@ -55,6 +55,7 @@ from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE, RECURSIVE
 from blockid.errors import ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
+from blockid.fitting.key_term_channels import ChannelKeyTermRLS, fit_key_term_channels
 from blockid.fitting.recursive import (
     RecursiveAlgorithm,
     Signals,
@@ -122,13 +123,9 @@ class KeyTermRLS(RecursiveAlgorithm):
     ``a_1..a_na``, ``q_2..q_r2`` (output block).
     """
 
-    method = "key-term RLS"
-    label = "key-term-rls"
-    reasons = {
-        _k.REASON_STEP: "the RLS update became non-finite or lost positive definiteness",
-        _k.REASON_EXPLODED: "the estimated internal signal x exceeded 1e6 (1 + max|y|): "
-        "the estimated linear block drives it unstable",
-    }
+    # one recursion, one or several inputs: the same names and failure reasons
+    method, label = ChannelKeyTermRLS.method, ChannelKeyTermRLS.label
+    reasons = ChannelKeyTermRLS.reasons
 
     def __init__(
         self,
@@ -277,7 +274,11 @@ def fit_key_term_rls(
     Parameters
     ----------
     data : Dataset
-        One input, one output; several experiments are processed one after another.
+        One output and one input; several experiments are processed one after another.
+        With several inputs (one output) the same recursion runs channel by channel,
+        paper B's two-segment polynomial of order ``r1`` on every input
+        (:func:`~blockid.fitting.key_term_channels.fit_key_term_channels`; ``nk`` may
+        then give one delay per input).
     structure : {"hammerstein-wiener", "hammerstein", "wiener", "arx"}
         Which blocks the model has (paper B's H-W model and its comparison models).
     na, nb, nk : int
@@ -324,7 +325,9 @@ def fit_key_term_rls(
     FitResult
         ``model`` is a :class:`~blockid.models.HammersteinWiener`,
         :class:`~blockid.models.Hammerstein`, :class:`~blockid.models.Wiener` or
-        :class:`~blockid.models.ARX`.
+        :class:`~blockid.models.ARX`; with several inputs a
+        :class:`~blockid.models.block_state_space.BlockStateSpace` (an ARX without
+        blocks).
 
     Raises
     ------
@@ -358,8 +361,14 @@ def fit_key_term_rls(
             f"unknown structure {structure!r} for key-term RLS; choose one of "
             f"{', '.join(KEY_TERM_STRUCTURES)}"
         )
-    check_siso(data, method)
     has_in, has_out = KEY_TERM_STRUCTURES[structure]
+    if isinstance(data, Dataset) and data.n_inputs > 1 and data.n_outputs == 1:
+        return _several_inputs(data, structure, scales, na=na, nb=nb, nk=nk, r1=r1, r2=r2,
+                               forgetting=schedule, passes=passes, tol=tol,
+                               initial_covariance=initial_covariance,
+                               initial_parameters=initial_parameters, normalize=normalize,
+                               record_history=record_history)  # fmt: skip
+    check_siso(data, method)
     na = int_at_least("na", na, 0)
     nb = int_at_least("nb", nb, 1)
     nk = int_at_least("nk", nk, 0)
@@ -386,4 +395,24 @@ def fit_key_term_rls(
         passes=passes,
         tol=tol,
         record_history=record_history,
+    )
+
+
+def _several_inputs(data: Dataset, structure: str, scales: Any, **options: Any) -> FitResult:
+    """Several inputs, one output: the same recursion channel by channel
+    (:func:`~blockid.fitting.key_term_channels.fit_key_term_channels`), with paper B's
+    two-segment polynomial of order ``r1`` on every input."""
+    if scales is not None:
+        raise ParameterError(
+            "scales (online learning's fixed scales) are for one input and one output; a "
+            "model of several inputs is learned offline, on its measured scales",
+            parameter="scales",
+        )
+    has_in, has_out = KEY_TERM_STRUCTURES[structure]
+    r1, r2 = options.pop("r1"), options.pop("r2")
+    return fit_key_term_channels(
+        data,
+        input_block=f"two-segment-polynomial:degree={checked('r1', r1)}" if has_in else None,
+        output_block=f"polynomial:degree={int_at_least('r2', r2, 2)}" if has_out else None,
+        **options,
     )

@@ -297,7 +297,7 @@ def _run_passes(
         before = theta.copy()
         in_pass = 0  # updates in this pass (where a forgetting schedule stands)
         for name, u, y in records:
-            m = (u.size - n0) // stride if trajectory is not None else 0
+            m = (u.shape[0] - n0) // stride if trajectory is not None else 0
             hist = np.zeros((m, theta.size))
             status, reason, detail = algorithm.run(theta, P, u, y, in_pass, hist, stride)
             if trajectory is not None:
@@ -309,8 +309,8 @@ def _run_passes(
                     f"try other orders, more exciting data or another method. "
                     f"{_CONVERGENCE_DOC}"
                 )
-            count += u.size - n0
-            in_pass += u.size - n0
+            count += u.shape[0] - n0
+            in_pass += u.shape[0] - n0
         if not np.all(np.isfinite(theta)):
             raise EstimationError(
                 f"{method} diverged in pass {p}: the parameter estimates are not finite. "
@@ -372,7 +372,7 @@ def fit_recursive(
     if np.ndim(initial_parameters) != 0:  # given in the data's units
         theta = algorithm.from_data_units(theta)
     P = initial_covariance * np.eye(n)
-    n_updates = sum(u.size - algorithm.n0 for _, u, _ in signals.records)
+    n_updates = sum(u.shape[0] - algorithm.n0 for _, u, _ in signals.records)
     stride = history_stride(passes, n_updates)
     trajectory = _Trajectory(n, stride) if record_history else None
 

@@ -831,6 +831,16 @@ STRUCTURES: dict[str, Structure] = {
                     recursive=True,
                     passes=("method",),
                 ),
+                Method(
+                    "key-term-rls",
+                    "blockid.fitting.key_term_channels:fit_key_term_block",
+                    ("input_block", "output_block", "na", "nb", "nk", "forgetting")
+                    + _PAPER
+                    + ("record_history",),
+                    "paper B's key-term RLS for one output of several inputs, passes over "
+                    "the record (default: two-segment polynomial per input, cubic output "
+                    "block)",
+                ),
             ),
             block_oriented=False,
             orders="state",

@@ -1,0 +1,277 @@
+"""Paper B's key-term RLS for several inputs (one output): the compiled pass against a
+plain recursion, one channel against the single-input method, a two-input
+Hammerstein-Wiener plant recovered, ARX against least squares, files and export, and
+what it refuses."""
+
+import numpy as np
+import pytest
+
+from blockid._kernels.key_term_channels import OK, key_term_channels_run
+from blockid.blocks import Polynomial, TwoSegmentPolynomial
+from blockid.data import Dataset
+from blockid.errors import DataError, EstimationError, ParameterError
+from blockid.fitting import fit_model
+from blockid.fitting.key_term import fit_key_term_rls
+from blockid.fitting.key_term_channels import fit_key_term_channels
+from blockid.models import ARX, HammersteinWiener, load_model, save_model
+from blockid.models.block_state_space import BlockStateSpace
+
+# the plant: two-segment cubic blocks on two inputs (delays 8 and 5), a third-order
+# linear block, a cubic output block (q_1 = 1); block gains fixed by b_{c,0} = 1
+A = np.real(np.poly([0.7, 0.5, -0.3]))[1:]
+F = (  # (f, p) of each input's block, p = g - f
+    (np.array([0.0, 0.3, 0.1, -0.05]), np.array([0.0, -0.15, -0.15, 0.08])),
+    (np.array([0.0, 0.5, 0.0, -0.1]), np.array([0.1, -0.2, 0.05, 0.0])),
+)
+B = (np.array([1.0, 0.5, 0.2]), np.array([1.0, -0.4, 0.1]))
+Q = np.array([0.2, 0.05])
+DELAYS = (8, 5)
+HW = dict(
+    input_block="two-segment-polynomial:degree=3",
+    output_block="polynomial:degree=3",
+    na=3,
+    nb=3,
+    nk=list(DELAYS),
+    passes=60,
+)
+
+
+def _two_segment(u, f, p):
+    powers = u[:, None] ** np.arange(f.size)
+    return powers @ f + (u < 0) * (powers @ p)
+
+
+def _plant(u, blocks=F, q=Q, delays=DELAYS):
+    """A plain loop, independent of the model classes."""
+    n = u.shape[0]
+    w = np.column_stack([_two_segment(u[:, c], *blocks[c]) for c in range(2)])
+    x = np.zeros(n)
+    for k in range(n):
+        s = 0.0
+        for c in range(2):
+            for i in range(3):
+                if k - delays[c] - i >= 0:
+                    s += B[c][i] * w[k - delays[c] - i, c]
+        for j in range(3):
+            if k - 1 - j >= 0:
+                s -= A[j] * x[k - 1 - j]
+        x[k] = s
+    return x + q[0] * x**2 + q[1] * x**3
+
+
+def _record(n=4000, snr_db=None, seed=0, **plant):
+    u = np.random.default_rng(seed).uniform(-1.0, 1.0, (n, 2))
+    y = _plant(u, **plant)
+    if snr_db is not None:
+        noise = np.random.default_rng(seed + 1).standard_normal(n)
+        y = y + noise * np.std(y) * 10 ** (-snr_db / 20)
+    return Dataset.from_arrays(u, y, inputs=["u1", "u2"], outputs=["y"], sampling_time=0.05)
+
+
+def _truth(blocks=F, q=Q):
+    """The true parameters in the order of the fit's ``history["names"]``."""
+    return np.concatenate(
+        [[blocks[0][0][0]], blocks[0][0][1:], blocks[0][1], blocks[1][0][1:], blocks[1][1],
+         B[0][1:], B[1][1:], A, q]
+    )  # fmt: skip
+
+
+def _estimate(model):
+    """The fitted model's blocks: both input blocks' f and p (the second without f_0,
+    which the model does not carry), the output block's q_2, q_3."""
+    (b1, b2), out = model.input_blocks, model.output_blocks[0]
+    return np.concatenate([b1.f, b1.p, b2.f[1:], b2.p, out.coefficients[1:]])
+
+
+# ---------------------------------------------------------------------- the kernel
+def _reference_pass(theta, P, phi_u, y, lam, nb, na, r2, has_in, has_out, n0, delays):
+    """The recursion written plainly with NumPy (no compiled code)."""
+    N, m, nf = phi_u.shape
+    w, x = np.zeros((N, m)), np.zeros(N)
+    b_first = 1 if has_in else 0
+    ib = 1 + m * nf if has_in else 0
+    ia = ib + m * (nb - b_first)
+    for k in range(N):
+        for c in range(m):
+            if has_in:
+                w[k, c] = (theta[0] if c == 0 else 0.0) + theta[
+                    1 + c * nf : 1 + (c + 1) * nf
+                ] @ phi_u[k, c]
+            else:
+                w[k, c] = phi_u[k, c, 0]
+        if has_out:
+            xk = 0.0
+            for c in range(m):
+                for i in range(nb):
+                    j = k - delays[c] - i
+                    if j >= 0:
+                        coef = 1.0 if (has_in and i == 0) else theta[ib + c * (nb - b_first)
+                                                                     + i - b_first]  # fmt: skip
+                        xk += coef * w[j, c]
+            x[k] = xk - sum(theta[ia + j - 1] * x[k - j] for j in range(1, na + 1) if k >= j)
+        else:
+            x[k] = y[k]
+        if k < n0:
+            continue
+        parts = []
+        if has_in:
+            parts.append([1.0])
+            parts += [phi_u[k - delays[c], c] for c in range(m)]
+        for c in range(m):
+            parts.append([w[k - delays[c] - i, c] for i in range(b_first, nb)])
+        parts.append(-x[k - np.arange(1, na + 1)])
+        if has_out:
+            parts.append(x[k] ** np.arange(2, r2 + 1))
+        phi = np.concatenate([np.asarray(p, dtype=float) for p in parts])
+        g = P @ phi
+        d = lam[k] + phi @ g
+        theta += g * (y[k] - phi @ theta) / d
+        P[:] = (P - np.outer(g, g) / d) / lam[k]
+    return theta, P
+
+
+@pytest.mark.parametrize(("has_in", "has_out"), [(1, 1), (1, 0), (0, 1), (0, 0)])
+def test_the_compiled_pass_is_the_plain_recursion(has_in, has_out):
+    rng = np.random.default_rng(3)
+    N, m, nf, nb, na, r2 = 120, 2, 3, 2, 2, 3
+    delays = np.array([2, 1], dtype=np.int64)
+    phi_u = rng.uniform(-1, 1, (N, m, nf if has_in else 1))
+    y = rng.standard_normal(N) * 0.3
+    n = (1 + m * nf if has_in else 0) + m * (nb - has_in) + na + (r2 - 1 if has_out else 0)
+    theta0, lam = rng.uniform(-0.05, 0.05, n), np.full(N, 0.99)
+    n0 = 3
+    theta, P = theta0.copy(), 10.0 * np.eye(n)
+    orders = np.array([nb, na, r2, has_in, has_out, n0, 1, 0], dtype=np.int64)
+    status, _ = key_term_channels_run(
+        theta, P, phi_u, y, lam, orders, delays, np.array([np.inf, 1e9]),
+        np.empty((N, m)), np.empty(N), np.zeros((0, n)), np.empty(N),
+    )  # fmt: skip
+    assert status == OK
+    ref_theta, ref_P = _reference_pass(
+        theta0.copy(), 10.0 * np.eye(n), phi_u, y, lam, nb, na, r2, has_in, has_out, n0, delays
+    )
+    np.testing.assert_allclose(theta, ref_theta, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(P, ref_P, rtol=1e-9, atol=1e-12)
+
+
+# ---------------------------------------------------------------------- against the truth
+def test_one_channel_is_the_single_input_method():
+    n1 = TwoSegmentPolynomial(*F[0])
+    plant = HammersteinWiener(
+        "u", "y", input_block=n1, output_block=Polynomial([1.0, *Q], constant=False),
+        a=A, b=B[0], na=3, nb=3, nk=8,
+    )  # fmt: skip
+    u = np.random.default_rng(1).uniform(-1.0, 1.0, 4000)
+    data = Dataset.from_arrays(u, plant.simulate(u), inputs=["u"], outputs=["y"])
+    single = fit_key_term_rls(data, "hammerstein-wiener", na=3, nb=3, nk=8)
+    channels = fit_key_term_channels(data, **{**HW, "nk": 8})
+    assert single.settings["passes_run"] == channels.settings["passes_run"]  # measured 16
+    u_new = np.random.default_rng(2).uniform(-0.9, 0.9, 1000)
+    # the two scale the recursion's columns differently (spread of u, RMS of each power),
+    # so they meet at the truth by different roads: measured 6e-9 apart
+    np.testing.assert_allclose(
+        channels.model.simulate(u_new), single.model.simulate(u_new), atol=1e-7
+    )
+
+
+def test_a_two_input_hammerstein_wiener_plant_is_recovered_noise_free():
+    result = fit_key_term_channels(_record(), **HW, record_history=True)
+    model = result.model
+    assert isinstance(model, BlockStateSpace)
+    assert result.settings["converged"] is True
+    assert result.settings["passes_run"] <= 40  # measured 26
+    # every parameter of the recursion, read back in the data's units: measured 5e-7
+    np.testing.assert_allclose(result.history["theta"][-1], _truth(), atol=1e-5)
+    np.testing.assert_allclose(_estimate(model), _estimate_truth(), atol=1e-5)
+    np.testing.assert_allclose(np.sort(np.abs(model.poles()))[-3:], [0.3, 0.5, 0.7], atol=1e-6)
+    u_new = np.random.default_rng(7).uniform(-0.95, 0.95, (1000, 2))
+    y_new = _plant(u_new)
+    err = model.simulate(u_new)[:, 0] - y_new
+    assert np.sqrt(np.mean(err**2)) < 1e-5 * np.std(y_new)
+
+
+def _estimate_truth():
+    return np.concatenate([F[0][0], F[0][1], F[1][0][1:], F[1][1], Q])
+
+
+def test_a_two_input_hammerstein_wiener_plant_at_40_db():
+    result = fit_key_term_channels(_record(snr_db=40), **HW)
+    model = result.model
+    # measured: block coefficients within 0.031, poles within 0.008, free run 0.79 %
+    np.testing.assert_allclose(_estimate(model), _estimate_truth(), atol=0.05)
+    np.testing.assert_allclose(np.sort(np.abs(model.poles()))[-3:], [0.3, 0.5, 0.7], atol=0.02)
+    u_new = np.random.default_rng(7).uniform(-0.95, 0.95, (1000, 2))
+    y_new = _plant(u_new)
+    err = model.simulate(u_new)[:, 0] - y_new
+    assert np.sqrt(np.mean(err**2)) < 0.02 * np.std(y_new)
+    assert result.metrics_mode == "simulation"  # a block model's prediction is its free run
+
+
+def test_without_blocks_it_is_recursive_least_squares_equal_to_the_batch_fit():
+    data = _record(blocks=((np.array([0, 1.0]), np.zeros(2)), (np.array([0, 1.0]), np.zeros(2))),
+                   q=np.zeros(2), snr_db=30)  # fmt: skip
+    result = fit_key_term_rls(
+        data, "arx", na=3, nb=3, nk=list(DELAYS), forgetting=1.0, passes=1,
+        initial_covariance=1e10,
+    )  # fmt: skip
+    assert isinstance(result.model, ARX)
+    batch = fit_model(data, "arx", method="batch", na=3, nb=3, nk="8,5").model
+    for name in ("u1", "u2"):
+        np.testing.assert_allclose(result.model.b["y"][name], batch.b["y"][name], atol=1e-6)
+    np.testing.assert_allclose(result.model.a["y"]["y"], batch.a["y"]["y"], atol=1e-6)
+
+
+def test_an_input_block_offset_breaks_the_iteration_and_it_says_so():
+    shifted = ((F[0][0] + [0.05, 0, 0, 0], F[0][1]), F[1])
+    with pytest.raises(EstimationError, match="did not converge in 60 passes"):
+        fit_key_term_channels(_record(blocks=shifted), **HW)
+
+
+# ---------------------------------------------------------------------- everywhere else
+def test_through_the_registry_files_and_export(tmp_path):
+    from blockid.models.export import to_python_module
+
+    data = _record(snr_db=40)
+    model = fit_model(
+        data, "block-state-space", method="key-term-rls", na=3, nb=3, nk="8,5", passes=60
+    ).model  # without blocks named: paper B's two-segment cubic in, cubic out
+    assert [b.kind for b in model.input_blocks] == ["two-segment-polynomial"] * 2
+    assert model.output_blocks[0].degree == 3
+    path = tmp_path / "m.json"
+    save_model(model, path)
+    loaded = load_model(path)
+    u2 = data.experiments[0].u * 1.2  # beyond the estimation range too
+    y0 = data.experiments[0].y[:20]
+    np.testing.assert_array_equal(loaded.simulate(u2, y0), model.simulate(u2, y0))
+    namespace: dict = {}
+    exec(to_python_module(model), namespace)  # noqa: S102 - the module under test
+    np.testing.assert_allclose(namespace["simulate"](u2), model.simulate(u2), atol=1e-10)
+
+
+@pytest.mark.parametrize(
+    ("options", "error", "message"),
+    [
+        ({"input_block": "dead-zone"}, ParameterError, "linear in their parameters"),
+        ({"output_block": "saturation"}, ParameterError, "polynomial output block"),
+        ({"input_block": {"u1": "polynomial"}}, ParameterError, "one input block family"),
+        ({"nk": "8,5,3"}, ParameterError, "one per input"),
+    ],
+)
+def test_what_it_cannot_fit_is_refused_with_the_option_named(options, error, message):
+    with pytest.raises(error, match=message):
+        fit_model(_record(n=300), "block-state-space", method="key-term-rls", **options)
+
+
+def test_several_outputs_are_refused_with_what_to_do():
+    e = _record(n=300).experiments[0]
+    data = Dataset.from_arrays(e.u, np.column_stack([e.y, e.y**2]), ["u1", "u2"], ["y1", "y2"])
+    with pytest.raises(DataError, match="one output at a time.*--output"):
+        fit_key_term_channels(data, **HW)
+
+
+def test_an_input_that_copies_another_is_named():
+    e = _record(n=300).experiments[0]
+    data = Dataset.from_arrays(np.column_stack([e.u[:, 0], 2 * e.u[:, 0]]), e.y, ["u1", "u2"],
+                               ["y"])  # fmt: skip
+    with pytest.raises(DataError, match="'u1', 'u2'"):
+        fit_key_term_channels(data, **HW)
