@@ -243,6 +243,23 @@ def _two_parts(u, y, rng, noise):
     )
 
 
+def mimo_orders_record(n=1500, seed=0, noise=0.02):
+    """A 2-input 2-output ARX plant whose pairs need their own numbers of input
+    coefficients: ``nb = [[2, 1], [0, 1]]`` at delay 1 (input 1 does not act on output
+    2), held Gaussian inputs, white output noise (``noise``, absolute)."""
+    from blockid.data import Dataset
+
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.standard_normal((n // 3, 2)), 3, axis=0)
+    y = np.zeros((n, 2))
+    for t in range(3, n):
+        y[t, 0] = (1.2 * y[t - 1, 0] - 0.4 * y[t - 2, 0] + 0.5 * u[t - 1, 0]
+                   + 0.4 * u[t - 2, 0] + 0.3 * u[t - 1, 1])  # fmt: skip
+        y[t, 1] = 0.6 * y[t - 1, 1] - 0.5 * u[t - 1, 1]
+    y += noise * rng.standard_normal(y.shape)
+    return Dataset.from_arrays(u, y, ["u1", "u2"], ["y1", "y2"])
+
+
 def mimo_delays_record(delays, n=1500, seed=0, noise=0.02):
     """A coupled 2-input 2-output ARX plant whose inputs act with their own delays
     (``delays[i][j]``: of input j in output i), driven by held Gaussian inputs, with

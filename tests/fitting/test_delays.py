@@ -5,7 +5,7 @@ import pytest
 
 from blockid import errors
 from blockid.data import Dataset, Experiment
-from blockid.fitting.delays import channel_delays
+from blockid.fitting.delays import channel_delays, channel_orders
 
 from reference import mimo_delays_record as two_by_two
 
@@ -67,3 +67,45 @@ def test_too_few_rows_for_the_regression_are_refused_not_fitted_exactly():
     short = Dataset.from_arrays(e.u[:16], e.y[:16], ["u1", "u2"], ["y1", "y2"])
     with pytest.raises(errors.DataError, match="regression rows for 7 coefficients"):
         channel_delays(short, max_delay=4)
+
+
+# ---------------------------------------------------------------------- orders per pair
+def _equation_noise_record(seed, n=1500, noise=0.05):
+    """``nb = [[2, 1], [0, 1]]`` at delay 1 (input 1 does not act on output 2), white
+    inputs and white equation noise: the model class the least-squares test assumes."""
+    rng = np.random.default_rng(seed)
+    u, e = rng.standard_normal((n, 2)), noise * rng.standard_normal((n, 2))
+    y = np.zeros((n, 2))
+    for t in range(3, n):
+        y[t, 0] = (1.2 * y[t - 1, 0] - 0.4 * y[t - 2, 0] + 0.5 * u[t - 1, 0]
+                   + 0.4 * u[t - 2, 0] + 0.3 * u[t - 1, 1] + e[t, 0])  # fmt: skip
+        y[t, 1] = 0.6 * y[t - 1, 1] - 0.5 * u[t - 1, 1] + e[t, 1]
+    return Dataset.from_arrays(u, y, ["u1", "u2"], ["y1", "y2"])
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_every_pairs_number_of_coefficients_is_the_plants(seed):
+    found = channel_orders(_equation_noise_record(seed), 1, 2, 3)
+    assert found.nb.tolist() == [[2, 1], [0, 1]]
+    assert found.as_option() == ((2, 1), (0, 1)) and not found.common
+    # input 1 does not act on output 2: its coefficients lower the residual by noise only
+    assert found.loss[1, 0, 0] < found.loss[1, 0, 3] * (1 + 3 * np.log(1497) / 1497)
+
+
+def test_orders_at_per_pair_delays_and_as_one_number():
+    # the delays plant: nb = 1 on every pair at its own delay
+    d = two_by_two(((1, 4), (3, 1)), noise=0.0)
+    assert channel_orders(d, ((1, 4), (3, 1)), 2, 3).as_option() == 1
+    # at one common delay, the late pairs need more coefficients to reach their lags
+    assert channel_orders(d, 1, 2, 4).nb.tolist() == [[1, 4], [3, 1]]
+
+
+def test_orders_bad_requests_are_named():
+    d = _equation_noise_record(0, n=300)
+    with pytest.raises(errors.ParameterError, match="nb_max"):
+        channel_orders(d, 1, 2, 0)
+    with pytest.raises(errors.ParameterError, match="nk must hold delays >= 0"):
+        channel_orders(d, ((1, -1), (1, 1)), 2, 2)
+    with pytest.raises(errors.DataError, match="too few to scan the pairs' orders"):
+        channel_orders(Dataset.from_arrays(d.experiments[0].u[:30], d.experiments[0].y[:30],
+                                           ["u1", "u2"], ["y1", "y2"]), 1, 2, 3)  # fmt: skip

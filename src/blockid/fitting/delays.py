@@ -23,6 +23,19 @@ no evidence (``ChannelDelays.evidence``): its delay is the median of the pairs t
 have it (0 if none does), so it does not make a per-pair candidate on its own. Records
 with fewer than five rows per regression coefficient are refused.
 
+**Orders.** With the delays found, :func:`channel_orders` gives each pair its own
+number of input coefficients ``nb``: for each output, each input's ``nb`` in ``0 ..
+nb_max`` (the other inputs at theirs, in turn) minimises Rissanen's minimum description
+length of the least-squares residual, ``V (1 + nb log N / N)`` (MATLAB's
+``selstruc(V, 'mdl')`` for ``arxstruc`` losses); 0 drops a pair whose input does not
+act on the output. A chi-square test of the dropped coefficients at 95 % kept 1-3
+coefficients too many on a plant with output noise (which an equation-error model
+fits with extra input lags); MDL's ``log N`` per coefficient keeps fewer, and the
+search's cross-validation judges the result. The false-nearest-neighbour test
+(:mod:`blockid.fitting.orders`) cannot choose orders per pair: with one input of
+several the output is not a function of that pair's regressor (the other inputs move
+it).
+
 Every delay of a pair is scored on the same samples (those that the longest delay
 leaves), regressors never straddle two experiments, and the signals are divided by
 their spread. The result is evidence for a search to weigh (``identify`` scores the
@@ -41,7 +54,7 @@ from blockid.errors import DataError, ParameterError
 if TYPE_CHECKING:  # pragma: no cover
     from blockid.data import Dataset
 
-__all__ = ["ChannelDelays", "channel_delays"]
+__all__ = ["ChannelDelays", "ChannelOrders", "channel_delays", "channel_orders"]
 
 
 @dataclass(frozen=True)
@@ -99,28 +112,13 @@ def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2)
                 f"{name} must be a whole number >= {low}, got {value!r}", parameter=name
             )
     start = max(na, max_delay + nb - 1)
-    experiments = [e for e in data.experiments if e.n_samples > start + 1]
-    if not experiments:
+    if all(e.n_samples <= start + 1 for e in data.experiments):
         raise DataError(
             f"every experiment is too short to scan delays up to {max_delay} "
             f"({start + 2} samples needed); give a smaller max_delay"
         )
-    rows = sum(e.n_samples - start for e in experiments)
-    columns = na + nb * data.n_inputs + 1
-    if rows < 5 * columns:
-        raise DataError(
-            f"{rows} regression rows for {columns} coefficients: too few to scan delays up "
-            f"to {max_delay} (at least {5 * columns} needed); give more data or a smaller "
-            "max_delay"
-        )
-    u_all = np.vstack([e.u for e in experiments])
-    y_all = np.vstack([e.y for e in experiments])
-    u_scale = np.where(u_all.std(axis=0) > 0, u_all.std(axis=0), 1.0)
-    y_scale = np.where(y_all.std(axis=0) > 0, y_all.std(axis=0), 1.0)
-    signals = [
-        ((e.u - u_all.mean(axis=0)) / u_scale, (e.y - y_all.mean(axis=0)) / y_scale)
-        for e in experiments
-    ]
+    signals = _signals(data, start, na + nb * data.n_inputs, f"delays up to {max_delay}",
+                       "a smaller max_delay")  # fmt: skip
     ny, nu = data.n_outputs, data.n_inputs
     nk = np.zeros((ny, nu), dtype=int)
     loss = np.full((ny, nu, max_delay + 1), np.inf)
@@ -146,6 +144,103 @@ def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2)
     return ChannelDelays(nk, loss, evidence, tuple(data.outputs), tuple(data.inputs))
 
 
+@dataclass(frozen=True)
+class ChannelOrders:
+    """Per-pair numbers of input coefficients and the losses they were chosen on.
+
+    Attributes
+    ----------
+    nb : numpy.ndarray
+        ``(n_outputs, n_inputs)``, MATLAB's ``nb`` matrix (0: the input does not enter
+        that output).
+    loss : numpy.ndarray
+        ``(n_outputs, n_inputs, nb_max + 1)`` mean squared residual (normalised signals)
+        of each ``nb`` of each pair, the other inputs at theirs.
+    outputs, inputs : tuple of str
+    """
+
+    nb: np.ndarray
+    loss: np.ndarray
+    outputs: tuple[str, ...]
+    inputs: tuple[str, ...]
+
+    @property
+    def common(self) -> bool:
+        """True when every pair has the same ``nb``."""
+        return bool(np.all(self.nb == self.nb.flat[0]))
+
+    def as_option(self) -> int | tuple[tuple[int, ...], ...]:
+        """The orders as ``fit``'s ``nb`` option: one number when they agree."""
+        if self.common:
+            return int(self.nb.flat[0])
+        return tuple(tuple(int(v) for v in row) for row in self.nb)
+
+
+def channel_orders(data: Dataset, nk: object, na: int, nb_max: int) -> ChannelOrders:
+    """The number of input coefficients of every input-output pair (module docstring),
+    at the delays ``nk`` (one number, or an ``(n_outputs, n_inputs)`` matrix) and ``na``
+    past outputs.
+
+    >>> import numpy as np
+    >>> from blockid.data import Dataset
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((3000, 2))
+    >>> y = np.zeros(3000)
+    >>> for t in range(3, 3000):
+    ...     y[t] = 0.6 * y[t - 1] + u[t - 1, 0] + 0.5 * u[t - 2, 0] + 0.8 * u[t - 1, 1]
+    >>> channel_orders(Dataset.from_arrays(u, y, ["a", "b"], ["y"]), 1, 1, 3).nb.tolist()
+    [[2, 1]]
+    """
+    for name, value, low in (("na", na, 0), ("nb_max", nb_max, 1)):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
+            raise ParameterError(
+                f"{name} must be a whole number >= {low}, got {value!r}", parameter=name
+            )
+    ny, nu = data.n_outputs, data.n_inputs
+    delays = np.broadcast_to(np.asarray(nk, dtype=int), (ny, nu))
+    if np.any(delays < 0):
+        raise ParameterError(f"nk must hold delays >= 0, got {np.asarray(nk).tolist()}")
+    start = max(na, int(delays.max()) + nb_max - 1)
+    signals = _signals(data, start, na + nb_max * nu, "the pairs' orders", "smaller orders")
+    nb = np.full((ny, nu), nb_max, dtype=int)
+    loss = np.full((ny, nu, nb_max + 1), np.inf)
+    for j in range(ny):
+        scan = _Scan(signals, j, start, na, nb_max)
+        for i in range(nu):
+            fixed = [scan.lagged(m, int(delays[j, m]), int(nb[j, m])) for m in range(nu) if m != i]
+            for b in range(nb_max + 1):
+                loss[j, i, b] = scan.residual([*fixed, scan.lagged(i, int(delays[j, i]), b)])
+            n = scan.target.size  # Rissanen's MDL, as MATLAB's selstruc(V, 'mdl')
+            mdl = loss[j, i] * (1.0 + np.arange(nb_max + 1) * np.log(n) / n)
+            nb[j, i] = int(np.argmin(mdl))  # the first of equals: the smaller nb
+    return ChannelOrders(nb, loss, tuple(data.outputs), tuple(data.inputs))
+
+
+def _signals(
+    data: Dataset, start: int, columns: int, what: str, smaller: str
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Every experiment's signals that reach past ``start`` (the first sample every
+    regression row can use), centred and divided by their spread; refuses fewer than
+    five rows per coefficient (``columns`` and the intercept), naming ``what`` was to be
+    scanned and the ``smaller`` setting that would help."""
+    experiments = [e for e in data.experiments if e.n_samples > start + 1]
+    rows = sum(e.n_samples - start for e in experiments)
+    columns += 1
+    if rows < 5 * columns:
+        raise DataError(
+            f"{rows} regression rows for {columns} coefficients: too few to scan {what} "
+            f"(at least {5 * columns} needed); give more data or {smaller}"
+        )
+    u_all = np.vstack([e.u for e in experiments])
+    y_all = np.vstack([e.y for e in experiments])
+    u_scale = np.where(u_all.std(axis=0) > 0, u_all.std(axis=0), 1.0)
+    y_scale = np.where(y_all.std(axis=0) > 0, y_all.std(axis=0), 1.0)
+    return [
+        ((e.u - u_all.mean(axis=0)) / u_scale, (e.y - y_all.mean(axis=0)) / y_scale)
+        for e in experiments
+    ]
+
+
 class _Scan:
     """The least-squares residuals of one output's delay scans (module docstring)."""
 
@@ -163,12 +258,14 @@ class _Scan:
             ]
         )
 
-    def lagged(self, i: int, d: int) -> np.ndarray:
-        """Input ``i`` from delay ``d`` on, ``nb`` samples."""
-        s = self.start
+    def lagged(self, i: int, d: int, nb: int | None = None) -> np.ndarray:
+        """Input ``i`` from delay ``d`` on, ``nb`` samples (default the scan's)."""
+        s, nb = self.start, self.nb if nb is None else nb
         return np.vstack(
             [
-                np.column_stack([u[s - d - m : len(u) - d - m, i] for m in range(self.nb)])
+                np.column_stack([u[s - d - m : len(u) - d - m, i] for m in range(nb)])
+                if nb
+                else np.empty((len(u) - s, 0))
                 for u, _ in self.signals
             ]
         )

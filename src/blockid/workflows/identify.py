@@ -27,9 +27,12 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
    differ, :func:`~blockid.fitting.delays.channel_delays`); the two best delays and the
    false-nearest-neighbours test's
    (:mod:`blockid.fitting.orders`, noise allowance estimated) carry on.
-2. ``linear orders`` -- ARX ``na = 1 .. max_order``, ``nb <= na + 1`` at those delays;
-   the best order sets carry on, and output-error models around the best one (the
-   best linear approximation's orders) replace the last.
+2. ``linear orders`` -- ARX ``na = 1 .. max_order``, ``nb <= na + 1`` at those delays
+   (with several inputs or outputs, then ``per-pair orders``: the best of them with
+   each pair's own ``nb``, at most its own, by the minimum description length of the
+   least-squares residual, :func:`~blockid.fitting.delays.channel_orders`); the best order sets
+   carry on, and output-error models around the best one (the best linear
+   approximation's orders) replace the last.
 3. ``structures`` -- every searched structure (the registry's ``search_rank``) with
    every block family in its slots (:mod:`blockid.workflows.search_space`), centring
    decided from the data, fitted by simulation error with ``screen_nfev`` iterations
@@ -515,11 +518,12 @@ def _integrations(data: Dataset, orders: Sequence[tuple[int, int, int]]) -> int:
     return min(count, 2)
 
 
-def _orders_of(score: Score) -> tuple[int, int, Any]:
-    """``(na, nb, nk)``; ``nk`` a per-pair matrix (nested tuples) where it is one."""
+def _orders_of(score: Score) -> tuple[int, Any, Any]:
+    """``(na, nb, nk)``; ``nb``, ``nk`` per-pair matrices (nested tuples) where they are."""
     o = score.candidate.orders()
-    nk = o["nk"]
-    return int(o["na"]), int(o["nb"]), nk if isinstance(nk, tuple) else int(nk)
+    nb, nk = o["nb"], o["nk"]
+    nb = nb if isinstance(nb, tuple) else int(nb)
+    return int(o["na"]), nb, nk if isinstance(nk, tuple) else int(nk)
 
 
 def _refit(
@@ -858,6 +862,10 @@ def _stages(
             "no linear model of any order in the grid simulates stably on the held-back "
             "folds; check the data (input and output columns, sampling) or give more data"
         )
+    pairs = _per_pair_orders(search, arx[0], notes)
+    if pairs is not None:  # the best ARX with each pair's unneeded coefficients dropped
+        search.run("per-pair orders", [pairs], False)
+        arx = search.ranked([s for s in search.order if s.candidate.structure == LINEAR])
     orders: list[tuple[int, int, Any]] = []
     for s in arx:
         if _orders_of(s) not in orders:
@@ -897,6 +905,43 @@ def _stages(
         current = min(better, key=lambda s: (s.rmse, s.candidate.label))
 
 
+def _pair_data(search: _Search) -> Dataset:
+    """The data the per-pair scans run their least squares on: a long record's first
+    samples (as the screening fits)."""
+    data = search.data
+    if search.long:
+        whole = tuple(Segment(i, 0, e.n_samples) for i, e in enumerate(data.experiments))
+        data = materialise(data, whole, search.effort.screen_samples)
+    return data
+
+
+def _per_pair_orders(search: _Search, best: Score, notes: list[str]) -> Candidate | None:
+    """With several inputs or outputs, the best ARX candidate with each pair's own
+    ``nb`` (:func:`~blockid.fitting.delays.channel_orders`, at most its ``nb``) when the
+    pairs differ, else None."""
+    if search.data.n_inputs * search.data.n_outputs == 1:
+        return None
+    na, nb, nk = _orders_of(best)
+    if isinstance(nb, tuple):
+        return None
+    from blockid.fitting.delays import channel_orders
+
+    try:
+        found = channel_orders(_pair_data(search), nk, na, nb)
+    except BlockidError as exc:
+        notes.append(f"per-pair orders not tested: {exc}")
+        return None
+    option = found.as_option()
+    if isinstance(option, int) and option == nb:
+        return None
+    notes.append(
+        f"per-pair orders by the least-squares description length, nb = {found.nb.tolist()} "
+        f"(at most the best ARX's {nb}; rows: {', '.join(found.outputs)}; columns: "
+        f"{', '.join(found.inputs)}), scored beside it"
+    )
+    return best.candidate.with_options(nb=option)
+
+
 def _per_pair_delays(search: _Search, notes: list[str]) -> tuple[tuple[int, ...], ...] | None:
     """With several inputs or outputs, each pair's delay by the least-squares scan
     (:func:`~blockid.fitting.delays.channel_delays`) when the pairs differ, else None."""
@@ -905,11 +950,8 @@ def _per_pair_delays(search: _Search, notes: list[str]) -> tuple[tuple[int, ...]
         return None
     from blockid.fitting.delays import channel_delays
 
-    if search.long:  # the scan's least squares on the first samples of a long record
-        whole = tuple(Segment(i, 0, e.n_samples) for i, e in enumerate(data.experiments))
-        data = materialise(data, whole, search.effort.screen_samples)
     try:
-        found = channel_delays(data, search.effort.max_delay)
+        found = channel_delays(_pair_data(search), search.effort.max_delay)
     except BlockidError as exc:
         notes.append(f"per-pair delays not scanned: {exc}")
         return None
