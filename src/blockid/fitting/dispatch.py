@@ -108,7 +108,9 @@ def fit_model(
                 hinted = EstimationError(f"{exc}{hint}")
                 hinted.__dict__.update(exc.__dict__)  # e.g. the trajectories up to a failure
                 raise hinted from None
-        if not result.model.ranges:  # the one place ranges are recorded for every method
+        # the one place ranges are recorded for every method of a chain (a block model
+        # of several inputs, key-term RLS's, records its own)
+        if hasattr(result.model, "with_ranges") and not result.model.ranges:
             model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
             result = replace(result, model=model)
     mse = result.estimation_metrics.get("mse", {})
@@ -226,6 +228,14 @@ def _run(decl: Structure, method: str, data: Dataset, options: dict[str, Any]) -
 def _fit_block(
     data: Dataset, decl: Structure, method: str, refine: bool, options: dict[str, Any]
 ) -> FitResult:
+    if refine and data.n_inputs > 1:
+        raise ParameterError(
+            "refine continues a chain of one input on its free-run error; a model of "
+            "several inputs (key-term RLS's block state space, whose core realises the "
+            "linear block with many states) is not refined: fit structure "
+            "block-state-space with method simulation-error instead",
+            parameter="refine",
+        )
     result = _run(decl, method, data, options)
     if not refine or method == "simulation-error":
         return result
@@ -252,8 +262,12 @@ def _centered(
     The estimation ranges are relative to the offsets, so those recorded on the shifted
     data hold for the model with offsets unchanged.
     """
-    u_off = float(np.mean(np.concatenate([e.u[:, 0] for e in data.experiments])))
-    y_off = float(np.mean(np.concatenate([e.y[:, 0] for e in data.experiments])))
+    if data.n_inputs > 1:  # key-term RLS of several inputs: a block state-space model
+        u_off = np.vstack([e.u for e in data.experiments]).mean(axis=0)
+        y_off = np.vstack([e.y for e in data.experiments]).mean(axis=0)
+    else:
+        u_off = float(np.mean(np.concatenate([e.u[:, 0] for e in data.experiments])))
+        y_off = float(np.mean(np.concatenate([e.y[:, 0] for e in data.experiments])))
     shifted = Dataset(
         data.inputs,
         data.outputs,
@@ -263,6 +277,9 @@ def _centered(
     )
     result = _fit_block(shifted, decl, method, refine, options)
     model = result.model
+    if not hasattr(model, "with_ranges"):  # its ranges are of the normalised signals
+        model = model.replace(input_offset=u_off, output_offset=y_off)
+        return replace(result, model=model, settings={**result.settings, "center": True})
     if not model.ranges:
         model = model.with_ranges([(e.u, e.y) for e in shifted.experiments])
     model = model.replace(input_offset=u_off, output_offset=y_off, ranges=model.ranges)
