@@ -305,3 +305,73 @@ def test_compare_fits_paper_bs_structures_of_several_inputs_its_way():
 def test_refine_after_the_recursion_of_several_inputs_is_refused_with_the_alternative():
     with pytest.raises(ParameterError, match="method simulation-error instead"):
         fit_model(_record(n=300), "hammerstein", method="key-term-rls", refine=True)
+
+
+# ---------------------------------------------------------------------- online
+ONLINE = dict(
+    input_block="two-segment-polynomial:degree=3", output_block="polynomial:degree=3",
+    na=3, nb=3, nk=[8, 5],
+)  # fmt: skip
+
+
+def _one_pass(data, **options):
+    """The offline recursion's estimate after one pass (data units), whether or not its
+    model passes the checks (one pass from theta(0) = 0.01 does not, here)."""
+    try:
+        fit = fit_key_term_channels(data, **ONLINE, passes=1, record_history=True, **options)
+        return fit.history["theta"][-1]
+    except EstimationError as exc:
+        return exc.history["theta"][-1]
+
+
+def _learner(structure="block-state-space", **options):
+    from blockid.fitting.online import online_estimator
+
+    return online_estimator(structure, "key-term-rls", options, ["u1", "u2"], ["y"])
+
+
+def test_online_learning_is_the_offline_pass_bit_for_bit_in_any_chunks():
+    data = _record(snr_db=40)
+    e = data.experiments[0]
+    scaled = dict(input_scale=0.6, output_scale=0.5)
+    chunks = _learner(**ONLINE, **scaled)
+    for start in range(0, 4000, 700):
+        chunks.partial_fit(e.u[start : start + 700], e.y[start : start + 700])
+    estimate = np.array(list(chunks.estimate().values()))
+    np.testing.assert_array_equal(estimate, _one_pass(data, scales=(0.6, 0.5)))
+    samples = _learner(**ONLINE, **scaled)
+    first = [samples.update(e.u[k], e.y[k]) for k in range(2000)]
+    assert np.isnan(first[0]).all() and np.isfinite(first[-1]).all()
+    # a checkpoint taken half way resumes exactly
+    import json
+
+    resumed = _learner(**ONLINE, **scaled).restore(json.loads(json.dumps(samples.state())))
+    for k in range(2000, 4000):
+        resumed.update(e.u[k], e.y[k])
+    assert resumed.estimate() == chunks.estimate()
+    assert isinstance(resumed.model(), BlockStateSpace)
+    # raw signals: the offline pass without normalisation
+    raw = _learner(**ONLINE, normalize=False).partial_fit(e.u, e.y)
+    np.testing.assert_array_equal(
+        np.array(list(raw.estimate().values())), _one_pass(data, normalize=False)
+    )
+
+
+def test_a_chain_structure_streamed_with_two_inputs_learns_both():
+    # before, the single-input learner took the first input and dropped the second
+    e = _record(n=1000).experiments[0]
+    learner = _learner("hammerstein", na=3, nb=3, nk=[8, 5], normalize=False)
+    model = learner.partial_fit(e.u, e.y).model()
+    assert model.inputs == ("u1", "u2") and model.output_blocks == (None,)
+    assert [b.kind for b in model.input_blocks] == ["two-segment-polynomial"] * 2
+
+
+def test_online_refusals_name_what_to_do():
+    from blockid.fitting.online import online_estimator
+
+    with pytest.raises(ParameterError, match="one output at a time"):
+        online_estimator("block-state-space", "key-term-rls", {}, ["u1", "u2"], ["y1", "y2"])
+    with pytest.raises(ParameterError, match="passes=2"):
+        _learner(passes=2)
+    with pytest.raises(ParameterError, match="positive finite"):
+        _learner(input_scale=[1.0, 0.0], output_scale=1.0)

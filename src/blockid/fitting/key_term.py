@@ -402,17 +402,12 @@ def _several_inputs(data: Dataset, structure: str, scales: Any, **options: Any) 
     """Several inputs, one output: the same recursion channel by channel
     (:func:`~blockid.fitting.key_term_channels.fit_key_term_channels`), with paper B's
     two-segment polynomial of order ``r1`` on every input."""
-    if scales is not None:
-        raise ParameterError(
-            "scales (online learning's fixed scales) are for one input and one output; a "
-            "model of several inputs is learned offline, on its measured scales",
-            parameter="scales",
-        )
     has_in, has_out = KEY_TERM_STRUCTURES[structure]
     r1, r2 = options.pop("r1"), options.pop("r2")
     return fit_key_term_channels(
         data,
         input_block=f"two-segment-polynomial:degree={checked('r1', r1)}" if has_in else None,
         output_block=f"polynomial:degree={int_at_least('r2', r2, 2)}" if has_out else None,
+        scales=scales,
         **options,
     )

@@ -62,7 +62,7 @@ from blockid.blocks import Polynomial
 from blockid.blocks.base import block_template
 from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE, RECURSIVE
-from blockid.errors import DataError, EstimationError, ParameterError
+from blockid.errors import DataError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.fitting.block_arx import Basis, _realisation, scalar_orders
 from blockid.fitting.recursive import (
@@ -80,7 +80,13 @@ from blockid.models.block_state_space import BlockStateSpace
 
 _KT = RECURSIVE["key-term-rls"]
 
-__all__ = ["ChannelKeyTermRLS", "fit_key_term_block", "fit_key_term_channels"]
+__all__ = [
+    "ChannelKeyTermRLS",
+    "fit_key_term_block",
+    "fit_key_term_channels",
+    "checked_scales",
+    "key_term_algorithm",
+]
 
 
 def _input_basis(input_block: Any) -> tuple[Basis, int, float]:
@@ -157,27 +163,62 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
 
     def __init__(
         self,
-        data: Dataset,
+        inputs: tuple[str, ...],
+        output: str,
         basis: tuple[Basis, int, float] | None,
         r2: int | None,
         orders: tuple[int, int, np.ndarray],
         schedule: ForgettingSchedule,
         mu: float,
-        normalize: bool,
     ) -> None:
         na, nb, delays = orders
-        self.inputs, self.output = tuple(data.inputs), data.outputs[0]
+        self.inputs, self.output = inputs, output
         self.basis = basis
         self.has_in, self.has_out = basis is not None, r2 is not None
         self.r2 = r2 if r2 is not None else 1
         self.na, self.nb, self.delays = na, nb, delays
         self.schedule = schedule
-        m = len(self.inputs)
+        self.mu = mu
+        m = len(inputs)
         self.nf = basis[0].size if basis is not None else 1
+        self.names = self._names()
+        self.n0 = max(largest_lag(na, nb, int(d)) for d in delays)
+        ia = (1 + m * self.nf if self.has_in else 0) + m * (nb - self.has_in)
+        self.a = slice(ia, ia + na)
+        self.set_scales(np.ones((m, self.nf)), 1.0, 0.0)
+        self.x_range = np.array([np.inf, -np.inf])  # of x_hat in the last pass (data units)
+        self.u_range: np.ndarray | None = None
+
+    def set_scales(self, scales: np.ndarray, sy: float, y_max: float) -> None:
+        """The recursion's units: every basis column divided by ``scales`` (m, nf), the
+        output by ``sy``; ``y_max`` the largest ``|y| / sy`` (divergence limit)."""
+        self.scales, self.sy = scales, sy
+        self.limits = np.array([self.mu * len(self.names), 1e6 * (1.0 + y_max)])
+        self.factors = self._factors()
+
+    def given_scales(self, su: Any) -> np.ndarray:
+        """Column scales from the inputs' scales ``su`` (one, or one per input): each
+        basis function's largest magnitude at ``+su`` and ``-su`` (a power ``p`` scales
+        by ``su^p``; 1 where it is 0 at both)."""
+        m = len(self.inputs)
+        su = np.broadcast_to(np.asarray(su, dtype=float), (m,))
+        probe = np.column_stack([su, -su])  # (m, 2): both signs, one row per input
+        values = np.abs(self._functions(probe.T))  # (2, m, nf)
+        scales = values.max(axis=0)
+        scales[scales == 0] = 1.0
+        return scales
+
+    def prepare(self, data: Dataset, normalize: bool, su: Any = None, sy: Any = None) -> Signals:
+        """The record as the recursion sees it: basis columns divided by their RMS and
+        ``y`` by its spread (``normalize``), by the scales the given ``su``, ``sy`` make
+        (:meth:`given_scales`), or as they are."""
         functions = [self._functions(e.u) for e in data.experiments]
         all_f = np.concatenate(functions)
         y_all = np.concatenate([e.y[:, 0] for e in data.experiments])
-        if normalize:
+        m = len(self.inputs)
+        if su is not None:
+            scales, sy = self.given_scales(su), float(sy)
+        elif normalize:
             scales = np.array([[_rms(all_f[:, c, j]) for j in range(self.nf)]
                                for c in range(m)])  # fmt: skip
             if not self.has_in:  # the input itself: its spread, as the single-input method
@@ -186,23 +227,15 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
             sy = float(np.std(y_all)) or _rms(y_all)
         else:
             scales, sy = np.ones((m, self.nf)), 1.0
-        self.scales, self.sy = scales, sy
         records = [
             (e.name, np.ascontiguousarray(f / scales), np.ascontiguousarray(e.y[:, 0] / sy))
             for e, f in zip(data.experiments, functions, strict=True)
         ]
-        self.signals = Signals(records, (0.0, 1.0), (0.0, sy), bool(normalize))
-        self.names = self._names()
-        self.n0 = max(largest_lag(na, nb, int(d)) for d in delays)
-        ia = (1 + m * self.nf if self.has_in else 0) + m * (nb - self.has_in)
-        self.a = slice(ia, ia + na)
-        y_max = self.signals.y_max
-        self.limits = np.array([mu * len(self.names), 1e6 * (1.0 + y_max)])
-        self.factors = self._factors()
-        self.u_range = np.column_stack(
-            [np.vstack([e.u for e in data.experiments]).min(axis=0),
-             np.vstack([e.u for e in data.experiments]).max(axis=0)]
-        )  # fmt: skip
+        signals = Signals(records, (0.0, 1.0), (0.0, sy), bool(normalize or su is not None))
+        self.set_scales(scales, sy, signals.y_max)
+        u_all = np.vstack([e.u for e in data.experiments])
+        self.u_range = np.column_stack([u_all.min(axis=0), u_all.max(axis=0)])
+        return signals
 
     def _functions(self, u: np.ndarray) -> np.ndarray:
         """Every channel's basis functions, shape (N, m, nf)."""
@@ -253,9 +286,18 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         detail = ""
         if status != OK and self.has_out:
             x_max = float(np.max(np.abs(x[:status]), initial=0.0)) * self.sy
-            y_max = self.signals.y_max * self.sy
+            y_max = (self.limits[1] / 1e6 - 1.0) * self.sy
             detail = f" (largest |x_hat| so far {x_max:.3g}, largest |y| {y_max:.3g})"
+        if count == 0:  # a new pass: the output block's range is that of its last pass
+            self.x_range = np.array([np.inf, -np.inf])
+        self.widen(x)
         return status, reason, detail
+
+    def widen(self, x: np.ndarray) -> None:
+        """Take ``x_hat`` (the recursion's units) into the output block's range."""
+        if x.size:
+            self.x_range = np.array([min(self.x_range[0], float(x.min()) * self.sy),
+                                     max(self.x_range[1], float(x.max()) * self.sy)])  # fmt: skip
 
     def to_data_units(self, theta):
         return theta * self.factors
@@ -285,6 +327,10 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         return gammas, constant, b, a, q
 
     def model(self, theta, data):
+        """The model of ``theta`` (data units); ``data`` gives the sampling time. The
+        input blocks' ranges are the inputs seen, the output block's that of ``x_hat``
+        in the last pass (:meth:`run`)."""
+        sampling_time = getattr(data, "sampling_time", None)
         gammas, constant, b, a, q = self._parts(theta)
         m, nk0 = len(self.inputs), int(self.delays.min())
         width = self.nb + int(self.delays.max()) - nk0
@@ -293,7 +339,7 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
             return ARX(
                 list(self.inputs), [self.output], self.na,
                 np.full((1, m), self.nb), self.delays.reshape(1, m),
-                a={self.output: {self.output: a}}, b=B, sampling_time=data.sampling_time,
+                a={self.output: {self.output: a}}, b=B, sampling_time=sampling_time,
             )  # fmt: skip
         padded = np.zeros((m, 1, width))  # every channel from the shortest delay
         for c in range(m):
@@ -307,24 +353,15 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
             vector = blocks[0].to_vector().copy()
             vector[at] = constant / value
             blocks[0] = blocks[0].with_vector(vector)
-        output = [Polynomial(q, constant=False)] if self.has_out else None
-        model = BlockStateSpace(
+        seen = self.has_out and bool(np.all(np.isfinite(self.x_range)))
+        return BlockStateSpace(
             self.inputs, [self.output], A, B, C, D,
-            input_blocks=blocks, output_blocks=output,
+            input_blocks=blocks,
+            output_blocks=[Polynomial(q, constant=False)] if self.has_out else None,
             input_range=self.u_range if blocks is not None else None,
-            sampling_time=data.sampling_time,
+            output_range=[self.x_range.tolist()] if seen else None,
+            sampling_time=sampling_time,
         )  # fmt: skip
-        if self.has_out:  # the range the output block's argument covered
-            z = np.concatenate(
-                [model.run(np.asarray(e.u, dtype=float))[1][:, 0] for e in data.experiments]
-            )
-            if not np.all(np.isfinite(z)):
-                raise EstimationError(
-                    f"{self.method} returned a linear block whose free run on the estimation "
-                    "data is not finite; no model is returned"
-                )
-            model = model.replace(output_range=[[float(z.min()), float(z.max())]])
-        return model
 
     def model_to_check(self, model):
         return _Checked(model, self.na, self.nb, self.delays)
@@ -391,6 +428,7 @@ def fit_key_term_channels(
     initial_parameters: Any = 0.01,
     normalize: bool = True,
     record_history: bool = False,
+    scales: tuple[Any, float] | None = None,
 ) -> FitResult:
     """Key-term RLS (B4, B5) of a model with a block per input channel and one output
     (module docstring).
@@ -414,6 +452,12 @@ def fit_key_term_channels(
     record_history
         As :func:`~blockid.fitting.key_term.fit_key_term_rls` (``initial_parameters``
         as a sequence in the order of ``history["names"]``).
+    scales : (input scale(s), output scale), optional
+        Fixed scales instead of the measured ones: every basis column divided by its
+        largest magnitude at plus and minus its input's scale (a power ``p`` by
+        ``s^p``), the output by its scale. What online learning with ``input_scale``,
+        ``output_scale`` runs on (:mod:`blockid.fitting.online`): one pass so scaled is
+        the online estimate.
 
     Returns
     -------
@@ -430,7 +474,7 @@ def fit_key_term_channels(
         The recursion diverged, did not converge, or its model fails the checks.
     """
     method = ChannelKeyTermRLS.method
-    schedule = ForgettingSchedule.parse(forgetting)
+    ForgettingSchedule.parse(forgetting)  # once, before any data work
     if not isinstance(data, Dataset):
         raise DataError(f"{method} needs a blockid Dataset, got {type(data).__name__}")
     if data.n_outputs != 1:
@@ -442,20 +486,20 @@ def fit_key_term_channels(
             "simulation-error (any blocks) or batch/rls (input blocks only)"
         )
     signal_statistics(data)  # every signal must move, inputs not together: else named
-    basis = _input_basis(input_block) if input_block is not None else None
-    r2 = _output_degree(output_block) if output_block is not None else None
-    na, nb, _ = scalar_orders(na, nb, 0)  # whole numbers, nb >= 1 (the inputs enter)
-    delays = _delays(nk, tuple(data.inputs))
+    options = dict(input_block=input_block, output_block=output_block, na=na, nb=nb, nk=nk,
+                   forgetting=forgetting, initial_covariance=initial_covariance)  # fmt: skip
+    algorithm = key_term_algorithm(tuple(data.inputs), data.outputs[0], options)
     passes, tol = checked("passes", passes), checked("tol", tol)
-    mu = checked("initial_covariance", initial_covariance)
-    algorithm = ChannelKeyTermRLS(data, basis, r2, (na, nb, delays), schedule, mu, normalize)
+    mu, na, nb, delays = algorithm.mu, algorithm.na, algorithm.nb, algorithm.delays
+    su, sy = (None, None) if scales is None else checked_scales(scales, data.n_inputs)
+    signals = algorithm.prepare(data, normalize, su, sy)
     data.check_orders(
         algorithm.n0, len(algorithm.names),
         what=f"key-term RLS na={na}, nb={nb}, nk={delays.tolist()}",
     )  # fmt: skip
     result = fit_recursive(
         data,
-        algorithm.signals,
+        signals,
         algorithm,
         initial_parameters=initial_parameters,
         initial_covariance=mu,
@@ -467,6 +511,41 @@ def fit_key_term_channels(
         return result
     # a block model of several channels predicts by its free run (BlockStateSpace.predict)
     return replace(result, metrics_mode="simulation")
+
+
+def key_term_algorithm(
+    inputs: tuple[str, ...], output: str, options: dict[str, Any]
+) -> ChannelKeyTermRLS:
+    """The recursion of ``options`` (``input_block``, ``output_block``, ``na``, ``nb``,
+    ``nk``, ``forgetting``, ``initial_covariance``), each checked and named when wrong:
+    what the offline fit and online learning share."""
+    schedule = ForgettingSchedule.parse(options["forgetting"])
+    block, out = options["input_block"], options["output_block"]
+    basis = _input_basis(block) if block is not None else None
+    r2 = _output_degree(out) if out is not None else None
+    na, nb, _ = scalar_orders(options["na"], options["nb"], 0)  # nb >= 1: the inputs enter
+    delays = _delays(options["nk"], tuple(inputs))
+    mu = checked("initial_covariance", options["initial_covariance"])
+    return ChannelKeyTermRLS(tuple(inputs), output, basis, r2, (na, nb, delays), schedule, mu)
+
+
+def checked_scales(scales: Any, n_inputs: int) -> tuple[np.ndarray, float]:
+    """``(input scales, output scale)``: positive finite, one input scale or one per
+    input."""
+    try:
+        su, sy = scales
+        su = np.broadcast_to(np.asarray(su, dtype=float), (n_inputs,)).copy()
+        sy = float(sy)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"scales must be (input scale or one per input, output scale), got {scales!r}",
+            parameter="scales",
+        ) from None
+    if not (np.all(np.isfinite(su)) and np.all(su > 0) and np.isfinite(sy) and sy > 0):
+        raise ParameterError(
+            f"scales must be positive finite numbers, got {scales!r}", parameter="scales"
+        )
+    return su, sy
 
 
 def fit_key_term_block(

@@ -4,7 +4,9 @@
 :meth:`blockid.fitting.estimator.ModelEstimator.partial_fit` and ``update`` for every
 recursive method of the registry: ARX ``rls``, ``aw-rls`` and ``hierarchical-rls``
 (A2, A8, A10), paper B's ``key-term-rls`` (B4, B5) for Hammerstein, Wiener and
-Hammerstein-Wiener models, and paper A's ``aw-rls`` for the backlash model (A6–A8).
+Hammerstein-Wiener models (of several inputs channel by channel,
+:mod:`blockid.fitting.key_term_channels`, also as ``block-state-space``), and paper A's
+``aw-rls`` for the backlash model (A6–A8).
 
 Equivalence contract. The samples of one record fed through
 :meth:`OnlineEstimator.partial_fit` in any chunks, or one at a time through
@@ -29,10 +31,12 @@ output_scale``, and the parameters are mapped back exactly, as offline). So:
 =========================  ================================================================
 online options             equal to the offline one-pass fit
 =========================  ================================================================
-(no scales)                ``fit_key_term_rls(.., normalize=False)``,
+(no scales)                ``fit_key_term_rls(.., normalize=False)`` (several inputs:
+                           ``fit_key_term_channels(.., normalize=False)``),
                            ``fit_backlash_aw_rls(.., normalize=False)``,
                            ``fit_arx(.., scaling="none")``
-``input_scale=su,``        ``fit_key_term_rls(.., scales=(su, sy))``,
+``input_scale=su,``        ``fit_key_term_rls(.., scales=(su, sy))`` (several inputs:
+                           ``fit_key_term_channels(.., scales=(su, sy))``),
 ``output_scale=sy``        ``fit_backlash_aw_rls(.., scales=(su, sy))``,
                            ``fit_arx(.., scaling=(su, sy))``
 =========================  ================================================================
@@ -71,6 +75,7 @@ import numpy as np
 
 from blockid._kernels import backlash_awrls as _kb
 from blockid._kernels import key_term as _kk
+from blockid._kernels import key_term_channels as _kc
 from blockid._kernels import rls as _kr
 from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
@@ -85,6 +90,7 @@ from blockid.fitting.block_arx import (
 )
 from blockid.fitting.dispatch import resolve_options
 from blockid.fitting.key_term import KEY_TERM_STRUCTURES, KeyTermRLS, fit_key_term_rls
+from blockid.fitting.key_term_channels import fit_key_term_block
 from blockid.fitting.recursive import (
     Signals,
     initial_vector,
@@ -176,7 +182,10 @@ def online_estimator(
         fit_key_term_rls: _OnlineKeyTerm,
         fit_backlash_aw_rls: _OnlineBacklash,
         fit_block_arx: _OnlineBlockARX,
+        fit_key_term_block: _OnlineKeyTermChannels,
     }[decl.method(method).function()]
+    if backend is _OnlineKeyTerm and len(names[0]) > 1:  # several inputs: channel by channel
+        backend = _OnlineKeyTermChannels
     return backend(structure, method, opts, names, scales, initial)
 
 
@@ -678,6 +687,112 @@ class _OnlineKeyTerm(_PaperOnline):
         limits = self._limits
         limits[1] = 1e6 * (1.0 + y_max)  # as offline, with max|y| so far
         return _kk.key_term_run(theta, P, u, y, lam, orders, limits, w, x, self._no_hist, err)
+
+
+class _OnlineKeyTermChannels(OnlineEstimator):
+    """Paper B's key-term RLS of several inputs (one output) online
+    (:mod:`blockid.fitting.key_term_channels`): the kernel continued from a window of
+    the last ``L`` samples of every channel's basis functions, the output and the
+    internal estimates ``w_hat``, ``x_hat``; the inputs and ``x_hat`` seen so far are the
+    blocks' ranges. Ends with the estimate of ``fit_key_term_channels(.., passes=1)``
+    on the same scales (``scales=(input_scale, output_scale)``, or ``normalize=False``
+    without them), bit for bit."""
+
+    _state = ("n_samples", "theta", "P", "_phi", "_y", "_w", "_x", "_y_max", "_ranges")
+
+    def __init__(self, structure, method, opts, names, scales, initial) -> None:
+        from blockid.fitting.key_term_channels import checked_scales, key_term_algorithm
+
+        super().__init__(names)
+        if initial is not None:
+            raise ParameterError(
+                "key-term RLS of several inputs learns online from no model (its model file "
+                "holds the realised state space, not the recursion's parameters); leave "
+                "--model out, or give initial_parameters",
+                parameter="initial",
+            )
+        if len(self.names.outputs) != 1:
+            raise ParameterError(
+                f"key-term RLS identifies one output at a time ({len(self.names.outputs)} "
+                "given): learn each output with its own stream, or use --method rls "
+                "(Hammerstein, several outputs)",
+                parameter="outputs",
+            )
+        keys = ("input_block", "output_block", "na", "nb", "nk", "forgetting")
+        keys += ("initial_covariance", "initial_parameters")
+        from blockid.fitting.key_term_channels import fit_key_term_channels
+
+        values = _defaults(fit_key_term_channels, opts, keys)
+        if structure in KEY_TERM_STRUCTURES:  # a chain structure: paper B's blocks
+            has_in, has_out = KEY_TERM_STRUCTURES[structure]
+            r = _defaults(fit_key_term_rls, opts, ("r1", "r2"))
+            values["input_block"] = f"two-segment-polynomial:degree={r['r1']}" if has_in else None
+            values["output_block"] = f"polynomial:degree={r['r2']}" if has_out else None
+        elif "input_block" not in opts and "output_block" not in opts:
+            values["input_block"] = "two-segment-polynomial:degree=3"  # as offline
+            values["output_block"] = "polynomial:degree=3"
+        algorithm = key_term_algorithm(self.names.inputs, self.names.outputs[0], values)
+        if scales is not None:
+            su, sy = checked_scales(scales, len(self.names.inputs))
+            algorithm.set_scales(algorithm.given_scales(su), sy, 0.0)
+        self.algorithm = algorithm
+        n = len(algorithm.names)
+        value = values["initial_parameters"]
+        theta = initial_vector(value, n, algorithm.names)
+        if np.ndim(value) != 0:  # given in the data's units
+            theta = algorithm.from_data_units(theta)
+        self.theta = np.ascontiguousarray(theta, dtype=float)
+        self.P = algorithm.mu * np.eye(n)
+        self.L = L = algorithm.n0
+        m, nf = len(self.names.inputs), algorithm.nf
+        self._phi, self._y = np.zeros((L, m, nf)), np.zeros(L)
+        self._w, self._x = np.zeros((L, m)), np.zeros(L)
+        self._y_max = 0.0
+        self._ranges = np.array([[np.inf, -np.inf]] * (m + 1))  # inputs, then x_hat
+
+    def _learn(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+        alg, L, N = self.algorithm, self.L, u.shape[0]
+        ys = y[:, 0] / alg.sy
+        phi = np.concatenate([self._phi, alg._functions(u) / alg.scales])
+        yy = np.concatenate([self._y, ys])
+        w = np.concatenate([self._w, np.empty((N, self._w.shape[1]))])
+        x = np.concatenate([self._x, np.empty(N)])
+        n0 = L + max(alg.n0 - self.n_samples, 0)
+        count = max(self.n_samples - alg.n0, 0)
+        lam = np.ones(L + N)
+        lam[n0:] = alg.schedule.factors(count, max(L + N - n0, 0))
+        y_max = max(self._y_max, float(np.max(np.abs(ys))))
+        limits = np.array([alg.limits[0], 1e6 * (1.0 + y_max)])
+        orders = np.array([alg.nb, alg.na, alg.r2, alg.has_in, alg.has_out, n0, 1, L],
+                          dtype=np.int64)  # fmt: skip
+        err = np.full(L + N, np.nan)
+        theta, P = self.theta.copy(), self.P.copy()
+        status, reason = _kc.key_term_channels_run(
+            theta, P, phi, yy, lam, orders, alg.delays, limits, w, x,
+            np.zeros((0, theta.size)), err,
+        )  # fmt: skip
+        if status != _kr.OK:
+            raise self._diverged(alg.method, status - L, alg.reasons[reason])
+        self.theta, self.P, self._y_max = theta, P, y_max
+        self._phi, self._y, self._w, self._x = phi[N:], yy[N:], w[N:], x[N:]
+        self._ranges[:-1, 0] = np.minimum(self._ranges[:-1, 0], u.min(axis=0))
+        self._ranges[:-1, 1] = np.maximum(self._ranges[:-1, 1], u.max(axis=0))
+        if alg.has_out:
+            self._ranges[-1] = [min(self._ranges[-1, 0], float(x[L:].min()) * alg.sy),
+                                max(self._ranges[-1, 1], float(x[L:].max()) * alg.sy)]  # fmt: skip
+        self.n_samples += N
+        return ((ys - err[L:]) * alg.sy)[:, None]
+
+    def model(self) -> Any:
+        alg = self.algorithm
+        if np.all(np.isfinite(self._ranges[:-1])):
+            alg.u_range = self._ranges[:-1].copy()
+        alg.x_range = self._ranges[-1].copy()
+        return alg.model(alg.to_data_units(self.theta), None)
+
+    def estimate(self) -> dict[str, float]:
+        theta = self.algorithm.to_data_units(self.theta)
+        return dict(zip(self.algorithm.names, theta.tolist(), strict=True))
 
 
 class _OnlineBacklash(_PaperOnline):

@@ -837,9 +837,10 @@ STRUCTURES: dict[str, Structure] = {
                     ("input_block", "output_block", "na", "nb", "nk", "forgetting")
                     + _PAPER
                     + ("record_history",),
-                    "paper B's key-term RLS for one output of several inputs, passes over "
-                    "the record (default: two-segment polynomial per input, cubic output "
-                    "block)",
+                    "paper B's key-term RLS for one output of several inputs (online: "
+                    "stream, partial_fit; default: two-segment polynomial per input, cubic "
+                    "output block)",
+                    recursive=True,
                 ),
             ),
             block_oriented=False,
