@@ -695,6 +695,7 @@ _KEY_TERM_CHANGES = {
     "initial_parameters": 0.3,
     "normalize": False,
     "record_history": True,
+    "center": True,
 }
 
 
@@ -736,6 +737,9 @@ def _check_key_term_channels(case: Case, option: str) -> None:
         assert settings["passes_run"] < default.settings["passes_run"]
     elif option == "normalize":
         assert settings["normalize"] is False and default.settings["normalize"] is True
+    elif option == "center":  # a Hammerstein model's default is not to centre
+        assert settings["center"] is True and default.settings["center"] is False
+        np.testing.assert_allclose(changed.model.input_offset, _means(case)[0])
     else:  # initial_covariance, initial_parameters: the start of the recursion
         assert settings[option] == value
 

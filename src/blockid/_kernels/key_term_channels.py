@@ -21,8 +21,9 @@ known; the recursion replaces them by estimates from the newest parameters, samp
 sample, as :mod:`blockid._kernels.key_term` does for one input.
 
 Without input blocks (``has_in = 0``) ``phi_c`` is the input itself (one function),
-``w_c = phi_c`` and every ``b_{c,0}`` is free; without an output block (``has_out =
-0``) ``x = y`` is measured.
+``w_c = phi_c`` and every ``b_{c,0}`` is free, and with an output block the model may
+carry an output bias ``h`` (``bias``: ``y = h + x + ..``, ``h`` first in ``theta``);
+without an output block (``has_out = 0``) ``x = y`` is measured.
 
 Parameter vector: ``[gamma_0, gamma_1 (nf), .., gamma_m (nf), b_1 (nb - 1), ..,
 b_m (nb - 1), a_1..a_na, q_2..q_r2]`` with input blocks, ``[b_1 (nb), .., b_m (nb),
@@ -30,7 +31,7 @@ a, q]`` without. With one channel and paper B's two-segment basis this is exactl
 single-input layout of (B4).
 
 Values before the start of the record are 0; the parameters are updated from sample
-``n0`` on. ``start`` (``orders[8]``) marks the samples before it as history, used as
+``n0`` on. ``start`` (``orders[7]``) marks the samples before it as history, used as
 given, so a pass can be split into chunks (see the single-input kernel).
 """
 
@@ -61,7 +62,9 @@ def key_term_channels_run(theta, P, phi_u, y, lam, orders, delays, limits, w, x,
     lam : ndarray, shape (N,)
         Forgetting factor of every sample (entries before ``n0`` are not used).
     orders : ndarray of int64
-        ``[nb, na, r2, has_in, has_out, n0, hist_stride, start]``.
+        ``[nb, na, r2, has_in, has_out, n0, hist_stride, start]``, optionally followed
+        by ``bias``: without input blocks, an output bias ``h`` first in ``theta``
+        (``y = h + x + Σ q_m x^m``; a constant in neither ``w`` nor ``x``).
     delays : ndarray of int64, shape (m,)
         ``nk_c`` of every channel.
     limits : ndarray of float
@@ -88,7 +91,9 @@ def key_term_channels_run(theta, P, phi_u, y, lam, orders, delays, limits, w, x,
     trace_max, x_limit = limits[0], limits[1]
     N, m, nf = phi_u.shape[0], phi_u.shape[1], phi_u.shape[2]
     n = theta.shape[0]
-    n_in = 1 + m * nf if has_in else 0  # gamma_0, then every channel's gammas
+    bias = not has_in and has_out and orders.shape[0] > 8 and orders[8] != 0
+    # gamma_0, then every channel's gammas; or a Wiener model's output bias h
+    n_in = 1 + m * nf if has_in else (1 if bias else 0)
     b_first = 1 if has_in else 0  # b_{c,0} = 1 is the key term with input blocks
     nbf = nb - b_first  # free b's per channel
     ib = n_in
@@ -128,6 +133,8 @@ def key_term_channels_run(theta, P, phi_u, y, lam, orders, delays, limits, w, x,
         if k < n0:
             continue
         # regressor Phi_hat(k)
+        if bias:
+            phi[0] = 1.0
         if has_in:
             phi[0] = 1.0
             for c in range(m):

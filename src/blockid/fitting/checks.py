@@ -92,9 +92,11 @@ def check_model(
     method: str,
     *,
     max_mse_ratio: float | None = 1.1,
+    advice: str | None = None,
 ) -> dict[str, dict[str, float]]:
     """Raise :class:`EstimationError` if ``model`` fails a check; else return its
-    free-run metrics on ``data``.
+    free-run metrics on ``data``. ``advice``: what to try instead when the model does
+    worse than the linear baseline (default: by the method's name).
 
     Parameters
     ----------
@@ -130,7 +132,7 @@ def check_model(
         if base is not None:
             base_mse = simulation_mse(base, data)
             if mse > max_mse_ratio * base_mse:
-                advice = (
+                advice = advice or (
                     "the structure or orders may not suit these data: try others, or "
                     "compare structures with 'blockid compare'"
                     if method.startswith("simulation-error")

@@ -28,7 +28,8 @@ number of input coefficients ``nb``: for each output, each input's ``nb`` in ``0
 nb_max`` (the other inputs at theirs, in turn) minimises Rissanen's minimum description
 length of the least-squares residual, ``V (1 + nb log N / N)`` (MATLAB's
 ``selstruc(V, 'mdl')`` for ``arxstruc`` losses); 0 drops a pair whose input does not
-act on the output. A chi-square test of the dropped coefficients at 95 % kept 1-3
+act on the output (an output whose every pair would drop keeps its best one). A
+chi-square test of the dropped coefficients at 95 % kept 1-3
 coefficients too many on a plant with output noise (which an equation-error model
 fits with extra input lags); MDL's ``log N`` per coefficient keeps fewer, and the
 search's cross-validation judges the result. The false-nearest-neighbour test
@@ -210,10 +211,19 @@ def channel_orders(data: Dataset, nk: object, na: int, nb_max: int) -> ChannelOr
             fixed = [scan.lagged(m, int(delays[j, m]), int(nb[j, m])) for m in range(nu) if m != i]
             for b in range(nb_max + 1):
                 loss[j, i, b] = scan.residual([*fixed, scan.lagged(i, int(delays[j, i]), b)])
-            n = scan.target.size  # Rissanen's MDL, as MATLAB's selstruc(V, 'mdl')
-            mdl = loss[j, i] * (1.0 + np.arange(nb_max + 1) * np.log(n) / n)
-            nb[j, i] = int(np.argmin(mdl))  # the first of equals: the smaller nb
+            nb[j, i] = int(np.argmin(_mdl(loss[j, i], scan.target.size)))  # ties: smaller
+        if not nb[j].any():  # an output fed by no input is no model: keep its best pair
+            best = [float(np.min(_mdl(loss[j, i], scan.target.size)[1:])) for i in range(nu)]
+            i = int(np.argmin(best))
+            nb[j, i] = 1 + int(np.argmin(_mdl(loss[j, i], scan.target.size)[1:]))
     return ChannelOrders(nb, loss, tuple(data.outputs), tuple(data.inputs))
+
+
+def _mdl(loss: np.ndarray, n: int) -> np.ndarray:
+    """Rissanen's description length of each ``nb`` (the index) from its residual,
+    ``V (1 + nb log N / N)``: MATLAB's ``selstruc(V, 'mdl')``, counting the pair's own
+    coefficients (the others are the same for every ``nb`` of the pair)."""
+    return loss * (1.0 + np.arange(loss.size) * np.log(n) / n)
 
 
 def _signals(

@@ -228,7 +228,7 @@ def _run(decl: Structure, method: str, data: Dataset, options: dict[str, Any]) -
 def _fit_block(
     data: Dataset, decl: Structure, method: str, refine: bool, options: dict[str, Any]
 ) -> FitResult:
-    if refine and data.n_inputs > 1:
+    if refine and data.n_inputs > 1 and method != "simulation-error":
         raise ParameterError(
             "refine continues a chain of one input on its free-run error; a model of "
             "several inputs (key-term RLS's block state space, whose core realises the "

@@ -362,7 +362,7 @@ def fit_key_term_rls(
             f"{', '.join(KEY_TERM_STRUCTURES)}"
         )
     has_in, has_out = KEY_TERM_STRUCTURES[structure]
-    if isinstance(data, Dataset) and data.n_inputs > 1 and data.n_outputs == 1:
+    if isinstance(data, Dataset) and data.n_inputs > 1:  # one output: else it says so
         return _several_inputs(data, structure, scales, na=na, nb=nb, nk=nk, r1=r1, r2=r2,
                                forgetting=schedule, passes=passes, tol=tol,
                                initial_covariance=initial_covariance,

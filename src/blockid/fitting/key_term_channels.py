@@ -34,18 +34,22 @@ Choices beyond paper B (which has one input):
 * One output: the key term ``b_{c,0} = 1`` fixes each input block's scale through one
   output's linear block; with several outputs the blocks would be scaled differently
   for each, so several outputs are refused with what to do instead.
-* Without input blocks (a Wiener model) ``w_c = u_c`` and every ``b_{c,0}`` is free;
+* Without input blocks (a Wiener model) ``w_c = u_c``, every ``b_{c,0}`` is free and
+  the model's constant is an output bias, ``y = h + x + q_2 x^2 + ..`` (the block
+  state space's ``h``);
   without an output block (a Hammerstein model) ``x = y`` is measured, the older block
   outputs still estimated; without either (an ARX) the method is plain RLS, equal to
   least squares (test).
 * Like the single-input method, it converges only where the internal-variable
-  iteration has a stable fixed point: an input block with a constant offset (``f_0 !=
-  0``) was enough to make it wander in our tests (``did not converge`` is then
-  reported, no model returned; docs/convergence.md).
+  iteration has a stable fixed point, and it is reported when it does not (``did not
+  converge``, no model returned; docs/convergence.md). In our tests a constant in an
+  input block (``f_0``, or a step at zero, ``p_0``) was enough to make it wander for
+  some delays and not others (docs/models.md).
 
 The model returned is a :class:`~blockid.models.block_state_space.BlockStateSpace`
 whose core realises the linear block (a state of the last ``na`` values of ``x`` and
-the last ``nk_c + nb - 1`` block outputs of every channel), so it simulates, saves,
+the last ``max(nk) + nb - 1`` block outputs of every channel: the channels of shorter
+delay are padded with zero coefficients), so it simulates, saves,
 exports, reports and compares as every block model of several channels.
 """
 
@@ -60,7 +64,7 @@ from blockid._kernels import key_term_channels as _k
 from blockid._kernels.rls import OK
 from blockid.blocks import Polynomial
 from blockid.blocks.base import block_template
-from blockid.data.dataset import Dataset
+from blockid.data.dataset import Dataset, Experiment
 from blockid.defaults import DEGREE, RECURSIVE
 from blockid.errors import DataError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
@@ -156,10 +160,23 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
     method = "key-term RLS"
     label = "key-term-rls"
     reasons = {
-        _k.REASON_STEP: "the RLS update became non-finite or lost positive definiteness",
+        _k.REASON_STEP: "the RLS update became non-finite or lost positive definiteness "
+        "(the first steps from P(0) = initial_covariance I were too large for the "
+        "internal estimates: a smaller initial_covariance, e.g. 1e3, often helps)",
         _k.REASON_EXPLODED: "the estimated internal signal x exceeded 1e6 (1 + max|y|): "
         "the estimated linear block drives it unstable",
     }
+
+    @property
+    def advice(self) -> str | None:
+        """Several inputs: ``refine`` does not apply, the simulation-error fit of the
+        block state space does."""
+        if len(self.inputs) == 1:
+            return None
+        return (
+            "try other orders or delays, more passes, or fit structure block-state-space "
+            "with method simulation-error (any blocks, from the linear state space)"
+        )
 
     def __init__(
         self,
@@ -181,9 +198,11 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         self.mu = mu
         m = len(inputs)
         self.nf = basis[0].size if basis is not None else 1
+        # a Wiener model's constant: an output bias (an input block carries its own)
+        self.bias = self.has_out and not self.has_in
         self.names = self._names()
         self.n0 = max(largest_lag(na, nb, int(d)) for d in delays)
-        ia = (1 + m * self.nf if self.has_in else 0) + m * (nb - self.has_in)
+        ia = (1 + m * self.nf if self.has_in else int(self.bias)) + m * (nb - self.has_in)
         self.a = slice(ia, ia + na)
         self.set_scales(np.ones((m, self.nf)), 1.0, 0.0)
         self.x_range = np.array([np.inf, -np.inf])  # of x_hat in the last pass (data units)
@@ -246,7 +265,7 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         )
 
     def _names(self) -> list[str]:
-        names = []
+        names = ["output bias"] if self.bias else []
         if self.has_in:
             names.append("constant")
             names += [f"{u}[{b}]" for u in self.inputs for b in self.basis[0].names]
@@ -261,7 +280,7 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         """Element-wise factors from the recursion's units to the data's (``w``, ``x``
         in ``y``'s units)."""
         sy, m = self.sy, len(self.inputs)
-        parts = []
+        parts: list[Any] = [[sy]] if self.bias else []
         if self.has_in:
             parts += [[sy], (sy / self.scales).ravel(), np.ones(m * (self.nb - 1))]
         else:
@@ -275,10 +294,7 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         N, n0 = u.shape[0], self.n0
         lam = np.ones(N)
         lam[n0:] = self.schedule.factors(count, N - n0)
-        orders = np.array(
-            [self.nb, self.na, self.r2, self.has_in, self.has_out, n0, stride, 0],
-            dtype=np.int64,
-        )
+        orders = self.kernel_orders(n0, stride, 0)
         w, x = np.empty((N, u.shape[1])), np.empty(N)
         status, reason = _k.key_term_channels_run(
             theta, P, u, y, lam, orders, self.delays, self.limits, w, x, hist, np.empty(N)
@@ -292,6 +308,15 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
             self.x_range = np.array([np.inf, -np.inf])
         self.widen(x)
         return status, reason, detail
+
+    def kernel_orders(self, n0: int, stride: int, start: int) -> np.ndarray:
+        """The kernel's ``orders`` (:func:`~blockid._kernels.key_term_channels.
+        key_term_channels_run`)."""
+        return np.array(
+            [self.nb, self.na, self.r2, self.has_in, self.has_out, n0, stride, start,
+             self.bias],
+            dtype=np.int64,
+        )  # fmt: skip
 
     def widen(self, x: np.ndarray) -> None:
         """Take ``x_hat`` (the recursion's units) into the output block's range."""
@@ -309,9 +334,12 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         self, theta: np.ndarray
     ) -> tuple[list[np.ndarray] | None, float, np.ndarray, np.ndarray, np.ndarray]:
         """``theta`` (data units) split: block coefficients per channel (or None), the
-        constant, ``b`` (m, nb), ``a`` and ``q`` (from ``q_1 = 1``)."""
+        constant (the first block's, or the output bias), ``b`` (m, nb), ``a`` and ``q``
+        (from ``q_1 = 1``)."""
         m, nf, nb = len(self.inputs), self.nf, self.nb
         pos, gammas, constant = 0, None, 0.0
+        if self.bias:
+            constant, theta = float(theta[0]), theta[1:]
         if self.has_in:
             constant = float(theta[0])
             gammas = [theta[1 + c * nf : 1 + (c + 1) * nf] for c in range(m)]
@@ -356,7 +384,7 @@ class ChannelKeyTermRLS(RecursiveAlgorithm):
         seen = self.has_out and bool(np.all(np.isfinite(self.x_range)))
         return BlockStateSpace(
             self.inputs, [self.output], A, B, C, D,
-            input_blocks=blocks,
+            input_blocks=blocks, output_bias=[constant] if self.bias else None,
             output_blocks=[Polynomial(q, constant=False)] if self.has_out else None,
             input_range=self.u_range if blocks is not None else None,
             output_range=[self.x_range.tolist()] if seen else None,
@@ -553,12 +581,19 @@ def fit_key_term_block(
     *,
     input_block: Any = None,
     output_block: Any = None,
+    center: bool | None = None,
     **options: Any,
 ) -> FitResult:
     """``block-state-space`` by ``key-term-rls``: without blocks named, paper B's
     Hammerstein-Wiener (``two-segment-polynomial:degree=3`` on every input,
     ``polynomial:degree=3`` on the output); otherwise the blocks named (only an input
-    block: Hammerstein; only an output block: Wiener)."""
+    block: Hammerstein; only an output block: Wiener).
+
+    ``center`` fits on signals less their means (per channel, over every experiment) and
+    keeps the means as the model's offsets; default: without input blocks (a Wiener
+    model), as the chain structures. The model carries a constant of its own too (the
+    first input block's, or a Wiener model's output bias ``h``), but the recursion on
+    signals far from zero wandered where the centred one converged (test)."""
     for key, value in (("input_block", input_block), ("output_block", output_block)):
         if isinstance(value, dict):
             raise ParameterError(
@@ -569,6 +604,22 @@ def fit_key_term_block(
     if input_block is None and output_block is None:
         input_block = f"two-segment-polynomial:degree={DEGREE}"
         output_block = f"polynomial:degree={DEGREE}"
-    return fit_key_term_channels(
-        data, input_block=input_block, output_block=output_block, **options
+    center = input_block is None if center is None else bool(checked("center", center))
+    if not center:
+        result = fit_key_term_channels(
+            data, input_block=input_block, output_block=output_block, **options
+        )
+        return replace(result, settings={**result.settings, "center": False})
+    if not isinstance(data, Dataset):
+        raise DataError(f"key-term RLS needs a blockid Dataset, got {type(data).__name__}")
+    u_off = np.vstack([e.u for e in data.experiments]).mean(axis=0)
+    y_off = np.vstack([e.y for e in data.experiments]).mean(axis=0)
+    shifted = Dataset(
+        data.inputs, data.outputs, data.sampling_time,
+        [Experiment(e.name, e.u - u_off, e.y - y_off) for e in data.experiments], data.source,
+    )  # fmt: skip
+    result = fit_key_term_channels(
+        shifted, input_block=input_block, output_block=output_block, **options
     )
+    model = result.model.replace(input_offset=u_off, output_offset=y_off)
+    return replace(result, model=model, settings={**result.settings, "center": True})

@@ -763,8 +763,7 @@ class _OnlineKeyTermChannels(OnlineEstimator):
         lam[n0:] = alg.schedule.factors(count, max(L + N - n0, 0))
         y_max = max(self._y_max, float(np.max(np.abs(ys))))
         limits = np.array([alg.limits[0], 1e6 * (1.0 + y_max)])
-        orders = np.array([alg.nb, alg.na, alg.r2, alg.has_in, alg.has_out, n0, 1, L],
-                          dtype=np.int64)  # fmt: skip
+        orders = alg.kernel_orders(n0, 1, L)
         err = np.full(L + N, np.nan)
         theta, P = self.theta.copy(), self.P.copy()
         status, reason = _kc.key_term_channels_run(

@@ -197,6 +197,9 @@ class RecursiveAlgorithm(ABC):
 
     method: str
     label: str
+    #: What to try when the model does worse than the linear baseline (None: the
+    #: default advice of :func:`~blockid.fitting.check_model`).
+    advice: str | None = None
     names: list[str]
     n0: int
     a: slice
@@ -393,7 +396,8 @@ def fit_recursive(
         )
         theta = algorithm.to_data_units(theta)
         model = algorithm.model(theta, data)
-        check_model(algorithm.model_to_check(model), data, algorithm.method)
+        check_model(algorithm.model_to_check(model), data, algorithm.method,
+                    advice=algorithm.advice)  # fmt: skip
     except EstimationError as exc:
         if trajectory is not None:
             exc.history = history()

@@ -834,7 +834,7 @@ STRUCTURES: dict[str, Structure] = {
                 Method(
                     "key-term-rls",
                     "blockid.fitting.key_term_channels:fit_key_term_block",
-                    ("input_block", "output_block", "na", "nb", "nk", "forgetting")
+                    ("input_block", "output_block", "na", "nb", "nk", "forgetting", "center")
                     + _PAPER
                     + ("record_history",),
                     "paper B's key-term RLS for one output of several inputs (online: "
