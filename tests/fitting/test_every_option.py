@@ -132,11 +132,25 @@ def _check_nk(case, default, changed, value):
 
 
 def _check_center(case, default, changed, value):
+    from blockid.fitting.simulation_error import offset_is_free
+
     means = _means(case)
     centered, plain = (changed, default) if value else (default, changed)
-    np.testing.assert_allclose(_offsets(centered.model), means, rtol=1e-12)
+    refined = offset_is_free(centered.model) and case.method == "simulation-error"
+    if refined:  # a Wiener model refines its output offset
+        assert _offsets(centered.model)[0] == pytest.approx(means[0], rel=1e-12)
+        data, model = case.data(), centered.model
+        step = 0.01 * float(np.std(data.experiments[0].y))
+        mse = [simulation_mse(model.replace(output_offset=model.output_offset + d), data)
+               for d in (-step, 0.0, step)]  # fmt: skip
+        assert mse[1] < min(mse[0], mse[2]), mse  # the least-squares constant
+    else:
+        np.testing.assert_allclose(_offsets(centered.model), means, rtol=1e-12)
     assert all(abs(m) > 1e-3 for m in means)
-    assert _offsets(plain.model) == (0.0, 0.0)
+    if refined:  # not centred: no input offset, the output's the refined constant
+        assert _offsets(plain.model)[0] == 0.0 and _offsets(plain.model)[1] != 0.0
+    else:
+        assert _offsets(plain.model) == (0.0, 0.0)
     _differs(default, changed)
 
 

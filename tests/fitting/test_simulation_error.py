@@ -615,3 +615,25 @@ def test_tail_is_kept_when_the_head_holds_one_sample_for_one_parameter():
     # N = 10, tail 5, n0 = 4: a head of 1 sample holds 1 parameter
     assert [s.n_fit for s in _segments(data, 4, 0.5, 1)] == [5]
     assert [s.n_fit for s in _segments(data, 4, 0.5, 2)] == [10]
+
+
+def test_a_centred_wiener_fit_refines_its_output_constant():
+    """An exact Wiener plant whose output polynomial has a square term: its output's
+    mean is not the constant of the centred model (the polynomial's mean over the data
+    is not zero). With the offset fixed at the mean the default (centred) fit erred by
+    14.4 % of the output's spread; refined with the other parameters, measured 0.15 %
+    (uncentred, exact to rounding either way)."""
+    from blockid.blocks import Polynomial
+    from blockid.models import Wiener
+
+    plant = Wiener("u", "y", output_block=Polynomial([1.0, 0.2, 0.05], constant=False),
+                   na=3, nb=3, nk=8, a=np.real(np.poly([0.7, 0.5, -0.3]))[1:],
+                   b=[0.4, 0.5, 0.2])  # fmt: skip
+    u = np.random.default_rng(0).uniform(-1.0, 1.0, 4000)
+    y = plant.simulate(u)[:, 0]
+    data = Dataset.from_arrays(u, y, inputs=["u"], outputs=["y"])
+    fit = fit_model(data, "wiener", na=3, nb=3, nk=8, r2=3)
+    assert fit.settings["center"] is True
+    err = fit.model.simulate(u)[:, 0] - y
+    assert np.sqrt(np.mean(err**2)) < 0.005 * np.std(y)
+    assert fit.model.output_offset != pytest.approx(float(np.mean(y)), abs=0.01)

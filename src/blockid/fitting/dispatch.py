@@ -282,5 +282,7 @@ def _centered(
         return replace(result, model=model, settings={**result.settings, "center": True})
     if not model.ranges:
         model = model.with_ranges([(e.u, e.y) for e in shifted.experiments])
+    # the fit's own output offset (a Wiener model refines it) on top of the mean
+    y_off = y_off + model.output_offset
     model = model.replace(input_offset=u_off, output_offset=y_off, ranges=model.ranges)
     return replace(result, model=model, settings={**result.settings, "center": True})

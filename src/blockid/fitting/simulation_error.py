@@ -293,6 +293,69 @@ class _Problem:
         return float(np.mean(err**2)) if np.all(np.isfinite(err)) else np.inf
 
 
+class _FreeOffset:
+    """A Wiener chain whose output offset is one more free parameter (the last).
+
+    The output polynomial has no constant (B3), so a Wiener chain's constant is its
+    output offset; fitted at the output's mean (centring) it is wrong wherever the
+    polynomial's mean over the data is not zero (a square term: an exact Wiener plant
+    was fitted 14 % off). Refined with the other parameters, it is the least-squares
+    constant. Its derivative is 1 plus its effect through the simulation's start from
+    the inverse of the first measured outputs, taken by a forward difference.
+    """
+
+    def __init__(self, base: ChainModel) -> None:
+        self.base = base
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.base, name)
+
+    def free_parameters(self) -> np.ndarray:
+        return np.append(self.base.free_parameters(), 0.0)
+
+    def parameter_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        lower, upper = self.base.parameter_bounds()
+        return np.append(lower, -np.inf), np.append(upper, np.inf)
+
+    def _shifted(self, model: ChainModel, delta: float) -> ChainModel:
+        return model.replace(output_offset=model.output_offset + delta)
+
+    def with_free_parameters(self, theta: Any) -> _FreeOffset:
+        theta = np.asarray(theta, dtype=float)
+        model = self.base.with_free_parameters(theta[:-1])
+        return _FreeOffset(self._shifted(model, float(theta[-1])))
+
+    def with_ranges(self, experiments: Any) -> _FreeOffset:
+        return _FreeOffset(self.base.with_ranges(experiments))
+
+    def replace(self, **changes: Any) -> _FreeOffset:
+        return _FreeOffset(self.base.replace(**changes))
+
+    def simulate_with_sensitivities(
+        self, u: Any, y_initial: Any = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        y, dy = self.base.simulate_with_sensitivities(u, y_initial)
+        h = 1e-6 * (1.0 + float(np.std(y)))
+        shifted = self._shifted(self.base, h).replace(ranges=self.base.ranges)
+        column = (shifted.simulate(u, y_initial)[:, 0] - y) / h
+        return y, np.column_stack([dy, column])
+
+
+def offset_is_free(model: Any) -> bool:
+    """A chain of linear blocks then a polynomial output block without constant (a
+    Wiener model): its output offset is refined (:class:`_FreeOffset`)."""
+    if not isinstance(model, ChainModel):
+        return False
+    last = model.blocks[-1]
+    before = model.blocks[: model.last_linear_index + 1]
+    return (
+        model.last_linear_index == len(model.blocks) - 2
+        and getattr(last, "kind", None) == "polynomial"
+        and not getattr(last, "constant", True)
+        and all(b.role == "linear" for b in before)
+    )
+
+
 def chunkable(model: Any) -> bool:
     """Whether :func:`~blockid.models.sensitivities.sensitivity_chunks` can walk the
     model in pieces: a chain of static and linear blocks (a dynamic block such as a
@@ -395,6 +458,9 @@ def refine(
     # earlier data (a warm start) would bound inversions and bend polynomial blocks onto
     # their tangents; the result records its own ranges on these data at the end.
     model = model.replace(ranges=None)
+    free_offset = offset_is_free(model)
+    if free_offset:
+        model = _FreeOffset(model)
     theta0 = model.free_parameters()
     n_par = theta0.size
     data.check_orders(model.max_lag, n_par, what=f"{model.structure} model")
@@ -452,6 +518,8 @@ def refine(
     if problem.has_tail and tracker.best_theta is not None:
         theta = tracker.best_theta
     fitted = model.with_free_parameters(theta)
+    if free_offset:
+        fitted, model = fitted.base, model.base
     # The estimation ranges decide whether a simulation may start from N_2^{-1} of the
     # measured outputs; record them first, so that every MSE reported here (and the
     # choice between starts) is the one evaluate() gives for the returned model.
