@@ -374,15 +374,16 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
         "The search is deterministic: the same data, effort and version give the same "
         "model on any machine; the times depend on the machine.",
         "",
-        "This run (2026-11-27): every single-output set at commit `e076ba6` (identify's "
-        "linear-unless-consistent rule), the multivariable sets again at `5552ad3` (per-pair "
-        "delays; the single-output search is unchanged by it). Where a set's choice changed "
-        "from the run before, its explanation below says so. The search times are not "
-        "idle-machine times: during the WH 2009 search other work of ours ran beside it "
-        "(load up to 3.0), so its 1019 s against 681 s for the same model, bit for bit, at "
-        "`372f87c` on an idle machine; Silverbox 205 s (239 before), Bouc-Wen 349 s (289). On "
-        "this shared 2-core machine the same work also varies by up to a third from one "
-        "hour to the next.",
+        "This run (2026-11-27): every single-output set at commit `5b2a56c` (a Wiener "
+        "model's output offset refined with its other parameters; the quick-effort sets at "
+        "the same commit, WH 2009's re-run on an idle machine after the standard sets, its "
+        "first run having compiled every kernel in a fresh worktree: 161 s), the "
+        "multivariable sets at `95b4d87` (per-pair orders). Every chosen model and test "
+        "RMSE is the one of the run before (`e076ba6`, `5552ad3`) except the winding "
+        "process (per-pair orders, below). The machine was idle but for the search itself "
+        "(its two workers keep the load near 2). On this shared 2-core machine the same "
+        "work varies by up to a third from one hour to the next: WH 2009's standard search "
+        "took 723 s here, 681 s and 1019 s in earlier runs of the same model.",
         "",
         "## Single-output sets",
         "",
