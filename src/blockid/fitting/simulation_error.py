@@ -301,7 +301,10 @@ class _FreeOffset:
     polynomial's mean over the data is not zero (a square term: an exact Wiener plant
     was fitted 14 % off). Refined with the other parameters, it is the least-squares
     constant. Its derivative is 1 plus its effect through the simulation's start from
-    the inverse of the first measured outputs, taken by a forward difference.
+    the inverse of the first measured outputs, taken by a forward difference. Only
+    where the whole Jacobian is formed (below :data:`LARGE_JACOBIAN`, about 1 million
+    samples of a Wiener model of 8 parameters): the piecewise path of longer records
+    keeps the offset the fit started from.
     """
 
     def __init__(self, base: ChainModel) -> None:
@@ -458,7 +461,11 @@ def refine(
     # earlier data (a warm start) would bound inversions and bend polynomial blocks onto
     # their tangents; the result records its own ranges on these data at the end.
     model = model.replace(ranges=None)
-    free_offset = offset_is_free(model)
+    # the offset's derivative needs the whole Jacobian: on a record too long for it
+    # (the piecewise path below) the offset stays where it is
+    rows = sum(max(e.n_samples - model.max_lag, 0) for e in data.experiments)
+    n_free = model.free_parameters().size + 1
+    free_offset = offset_is_free(model) and rows * n_free * 8 <= LARGE_JACOBIAN
     if free_offset:
         model = _FreeOffset(model)
     theta0 = model.free_parameters()
