@@ -62,9 +62,9 @@ def key_term_channels_run(theta, P, phi_u, y, lam, orders, delays, limits, w, x,
     lam : ndarray, shape (N,)
         Forgetting factor of every sample (entries before ``n0`` are not used).
     orders : ndarray of int64
-        ``[nb, na, r2, has_in, has_out, n0, hist_stride, start]``, optionally followed
-        by ``bias``: without input blocks, an output bias ``h`` first in ``theta``
-        (``y = h + x + Σ q_m x^m``; a constant in neither ``w`` nor ``x``).
+        ``[nb, na, r2, has_in, has_out, n0, hist_stride, start, bias]``; ``bias``:
+        without input blocks, an output bias ``h`` first in ``theta`` (``y = h + x +
+        Σ q_m x^m``; a constant in neither ``w`` nor ``x``).
     delays : ndarray of int64, shape (m,)
         ``nk_c`` of every channel.
     limits : ndarray of float
@@ -91,7 +91,7 @@ def key_term_channels_run(theta, P, phi_u, y, lam, orders, delays, limits, w, x,
     trace_max, x_limit = limits[0], limits[1]
     N, m, nf = phi_u.shape[0], phi_u.shape[1], phi_u.shape[2]
     n = theta.shape[0]
-    bias = not has_in and has_out and orders.shape[0] > 8 and orders[8] != 0
+    bias = orders[8] != 0 and not has_in and has_out
     # gamma_0, then every channel's gammas; or a Wiener model's output bias h
     n_in = 1 + m * nf if has_in else (1 if bias else 0)
     b_first = 1 if has_in else 0  # b_{c,0} = 1 is the key term with input blocks

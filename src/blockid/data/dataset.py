@@ -472,6 +472,15 @@ class Dataset:
             selected.append(Experiment(exp.name, exp.u[lo:hi], exp.y[lo:hi]))
         return Dataset(self.inputs, self.outputs, self.sampling_time, selected, self.source)
 
+    def shifted(self, u_offset: Any, y_offset: Any) -> Dataset:
+        """The same record less the offsets (a number, or one per input / output), as
+        the centred fits use it; names, sampling time and source kept."""
+        return Dataset(
+            self.inputs, self.outputs, self.sampling_time,
+            [Experiment(e.name, e.u - u_offset, e.y - y_offset) for e in self.experiments],
+            self.source,
+        )  # fmt: skip
+
     def check_orders(self, max_lag: int, n_parameters: int, what: str) -> None:
         """Check that every experiment is long enough for a model.
 

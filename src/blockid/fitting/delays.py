@@ -85,13 +85,11 @@ class ChannelDelays:
     @property
     def common(self) -> bool:
         """True when every pair has the same delay."""
-        return bool(np.all(self.nk == self.nk.flat[0]))
+        return isinstance(self.as_option(), int)
 
     def as_option(self) -> int | tuple[tuple[int, ...], ...]:
         """The delays as ``fit``'s ``nk`` option: one number when they agree."""
-        if self.common:
-            return int(self.nk.flat[0])
-        return tuple(tuple(int(v) for v in row) for row in self.nk)
+        return _option(self.nk)
 
 
 def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2) -> ChannelDelays:
@@ -168,13 +166,11 @@ class ChannelOrders:
     @property
     def common(self) -> bool:
         """True when every pair has the same ``nb``."""
-        return bool(np.all(self.nb == self.nb.flat[0]))
+        return isinstance(self.as_option(), int)
 
     def as_option(self) -> int | tuple[tuple[int, ...], ...]:
         """The orders as ``fit``'s ``nb`` option: one number when they agree."""
-        if self.common:
-            return int(self.nb.flat[0])
-        return tuple(tuple(int(v) for v in row) for row in self.nb)
+        return _option(self.nb)
 
 
 def channel_orders(data: Dataset, nk: object, na: int, nb_max: int) -> ChannelOrders:
@@ -217,6 +213,14 @@ def channel_orders(data: Dataset, nk: object, na: int, nb_max: int) -> ChannelOr
             i = int(np.argmin(best))
             nb[j, i] = 1 + int(np.argmin(_mdl(loss[j, i], scan.target.size)[1:]))
     return ChannelOrders(nb, loss, tuple(data.outputs), tuple(data.inputs))
+
+
+def _option(matrix: np.ndarray) -> int | tuple[tuple[int, ...], ...]:
+    """A per-pair order matrix as ``fit``'s option: one number when every pair agrees,
+    else nested tuples (rows: outputs)."""
+    if np.all(matrix == matrix.flat[0]):
+        return int(matrix.flat[0])
+    return tuple(tuple(int(v) for v in row) for row in matrix)
 
 
 def _mdl(loss: np.ndarray, n: int) -> np.ndarray:

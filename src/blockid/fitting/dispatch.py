@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from blockid.data.dataset import Dataset, Experiment
+from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.registry import (
     STRUCTURES,
@@ -268,13 +268,7 @@ def _centered(
     else:
         u_off = float(np.mean(np.concatenate([e.u[:, 0] for e in data.experiments])))
         y_off = float(np.mean(np.concatenate([e.y[:, 0] for e in data.experiments])))
-    shifted = Dataset(
-        data.inputs,
-        data.outputs,
-        data.sampling_time,
-        [Experiment(e.name, e.u - u_off, e.y - y_off) for e in data.experiments],
-        data.source,
-    )
+    shifted = data.shifted(u_off, y_off)
     result = _fit_block(shifted, decl, method, refine, options)
     model = result.model
     if not hasattr(model, "with_ranges"):  # its ranges are of the normalised signals

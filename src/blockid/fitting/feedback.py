@@ -46,7 +46,7 @@ import numpy as np
 from blockid.blocks import Polynomial
 from blockid.blocks.base import LinearFamily, StaticBlock
 from blockid.blocks.linear import LinearBlock
-from blockid.data.dataset import Dataset, Experiment
+from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError, ParameterError
 from blockid.fitting.checks import simulation_mse
 from blockid.fitting.initial import _lagged, _least_squares, _stabilise
@@ -309,13 +309,7 @@ def fit_feedback(
             float(np.mean(np.concatenate([e.u[:, 0] for e in data.experiments]))),
             float(np.mean(np.concatenate([e.y[:, 0] for e in data.experiments]))),
         )
-        data = Dataset(
-            data.inputs,
-            data.outputs,
-            data.sampling_time,
-            [Experiment(e.name, e.u - offsets[0], e.y - offsets[1]) for e in data.experiments],
-            data.source,
-        )
+        data = data.shifted(*offsets)
     t0 = time.perf_counter()
     if feedback_block is None:
         start, scores = initial_feedback(data, na=na, nb=nb, nk=nk, r=int(r))

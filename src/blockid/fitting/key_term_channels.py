@@ -64,7 +64,7 @@ from blockid._kernels import key_term_channels as _k
 from blockid._kernels.rls import OK
 from blockid.blocks import Polynomial
 from blockid.blocks.base import block_template
-from blockid.data.dataset import Dataset, Experiment
+from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE, RECURSIVE
 from blockid.errors import DataError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
@@ -502,7 +502,6 @@ def fit_key_term_channels(
         The recursion diverged, did not converge, or its model fails the checks.
     """
     method = ChannelKeyTermRLS.method
-    ForgettingSchedule.parse(forgetting)  # once, before any data work
     if not isinstance(data, Dataset):
         raise DataError(f"{method} needs a blockid Dataset, got {type(data).__name__}")
     if data.n_outputs != 1:
@@ -513,10 +512,10 @@ def fit_key_term_channels(
             "or fit all of them with structure block-state-space and method "
             "simulation-error (any blocks) or batch/rls (input blocks only)"
         )
-    signal_statistics(data)  # every signal must move, inputs not together: else named
     options = dict(input_block=input_block, output_block=output_block, na=na, nb=nb, nk=nk,
                    forgetting=forgetting, initial_covariance=initial_covariance)  # fmt: skip
-    algorithm = key_term_algorithm(tuple(data.inputs), data.outputs[0], options)
+    algorithm = key_term_algorithm(tuple(data.inputs), data.outputs[0], options)  # all checked
+    signal_statistics(data)  # every signal must move, inputs not together: else named
     passes, tol = checked("passes", passes), checked("tol", tol)
     mu, na, nb, delays = algorithm.mu, algorithm.na, algorithm.nb, algorithm.delays
     su, sy = (None, None) if scales is None else checked_scales(scales, data.n_inputs)
@@ -614,10 +613,7 @@ def fit_key_term_block(
         raise DataError(f"key-term RLS needs a blockid Dataset, got {type(data).__name__}")
     u_off = np.vstack([e.u for e in data.experiments]).mean(axis=0)
     y_off = np.vstack([e.y for e in data.experiments]).mean(axis=0)
-    shifted = Dataset(
-        data.inputs, data.outputs, data.sampling_time,
-        [Experiment(e.name, e.u - u_off, e.y - y_off) for e in data.experiments], data.source,
-    )  # fmt: skip
+    shifted = data.shifted(u_off, y_off)
     result = fit_key_term_channels(
         shifted, input_block=input_block, output_block=output_block, **options
     )
