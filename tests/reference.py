@@ -155,6 +155,48 @@ def mimo_hw_record(n=4000, snr_db=40.0, seed=1):
     return Dataset.from_arrays(u, y, inputs=["u1", "u2"], outputs=["y1", "y2"]), u
 
 
+def mimo_loop_plant(kind):
+    """A plant of two inputs and two outputs with a static block in each of two loops
+    (:class:`~blockid.models.block_state_space.BlockStateSpace` loop blocks):
+
+    * ``"lure"``: two coupled second-order channels, each output fed back through a
+      saturation (knees -0.4/0.4 and -0.3/0.5), a multivariable Lur'e system;
+    * ``"wiener-hammerstein"``: two paths, each a first-order filter of both inputs, a
+      dead zone (edges -0.3/0.2 and -0.2/0.4) and a second first-order filter (beside
+      a linear path from the first filter's state).
+    """
+    from blockid.blocks import DeadZone, Saturation
+    from blockid.models.block_state_space import BlockStateSpace
+
+    if kind == "lure":
+        A = 0.9 * np.array([[1.2, -0.5, 0, 0], [1, 0, 0, 0], [0, 0, 0.9, -0.3], [0, 0, 1, 0]])
+        B = [[1, 0.3], [0, 0], [0.2, 1], [0, 0]]
+        C = np.array([[0.5, 0.3, 0, 0], [0, 0, 0.6, 0.2]])
+        blocks, Cp = [Saturation(-0.4, 0.4), Saturation(-0.3, 0.5)], C
+        Bq = [[-0.8, 0], [0, 0], [0, -0.7], [0, 0]]
+    else:
+        A = np.diag([0.6, 0.8, 0.5, 0.7])
+        A[1, 0], A[3, 2] = 0.5, 0.4
+        B = [[1, 0.4], [0, 0], [0.3, 1], [0, 0]]
+        C = 0.5 * np.array([[0, 1, 0, 0], [0, 0, 0, 1]])
+        blocks, Cp = [DeadZone(-0.3, 0.2), DeadZone(-0.2, 0.4)], [[1, 0, 0, 0], [0, 0, 1, 0]]
+        Bq = [[0, 0], [1, 0], [0, 0], [0, 1]]
+    return BlockStateSpace(
+        ["u1", "u2"], ["y1", "y2"], A, B, C, np.zeros((2, 2)), loop_blocks=blocks, Cp=Cp,
+        Dp=np.zeros((2, 2)), Bq=Bq, Dq=np.zeros((2, 2)),
+    )  # fmt: skip
+
+
+def mimo_loop_record(kind, n=2000, snr_db=40.0, seed=1):
+    """``(data, u, y_true)``: :func:`mimo_loop_plant` driven by uniform white inputs on
+    [-1.5, 1.5]; white output noise at ``snr_db``."""
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1.5, 1.5, (n, 2))
+    y_true = mimo_loop_plant(kind).simulate(u)
+    y = y_true + rng.standard_normal(y_true.shape) * y_true.std(axis=0) * 10 ** (-snr_db / 20)
+    return Dataset.from_arrays(u, y, inputs=["u1", "u2"], outputs=["y1", "y2"]), u, y_true
+
+
 def _arx_data(n=200, seed=0):
     # y(t) = 0.5 y(t-1) + u(t-1), noise free
     rng = np.random.default_rng(seed)

@@ -355,6 +355,13 @@ def _check_output_block(case, default, changed, value):
     assert changed.settings["output_block"] == "polynomial"
 
 
+def _check_loop_block(case, default, changed, value):
+    assert default.model.loop_blocks == () and default.settings["loop_blocks"] == []
+    (block,) = changed.model.loop_blocks
+    assert block.kind == value and changed.settings["loop_blocks"] == [value]
+    assert changed.model.kind.endswith("+loop")
+
+
 def _check_feedback_block(case, default, changed, value):
     assert default.model.feedback.kind == "polynomial" and default.settings["center"] is True
     assert changed.model.feedback.kind == "dead-zone"
@@ -527,6 +534,7 @@ EXPECT: dict[str, Expect] = {
     "input_block": Expect("dead-zone", _check_input_block),
     "output_block": Expect("polynomial:degree=4", _check_output_block),
     "feedback_block": Expect("dead-zone", _check_feedback_block),
+    "loop_block": Expect("saturation", _check_loop_block),
     # not centred (the plants have no offsets): from centred data the Wiener-Hammerstein
     # split of the differenced record lands in another local minimum within max_nfev = 5
     "integrator": Expect(1, _check_integrator, {"center": False}, data=_integrating_record),

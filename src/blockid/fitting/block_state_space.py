@@ -72,18 +72,20 @@ def parse_channel_blocks(spec: Any, channels: list[str], output: bool) -> list[S
     return [_spec_block(named.get(c), output, f"{what} {c}") for c in channels]
 
 
-def near_identity(block: StaticBlock, v: np.ndarray) -> StaticBlock:
-    """The block of ``block``'s family nearest the identity on the values ``v`` (least
-    squares over every entry, from the block adapted to ``v``)."""
+def near_identity(block: StaticBlock, v: np.ndarray, target: Any = None) -> StaticBlock:
+    """The block of ``block``'s family nearest the identity (or the function ``target``)
+    on the values ``v`` (least squares over every entry, from the block adapted to
+    ``v``)."""
     start = block.adapted(v)
     v = np.asarray(v, dtype=float).ravel()
     if v.size > 20_000:
         v = np.sort(v)[:: v.size // 10_000]
+    t = v if target is None else target(v)
     lo, hi = start.bounds()
     theta0 = np.clip(start.to_vector(), lo, hi)
 
     def residual(theta: np.ndarray) -> np.ndarray:
-        return np.asarray(start.with_vector(theta)(v), dtype=float) - v
+        return np.asarray(start.with_vector(theta)(v), dtype=float) - t
 
     def jac(theta: np.ndarray) -> np.ndarray:
         return start.with_vector(theta).jacobian(v)  # type: ignore[union-attr]
@@ -95,11 +97,176 @@ def near_identity(block: StaticBlock, v: np.ndarray) -> StaticBlock:
     return start.with_vector(sol.x)  # type: ignore[return-value]
 
 
+#: The loop blocks' starting shapes: each family fitted (least squares) to a soft
+#: saturation ``s tanh(v / s)`` and to a soft dead zone ``v - s tanh(v / s)`` with ``s``
+#: these fractions of the largest ``|p|`` the linear start gives; the shape whose loop
+#: would lower the error most to first order is taken (:func:`_loop_start`).
+LOOP_SHAPES = (0.3, 0.6)
+
+#: Samples per experiment on which the loop blocks' starting shapes are compared.
+LOOP_START_SAMPLES = 4000
+
+
+def parse_loop_blocks(spec: Any, outputs: list[str]) -> list[tuple[int, StaticBlock]]:
+    """Loop blocks from ``spec``: one spec for a loop per output, or loops named by the
+    output each starts from (``"y1=saturation"``, a mapping or a list of such texts).
+    Pairs (output index, block)."""
+    if spec is None or spec == "" or spec == "none":
+        return []
+    named = channel_specs(spec)
+    if named is None:
+        block = _spec_block(spec, False, "loop_block")
+        return [(j, block) for j in range(len(outputs))]  # type: ignore[misc]
+    unknown = [k for k in named if k not in outputs]
+    if unknown:
+        raise ParameterError(
+            f"loop_block names {unknown}, which are not among the outputs {outputs} (a loop "
+            "is named by the output it starts from)",
+            parameter="loop_block",
+        )
+    out = [(j, _spec_block(named.get(c), False, f"loop_block {c}")) for j, c in enumerate(outputs)]
+    return [(j, b) for j, b in out if b is not None]
+
+
+def _modal_directions(A: np.ndarray) -> list[np.ndarray]:
+    """Rows ``c`` for which ``c x`` is one mode of ``x(k+1) = A x + ...`` (the real part
+    of a left eigenvector; one per real pole or complex pair); none when the
+    eigenvectors are nearly dependent."""
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) > 1e8:
+        return []
+    L = np.linalg.inv(V)
+    rows = []
+    for i, value in enumerate(lam):
+        if value.imag < 0:
+            continue  # the pair's other member
+        rows.append(np.real(L[i]) if value.imag == 0 else np.real(L[i]) + np.imag(L[i]))
+    return rows
+
+
+def _loop_start(
+    template: BlockStateSpace, data: Dataset, x0s: list[np.ndarray], feedthrough: bool
+) -> BlockStateSpace:
+    """Each loop's starting argument and shape. With the loops open (``Bq = Dq = 0``)
+    the model is the linear start, and the first-order effect of opening a loop is the
+    span of its ``Bq``, ``Dq`` columns of the Jacobian. Arguments tried: the loop's
+    output's linear prediction (a Lur'e loop) and each mode of the start
+    (:func:`_modal_directions`: the middle of a Wiener-Hammerstein path is a filtered
+    input), scaled to unit spread; shapes: :data:`LOOP_SHAPES`. Loop by loop, the
+    pair whose columns, beside the linear core's and the loops already chosen, explain
+    most of the start's simulation error is kept (each pair once)."""
+    pieces = []
+    for e, x0 in zip(data.experiments, x0s, strict=True):
+        n = min(e.n_samples, LOOP_START_SAMPLES)
+        pieces.append((template.normalised_input(e.u[:n]), template.normalised_output(e.y[:n]),
+                       x0))  # fmt: skip
+    nl = len(template.loop_blocks)
+    names = template.free_parameter_names()
+    mask = template.parameter_mask(feedthrough)
+    linear = [i for i, n in enumerate(names) if mask[i] and n[0] in "ABCD" and n[1] == "["]
+    columns = [
+        [i for i, n in enumerate(names)
+         if n.startswith(("Bq[", "Dq[")) and int(n[3:-1].split(",")[1]) == l]
+        for l in range(nl)
+    ]  # fmt: skip
+    arguments: list[tuple[np.ndarray, np.ndarray]] = [(template.Cp, template.Dp)]
+    for row in _modal_directions(template.A):
+        arguments.append((np.tile(row, (nl, 1)), np.zeros_like(template.Dp)))
+    r, base = None, None
+    options: list[list[tuple[tuple[int, int], np.ndarray, Any]]] = [[] for _ in range(nl)]
+    for a, (Cp, Dp) in enumerate(arguments):
+        trial = template.replace(Cp=Cp, Dp=Dp)
+        P = np.vstack([trial._loop_run(trial.block_inputs(u), x0)[1] for u, _, x0 in pieces])
+        spread = np.maximum(P.std(axis=0), 1e-12)
+        trial = trial.replace(Cp=Cp / spread[:, None], Dp=Dp / spread[:, None])
+        P = P / spread
+        for k, (fraction, dead_zone) in enumerate(
+            (f, dz) for f in LOOP_SHAPES for dz in (False, True)
+        ):
+            shapes = [_shaped(b, P[:, l], fraction, dead_zone)
+                      for l, b in enumerate(template.loop_blocks)]  # fmt: skip
+            shaped = trial.replace(loop_blocks=shapes)
+            Js, rs = [], []
+            for u, y, x0 in pieces:
+                with np.errstate(all="ignore"):
+                    out, J = shaped.jacobian_piece(u, *shaped._sensitivity_start(x0))
+                Js.append(J)
+                rs.append((y - out).reshape(-1))
+            J = np.vstack(Js)
+            if not np.all(np.isfinite(J)):
+                continue
+            if r is None:
+                r, base = np.concatenate(rs), J[:, linear]
+            for l in range(nl):
+                # the own-output argument differs per loop; a mode is one argument for all
+                key = (a if a else -1 - l, k)
+                options[l].append((key, J[:, columns[l]], (trial.Cp[l], trial.Dp[l], shapes[l])))
+    if r is None:
+        return template
+    chosen, used, picks = base, set(), []
+    for l in range(nl):
+        best = (-np.inf, None, None)
+        for key, cols, pick in options[l]:
+            if key in used:
+                continue
+            both = np.hstack((chosen, cols))
+            beta = np.linalg.lstsq(both, r, rcond=None)[0]
+            gain = float(r @ r - np.sum((r - both @ beta) ** 2))
+            if gain > best[0]:
+                best = (gain, key, (cols, pick))
+        if best[1] is None:
+            picks.append((template.Cp[l], template.Dp[l], template.loop_blocks[l]))
+            continue
+        used.add(best[1])
+        chosen = np.hstack((chosen, best[2][0]))
+        picks.append(best[2][1])
+    return template.replace(
+        Cp=np.array([p[0] for p in picks]),
+        Dp=np.array([p[1] for p in picks]),
+        loop_blocks=[p[2] for p in picks],
+    )
+
+
+def _loop_gains(model: BlockStateSpace, p: np.ndarray, q: np.ndarray) -> BlockStateSpace:
+    """The same model with each loop block's output scaled to its argument's spread
+    (``Bq``, ``Dq`` take the inverse gain): the gain between a loop block and the core
+    is not unique, and the fit may leave it anywhere (values of 1e13 with ``Bq`` of
+    1e-13 were seen). Blocks that cannot absorb a gain are left as they are."""
+    blocks, Bq, Dq = list(model.loop_blocks), model.Bq.copy(), model.Dq.copy()
+    for l, b in enumerate(blocks):
+        gain = float(np.std(q[:, l]) / max(float(np.std(p[:, l])), 1e-300))
+        if not np.isfinite(gain) or gain <= 0.0:
+            continue
+        try:
+            blocks[l] = b.scaled(1.0 / gain)  # type: ignore[assignment]
+        except ParameterError:
+            continue
+        Bq[:, l] *= gain
+        Dq[:, l] *= gain
+    return model.replace(loop_blocks=blocks, Bq=Bq, Dq=Dq)
+
+
+def _shaped(block: StaticBlock, p: np.ndarray, fraction: float, dead_zone: bool) -> StaticBlock:
+    """``block``'s family fitted to a soft saturation (or soft dead zone) whose knee is
+    ``fraction`` of the largest ``|p|`` (:data:`LOOP_SHAPES`)."""
+    s = fraction * max(float(np.max(np.abs(p))), 1e-12)
+
+    def target(v: np.ndarray) -> np.ndarray:
+        soft = s * np.tanh(v / s)
+        return v - soft if dead_zone else soft
+
+    try:
+        return near_identity(block, p, target)
+    except (ParameterError, ValueError):
+        return block
+
+
 def fit_block_state_space(
     data: Dataset,
     *,
     input_block: Any = None,
     output_block: Any = None,
+    loop_block: Any = None,
     nx: int | None = None,
     max_order: int = 10,
     horizon: int | None = None,
@@ -119,7 +286,14 @@ def fit_block_state_space(
     input_block, output_block : str, Block or mapping, optional
         The block of every input (output) channel: one spec for all
         (``"polynomial:degree=3"``), ``"u1=dead-zone,u2=polynomial:degree=3"`` or a
-        mapping naming channels (the others pass their signal through). At least one.
+        mapping naming channels (the others pass their signal through).
+    loop_block : str, Block or mapping, optional
+        Static blocks inside the core's loop (:class:`BlockStateSpace`: ``q = φ(p)``,
+        ``p = Cp x + Dp w``): one spec for a loop per output, or loops named by the
+        output each starts from (``"y1=saturation"``). Each loop starts open (``Bq = Dq
+        = 0``) from its output's linear prediction (``Cp``, ``Dp`` the start's ``C``,
+        ``D`` row), with the shape :func:`_loop_start` picks. At least one block of the
+        three kinds.
     nx, max_order, horizon, weighting, feedthrough
         Of the linear start (:func:`~blockid.fitting.state_space.fit_state_space`).
     max_nfev, ftol, xtol, gtol
@@ -149,10 +323,11 @@ def fit_block_state_space(
     """
     ins = parse_channel_blocks(input_block, list(data.inputs), output=False)
     outs = parse_channel_blocks(output_block, list(data.outputs), output=True)
-    if all(b is None for b in ins + outs):
+    loops = parse_loop_blocks(loop_block, list(data.outputs))
+    if all(b is None for b in ins + outs) and not loops:
         raise ParameterError(
-            "a block state-space model needs an input_block or an output_block (without "
-            "blocks it is the linear structure 'state-space')",
+            "a block state-space model needs an input_block, an output_block or a "
+            "loop_block (without blocks it is the linear structure 'state-space')",
             parameter="input_block",
         )
     t0 = time.perf_counter()
@@ -172,23 +347,34 @@ def fit_block_state_space(
     for j, b in enumerate(outs):
         if b is not None:
             outs[j] = near_identity(b, z[:, j])
+    rows = [j for j, _ in loops]
     template = BlockStateSpace(
         data.inputs, data.outputs, lin.A, lin.B, lin.C, lin.D, input_blocks=ins,
         output_blocks=outs, input_offset=lin.input_offset, input_scale=lin.input_scale,
         output_offset=lin.output_offset, output_scale=lin.output_scale,
-        sampling_time=lin.sampling_time,
+        sampling_time=lin.sampling_time, loop_blocks=[b for _, b in loops],
+        Cp=lin.C[rows], Dp=lin.D[rows],
     )  # fmt: skip
+    if loops:
+        template = _loop_start(template, data, x0s, feedthrough)
     model, info = refine_state_space(
         template, data, initial_states=x0s, feedthrough=feedthrough, max_nfev=max_nfev,
         ftol=ftol, xtol=xtol, gtol=gtol,
     )  # fmt: skip
     # the ranges the blocks' arguments covered, for the extrapolation checks
-    zs = [model.run(u, model.initial_state(e.u, e.y[: 4 * model.nx]))[1]
-          for u, e in zip(un, data.experiments, strict=True)]  # fmt: skip
+    x_fit = [model.initial_state(e.u, e.y[: 4 * model.nx]) for e in data.experiments]
+    zs = [model.run(u, x0)[1] for u, x0 in zip(un, x_fit, strict=True)]
     z_all = np.vstack(zs)
+    ranges: dict[str, Any] = {}
+    if loops:
+        runs = [model._loop_run(model.block_inputs(u), x0) for u, x0 in zip(un, x_fit, strict=True)]
+        p, q = np.vstack([r[1] for r in runs]), np.vstack([r[2] for r in runs])
+        ranges["loop_range"] = np.column_stack((p.min(axis=0), p.max(axis=0)))
+        model = _loop_gains(model, p, q)
     model = model.replace(
         input_range=np.column_stack((u_all.min(axis=0), u_all.max(axis=0))),
         output_range=np.column_stack((z_all.min(axis=0), z_all.max(axis=0))),
+        **ranges,
     )
     method = f"subspace+block-state-space ({model.kind})"
     metrics = _check(model, data, method)  # type: ignore[arg-type]
@@ -198,6 +384,7 @@ def fit_block_state_space(
         "kind": model.kind,
         "input_blocks": [None if b is None else b.kind for b in model.input_blocks],
         "output_blocks": [None if b is None else b.kind for b in model.output_blocks],
+        "loop_blocks": [b.kind for b in model.loop_blocks],
         "refinement": info,
         "linear_simulation_metrics": linear.estimation_metrics,
     }

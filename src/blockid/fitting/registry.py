@@ -316,6 +316,15 @@ OPTIONS: dict[str, Option] = _options(
         metavar="KIND",
     ),
     Option(
+        "loop_block",
+        "block",
+        "Loop block (block-state-space): a static block inside the core's loop, fed by a "
+        "combination of its states and inputs and acting back on them (Lur'e feedback, the "
+        "middle block of a Wiener-Hammerstein path): one kind for a loop per output, or "
+        "OUTPUT=KIND, repeated (a loop started from that output).",
+        metavar="KIND",
+    ),
+    Option(
         "integrator",
         "count",
         "Integrators after the last linear block, for a plant that integrates (position "
@@ -800,9 +809,10 @@ STRUCTURES: dict[str, Structure] = {
                 Method(
                     "simulation-error",
                     "blockid.fitting.block_state_space:fit_block_state_space",
-                    ("input_block", "output_block") + _STATE_SPACE + _REFINEMENT,
-                    "linear state-space start with every block near the identity, then "
-                    "every parameter refined on the free-run error (exact Jacobian)",
+                    ("input_block", "output_block", "loop_block") + _STATE_SPACE + _REFINEMENT,
+                    "linear state-space start with every input and output block near the "
+                    "identity and every loop open, then every parameter refined on the "
+                    "free-run error (exact Jacobian)",
                 ),
                 Method(
                     "batch",

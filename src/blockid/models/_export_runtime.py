@@ -371,7 +371,21 @@ def _bss_run(M, w, x, sens=False):
     J = np.zeros((N * ny, nx)) if sens else None
     S = np.eye(nx)
     x = np.array(x, dtype=float)
+    loop = M.get("loop")
     for k in range(N):
+        if loop is not None:  # p = Cp x + Dp w, q = phi(p) into the state and the output
+            p = loop["Cp"] @ x + loop["Dp"] @ w[k]
+            q, slope = np.zeros(p.size), np.zeros(p.size)
+            for i, spec in enumerate(loop["blocks"]):
+                value, d = _bss_block(spec, p[i : i + 1], loop["range"][i])
+                q[i], slope[i] = value[0], d[0]
+            z[k] = C @ x + D @ w[k] + loop["Dq"] @ q
+            if sens:
+                Sq = slope[:, None] * (loop["Cp"] @ S)
+                J[k * ny : (k + 1) * ny] = C @ S + loop["Dq"] @ Sq
+                S = A @ S + loop["Bq"] @ Sq
+            x = A @ x + B @ w[k] + loop["Bq"] @ q + e
+            continue
         z[k] = C @ x + D @ w[k]
         if sens:
             J[k * ny : (k + 1) * ny] = C @ S
@@ -387,7 +401,8 @@ def _bss_run(M, w, x, sens=False):
 
 
 def _block_state_space(u, y0):
-    """w = f(u_n) per input, x(k+1) = A x + B w + e, z = C x + D w, y_n = g(z) + h."""
+    """w = f(u_n) per input, x(k+1) = A x + B w + Bq q + e, z = C x + D w + Dq q,
+    y_n = g(z) + h, with loop blocks q = phi(p), p = Cp x + Dp w (when the model has them)."""
     m, norm = MODEL, MODEL["normalisation"]
     nx, nu, ny = int(m["nx"]), len(INPUTS), len(OUTPUTS)
     M = {
@@ -396,6 +411,16 @@ def _block_state_space(u, y0):
     }
     M["e"] = np.asarray(m["state_bias"], dtype=float)
     M["h"] = np.asarray(m["output_bias"], dtype=float)
+    if m.get("loop"):
+        loop = m["loop"]
+        nl = len(loop["blocks"])
+        M["loop"] = {
+            "blocks": loop["blocks"],
+            "range": loop["range"],
+            **{k: np.asarray(loop[k], dtype=float).reshape(s)
+               for k, s in (("Cp", (nl, nx)), ("Dp", (nl, nu)), ("Bq", (nx, nl)),
+                            ("Dq", (ny, nl)))},
+        }  # fmt: skip
     un = (u - np.asarray(norm["input_offset"])) / np.asarray(norm["input_scale"])
     w = un.copy()
     for i, p in enumerate(m["input_blocks"]):

@@ -49,6 +49,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from blockid._kernels import writable
+from blockid._kernels.loop import (
+    KIND_POLYNOMIAL,
+    KIND_TABLE,
+    KIND_TWO_SEGMENT,
+    loop_sensitivity,
+    loop_simulate,
+)
 from blockid._kernels.state_space import channel_response, pnlss_jacobian
 from blockid.blocks.base import Block, StaticBlock, block_from_dict
 from blockid.errors import ModelFileError, OrderError
@@ -94,7 +102,7 @@ def channel_blocks(
 
 
 def _range(value: Any, n: int, name: str) -> np.ndarray:
-    if value is None:
+    if value is None or (n == 0 and np.size(value) == 0):
         return np.tile([-np.inf, np.inf], (n, 1))
     arr = np.array(
         [[-np.inf if v is None else v for v in row] for row in np.asarray(value, dtype=object)],
@@ -103,6 +111,55 @@ def _range(value: Any, n: int, name: str) -> np.ndarray:
     if arr.shape != (n, 2):
         raise OrderError(f"{name} needs one (low, high) pair per channel ({n}), got {arr.shape}")
     return arr
+
+
+def _loop_blocks(blocks: Any) -> tuple[StaticBlock, ...]:
+    if blocks is None:
+        return ()
+    out = (blocks,) if isinstance(blocks, Block) else tuple(blocks)
+    for block in out:
+        if getattr(block, "role", None) != "static":
+            raise OrderError(
+                "loop blocks of a state-space block model must be static blocks, got "
+                f"{type(block).__name__}"
+            )
+    return out
+
+
+def _matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:
+    if value is None:
+        return np.zeros(shape)
+    arr = np.asarray(value, dtype=float)
+    if arr.size == 0 and 0 in shape:
+        return np.zeros(shape)
+    if arr.shape != shape:
+        raise OrderError(f"{name} needs shape {shape}, got {arr.shape}")
+    return arr
+
+
+def _pack(blocks: tuple[StaticBlock, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The loop blocks as the compiled loop's codes, packed coefficients and offsets
+    (:mod:`blockid._kernels.loop`); None if one of them is not of a compiled kind."""
+    from blockid.blocks.polynomial import Polynomial, TwoSegmentPolynomial
+
+    kinds, parts = [], []
+    for b in blocks:
+        table = b.piecewise_linear()
+        if isinstance(b, TwoSegmentPolynomial):
+            kinds.append(KIND_TWO_SEGMENT)
+            parts.append(np.r_[b.f.size, b.f, b.p])
+        elif isinstance(b, Polynomial):
+            kinds.append(KIND_POLYNOMIAL)
+            parts.append(np.r_[b._powers.size, b._powers])
+        elif table is not None:
+            xs, ys, left, right = table
+            kinds.append(KIND_TABLE)
+            parts.append(np.r_[len(xs), xs, ys, left, right])
+        else:
+            return None
+    ptr = np.r_[0, np.cumsum([len(c) for c in parts])].astype(np.int64)
+    coef = np.concatenate(parts) if parts else np.zeros(0)
+    return np.array(kinds, dtype=np.int64), np.ascontiguousarray(coef, dtype=float), ptr
 
 
 class BlockStateSpace(ForwardSensitivities, Model):
@@ -156,6 +213,12 @@ class BlockStateSpace(ForwardSensitivities, Model):
         output_scale: Any = None,
         input_range: Any = None,
         output_range: Any = None,
+        loop_blocks: Any = None,
+        Cp: Any = None,
+        Dp: Any = None,
+        Bq: Any = None,
+        Dq: Any = None,
+        loop_range: Any = None,
         sampling_time: float | None = None,
     ) -> None:
         self.inputs, self.outputs = _names(inputs), _names(outputs)
@@ -165,9 +228,23 @@ class BlockStateSpace(ForwardSensitivities, Model):
         e = np.zeros(nx) if state_bias is None else np.asarray(state_bias, dtype=float)
         if e.shape != (nx,):
             raise OrderError(f"state_bias needs {nx} value(s), got {np.shape(state_bias)}")
+        self.loop_blocks = _loop_blocks(loop_blocks)
+        nl = len(self.loop_blocks)
+        self.Cp = _matrix(Cp, (nl, nx), "Cp")
+        self.Dp = _matrix(Dp, (nl, nu), "Dp")
+        Bq, Dq = _matrix(Bq, (nx, nl), "Bq"), _matrix(Dq, (ny, nl), "Dq")
+        B = np.asarray(B, dtype=float)
+        D = np.asarray(D, dtype=float)
+        if nl:
+            if B.shape != (nx, nu) or D.shape != (ny, nu):
+                raise OrderError(
+                    f"B and D need shapes {(nx, nu)} and {(ny, nu)}, got {B.shape} and {D.shape}"
+                )
+            B, D = np.hstack((B, Bq)), np.hstack((D, Dq))
         self.core = PolynomialStateSpace(
-            [f"w{i + 1}" for i in range(nu)], [f"z{j + 1}" for j in range(ny)], A, B, C, D,
-            E=e.reshape(nx, 1), F=np.zeros((ny, 1)), exponents=np.zeros((1, nx + nu)),
+            [f"w{i + 1}" for i in range(nu)] + [f"q{i + 1}" for i in range(nl)],
+            [f"z{j + 1}" for j in range(ny)], A, B, C, D,
+            E=e.reshape(nx, 1), F=np.zeros((ny, 1)), exponents=np.zeros((1, nx + nu + nl)),
         )  # fmt: skip
         self.input_blocks = channel_blocks(input_blocks, self.inputs, "input")
         self.output_blocks = channel_blocks(output_blocks, self.outputs, "output")
@@ -185,6 +262,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
         self.output_offset, self.output_scale = norm.output_offset, norm.output_scale
         self.input_range = _range(input_range, nu, "input_range")
         self.output_range = _range(output_range, ny, "output_range")
+        self.loop_range = _range(loop_range, nl, "loop_range")
         self.sampling_time = sampling_time
 
     # ------------------------------------------------------------------ structure
@@ -194,7 +272,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
 
     @property
     def B(self) -> np.ndarray:
-        return self.core.B
+        return self.core.B[:, : len(self.inputs)]
 
     @property
     def C(self) -> np.ndarray:
@@ -202,7 +280,22 @@ class BlockStateSpace(ForwardSensitivities, Model):
 
     @property
     def D(self) -> np.ndarray:
-        return self.core.D
+        return self.core.D[:, : len(self.inputs)]
+
+    @property
+    def Bq(self) -> np.ndarray:
+        """Where the loop blocks' outputs ``q`` enter the state (nx, nl)."""
+        return self.core.B[:, len(self.inputs) :]
+
+    @property
+    def Dq(self) -> np.ndarray:
+        """Where the loop blocks' outputs ``q`` enter the core's output (ny, nl)."""
+        return self.core.D[:, len(self.inputs) :]
+
+    @property
+    def loops(self) -> tuple[str, ...]:
+        """Names of the loop channels, ``p1``, ``p2``, ..."""
+        return tuple(f"p{i + 1}" for i in range(len(self.loop_blocks)))
 
     @property
     def state_bias(self) -> np.ndarray:
@@ -222,8 +315,11 @@ class BlockStateSpace(ForwardSensitivities, Model):
         sides carry blocks)."""
         left = any(b is not None for b in self.input_blocks)
         right = any(b is not None for b in self.output_blocks)
-        return {(True, True): "hammerstein-wiener", (True, False): "hammerstein",
+        kind = {(True, True): "hammerstein-wiener", (True, False): "hammerstein",
                 (False, True): "wiener", (False, False): "linear"}[(left, right)]  # fmt: skip
+        if self.loop_blocks:
+            return "loop" if kind == "linear" else f"{kind}+loop"
+        return kind
 
     def poles(self) -> np.ndarray:
         return self.core.poles()
@@ -241,13 +337,15 @@ class BlockStateSpace(ForwardSensitivities, Model):
 
     # ------------------------------------------------------------------ parameters
     def _blocks(self) -> list[StaticBlock | None]:
-        return [*self.input_blocks, *self.output_blocks]
+        return [*self.input_blocks, *self.loop_blocks, *self.output_blocks]
 
     def free_parameters(self) -> np.ndarray:
-        """``[A, B, C, D, e, 0 (ny, unused), input blocks, output blocks, h]``: the core's
-        vector (:meth:`PolynomialStateSpace.free_parameters`, ``E = e``), each block's
+        """``[A, B, C, D, e, 0 (ny, unused), Cp, Dp, input blocks, loop blocks, output
+        blocks, h]``: the core's vector (:meth:`PolynomialStateSpace.free_parameters`,
+        ``E = e``; with loop blocks its ``B`` and ``D`` are ``[B, Bq]`` and ``[D, Dq]``),
+        the loop's argument maps, each block's
         :meth:`~blockid.blocks.base.Block.to_vector` in channel order, then ``h``."""
-        parts = [self.core.free_parameters()]
+        parts = [self.core.free_parameters(), self.Cp.reshape(-1), self.Dp.reshape(-1)]
         parts += [b.to_vector() for b in self._blocks() if b is not None]
         return np.concatenate([*parts, self.output_bias])
 
@@ -256,18 +354,23 @@ class BlockStateSpace(ForwardSensitivities, Model):
         ``feedthrough``, not the state bias ``e`` (module docstring: the blocks carry the
         operating point, and a free ``e`` would make an output block's shape non-unique),
         not the unused column, not a block's entries its normalisation fixes."""
-        nx, nu, ny = self.nx, len(self.inputs), len(self.outputs)
+        nx, nu, ny, nl = self.nx, len(self.inputs), len(self.outputs), len(self.loop_blocks)
         core = np.zeros(self.core.free_parameters().size, dtype=bool)
-        o_d = nx * nx + nx * nu + ny * nx
+        o_d = nx * nx + nx * (nu + nl) + ny * nx
         core[:o_d] = True
-        core[o_d : o_d + ny * nu] = feedthrough
-        parts = [core] + [b.free_mask(after_linear=True) for b in self._blocks() if b is not None]
+        d = np.ones((ny, nu + nl), dtype=bool)  # the loop's columns Dq are always free
+        d[:, :nu] = feedthrough
+        core[o_d : o_d + d.size] = d.reshape(-1)
+        maps = np.r_[np.ones(nl * nx, dtype=bool), np.full(nl * nu, feedthrough)]
+        parts = [core, maps]
+        parts += [b.free_mask(after_linear=True) for b in self._blocks() if b is not None]
         return np.concatenate([*parts, np.ones(ny, dtype=bool)])
 
     def parameter_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Bounds of :meth:`free_parameters`: the blocks' own (positive slopes, ordered
         breakpoints, ..), none elsewhere."""
-        nc, ny = self.core.free_parameters().size, len(self.outputs)
+        nc = self.core.free_parameters().size + self.Cp.size + self.Dp.size
+        ny = len(self.outputs)
         lows, highs = [np.full(nc, -np.inf)], [np.full(nc, np.inf)]
         for b in self._blocks():
             if b is not None:
@@ -283,16 +386,31 @@ class BlockStateSpace(ForwardSensitivities, Model):
         return int(self.parameter_mask(bool(np.any(self.D != 0.0))).sum())
 
     def free_parameter_names(self) -> list[str]:
-        names = [n if not n.startswith("E[") else f"e[{n[2:].split(',')[0]}]"
-                 for n in self.core.free_parameter_names()]  # fmt: skip
-        for side, channels, blocks in (
-            ("input", self.inputs, self.input_blocks),
-            ("output", self.outputs, self.output_blocks),
-        ):
+        nu = len(self.inputs)
+
+        def core_name(n: str) -> str:
+            if n.startswith("E["):
+                return f"e[{n[2:].split(',')[0]}]"
+            if n[0] in "BD" and n[1] == "[":  # a loop column of the core: Bq, Dq
+                r, c = (int(v) for v in n[2:-1].split(","))
+                return n if c < nu else f"{n[0]}q[{r},{c - nu}]"
+            return n
+
+        names = [core_name(n) for n in self.core.free_parameter_names()]
+        names += [f"Cp[{i},{j}]" for i in range(self.Cp.shape[0]) for j in range(self.nx)]
+        names += [f"Dp[{i},{j}]" for i in range(self.Dp.shape[0]) for j in range(nu)]
+        for side, channels, blocks in self._sides():
             for c, b in zip(channels, blocks, strict=True):
                 if b is not None:
                     names += [f"{side} {c}: {v}" for v in b.vector_names()]
         return names + [f"h[{j}]" for j in range(len(self.outputs))]
+
+    def _sides(self) -> tuple[tuple[str, tuple[str, ...], tuple[StaticBlock | None, ...]], ...]:
+        return (
+            ("input", self.inputs, self.input_blocks),
+            ("loop", self.loops, self.loop_blocks),
+            ("output", self.outputs, self.output_blocks),
+        )
 
     def with_free_parameters(self, theta: Any) -> BlockStateSpace:
         theta = np.asarray(theta, dtype=float).reshape(-1)
@@ -302,7 +420,11 @@ class BlockStateSpace(ForwardSensitivities, Model):
             )
         nc = self.core.free_parameters().size
         core = self.core.with_free_parameters(theta[:nc])
-        k = nc
+        nl, nu = len(self.loop_blocks), len(self.inputs)
+        Cp = theta[nc : nc + self.Cp.size].reshape(self.Cp.shape)
+        k = nc + self.Cp.size
+        Dp = theta[k : k + self.Dp.size].reshape(self.Dp.shape)
+        k += self.Dp.size
         blocks: list[StaticBlock | None] = []
         for b in self._blocks():
             if b is None:
@@ -311,10 +433,11 @@ class BlockStateSpace(ForwardSensitivities, Model):
             n = b.to_vector().size
             blocks.append(b.with_vector(theta[k : k + n]))  # type: ignore[arg-type]
             k += n
-        nu = len(self.inputs)
         return self.replace(
-            A=core.A, B=core.B, C=core.C, D=core.D, state_bias=core.E[:, 0],
-            input_blocks=blocks[:nu], output_blocks=blocks[nu:], output_bias=theta[k:],
+            A=core.A, B=core.B[:, :nu], C=core.C, D=core.D[:, :nu], state_bias=core.E[:, 0],
+            input_blocks=blocks[:nu], loop_blocks=blocks[nu : nu + nl],
+            output_blocks=blocks[nu + nl :], output_bias=theta[k:], Cp=Cp, Dp=Dp,
+            Bq=core.B[:, nu:], Dq=core.D[:, nu:],
         )  # fmt: skip
 
     def replace(self, **changes: Any) -> BlockStateSpace:
@@ -326,6 +449,8 @@ class BlockStateSpace(ForwardSensitivities, Model):
             input_scale=self.input_scale, output_offset=self.output_offset,
             output_scale=self.output_scale, input_range=self.input_range,
             output_range=self.output_range, sampling_time=self.sampling_time,
+            loop_blocks=self.loop_blocks, Cp=self.Cp, Dp=self.Dp, Bq=self.Bq, Dq=self.Dq,
+            loop_range=self.loop_range,
         )  # fmt: skip
         kwargs.update(changes)
         return BlockStateSpace(self.inputs, self.outputs, **kwargs)
@@ -333,12 +458,11 @@ class BlockStateSpace(ForwardSensitivities, Model):
     @property
     def parameters(self) -> dict[str, Any]:
         out: dict[str, Any] = {k: getattr(self, k).tolist() for k in "ABCD"}
+        if self.loop_blocks:
+            out.update({k: getattr(self, k).tolist() for k in ("Bq", "Dq", "Cp", "Dp")})
         out["e"] = self.state_bias.tolist()
         out["h"] = self.output_bias.tolist()
-        for side, channels, blocks in (
-            ("input", self.inputs, self.input_blocks),
-            ("output", self.outputs, self.output_blocks),
-        ):
+        for side, channels, blocks in self._sides():
             for c, b in zip(channels, blocks, strict=True):
                 if b is not None:
                     out[f"{side} block {c}"] = b.to_dict()
@@ -346,16 +470,14 @@ class BlockStateSpace(ForwardSensitivities, Model):
 
     def parameter_table(self) -> list[tuple[str, str]]:
         rows = []
-        for key in "ABCD":
+        keys = ("A", "B", "C", "D") + (("Bq", "Dq", "Cp", "Dp") if self.loop_blocks else ())
+        for key in keys:
             for i, row in enumerate(getattr(self, key)):
                 if row.size:
                     rows.append((f"{key}[{i}]", ", ".join(f"{v:.6g}" for v in row)))
         rows.append(("e", ", ".join(f"{v:.6g}" for v in self.state_bias)))
         rows.append(("h", ", ".join(f"{v:.6g}" for v in self.output_bias)))
-        for side, channels, blocks in (
-            ("input", self.inputs, self.input_blocks),
-            ("output", self.outputs, self.output_blocks),
-        ):
+        for side, channels, blocks in self._sides():
             for c, b in zip(channels, blocks, strict=True):
                 if b is None:
                     continue
@@ -409,9 +531,54 @@ class BlockStateSpace(ForwardSensitivities, Model):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Free run on a normalised input from ``x0`` (default 0): normalised outputs,
         the core's outputs ``z`` and the state after the last sample."""
-        z, x = self.core.run(self.block_inputs(un), x0)
+        if self.loop_blocks:
+            _, _, _, z, x = self._loop_run(self.block_inputs(un), x0)
+        else:
+            z, x = self.core.run(self.block_inputs(un), x0)
         with np.errstate(all="ignore"):
             return self.block_outputs(z), z, x
+
+    def _loop_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where each loop block leaves itself for its tangent (a polynomial's recorded
+        range; +-inf for the others and where no range is recorded)."""
+        lo = np.full(len(self.loop_blocks), -np.inf)
+        hi = np.full(len(self.loop_blocks), np.inf)
+        for l, b in enumerate(self.loop_blocks):
+            seen = self.loop_range[l]
+            if b.warn_extrapolation and np.all(np.isfinite(seen)):
+                lo[l], hi[l] = seen
+        return lo, hi
+
+    def _loop_run(
+        self, w: np.ndarray, x0: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Free run of the core with its loop blocks on the core's input ``w`` from
+        ``x0``: the states before each update, the loop blocks' arguments ``p`` and
+        outputs ``q``, the core's outputs ``z`` and the final state. Compiled for the
+        blocks :func:`_pack` takes; any other block is evaluated sample by sample in
+        Python (correct, much slower)."""
+        n, nx, nl, ny = w.shape[0], self.nx, len(self.loop_blocks), len(self.outputs)
+        x = np.zeros(nx) if x0 is None else np.array(x0, dtype=float)
+        X, P, Q, z = np.zeros((n, nx)), np.zeros((n, nl)), np.zeros((n, nl)), np.zeros((n, ny))
+        core = self.core
+        A, B, C, D = (writable(m, float) for m in (core.A, core.B, core.C, core.D))
+        e, Cp, Dp = writable(core.E[:, 0], float), writable(self.Cp, float), writable(self.Dp)
+        packed = _pack(self.loop_blocks)
+        with np.errstate(all="ignore"):
+            if packed is not None:
+                lo, hi = self._loop_limits()
+                loop_simulate(A, B, C, D, e, Cp, Dp, *packed, lo, hi, writable(w, float), x,
+                              X, P, Q, z)  # fmt: skip
+                return X, P, Q, z, x
+            for k in range(n):
+                X[k] = x
+                P[k] = Cp @ x + Dp @ w[k]
+                for l, b in enumerate(self.loop_blocks):
+                    Q[k, l] = self._apply(b, P[k, l : l + 1], self.loop_range[l])[0]
+                v = np.r_[w[k], Q[k]]
+                z[k] = C @ x + D @ v
+                x = A @ x + B @ v + e
+        return X, P, Q, z, x
 
     # ------------------------------------------------------------------ derivatives
     def jacobian_piece(
@@ -423,19 +590,16 @@ class BlockStateSpace(ForwardSensitivities, Model):
         mask). ``x`` (nx,), ``S`` (nx, Pc + nx: the core's parameters and ``x(0)``) and
         ``X`` (nx, p_in: the input blocks' parameters) carry the state and its
         sensitivities across pieces, updated in place; start with ``x = x(0)``, ``S =
-        [0 | I]`` and ``X = 0``. Row ``k * ny + j`` of the Jacobian is output ``j`` at
-        sample ``k``; its columns are ``θ`` then ``x(0)``.
+        [0 | I]`` and ``X = 0`` (:meth:`_sensitivity_start`; with loop blocks ``S``
+        carries every column the loop reaches and ``X`` is None). Row ``k * ny + j`` of
+        the Jacobian is output ``j`` at sample ``k``; its columns are ``θ`` then
+        ``x(0)``.
         """
+        if self.loop_blocks:
+            return self._loop_jacobian_piece(un, x, S)
         n, ny, nx = un.shape[0], len(self.outputs), self.nx
         w = self.block_inputs(un)
-        cols, chans = [], []
-        for i, b in enumerate(self.input_blocks):
-            if b is not None:
-                edge = self._edge(b, un[:, i], self.input_range[i])
-                # beyond a recorded range: the parameters' effect at the range's end
-                G = b.jacobian(un[:, i] if edge is None else edge)
-                cols.append(G)
-                chans += [i] * G.shape[1]
+        G, chans = self._input_effects(un)
         p_in = len(chans)
         Pc = S.shape[1] - nx
         z = np.zeros((n, ny))
@@ -444,17 +608,36 @@ class BlockStateSpace(ForwardSensitivities, Model):
         pnlss_jacobian(*core, w, x, S, z, Jc)
         Jin = np.zeros((n, ny, p_in))
         if p_in:
-            G = np.ascontiguousarray(np.hstack(cols))
             channel_response(core[0], core[1], core[2], core[3],
                              np.array(chans, dtype=np.int64), G, X, Jin)  # fmt: skip
-        p_out = sum(b.to_vector().size for b in self.output_blocks if b is not None)
-        P = Pc + p_in + p_out + ny
+        P = self.free_parameters().size
         J = np.zeros((n * ny, P + nx))
         J[:, : Pc - ny] = Jc[:, : Pc - ny]  # the core's F (last ny) is unused: zero
         J[:, Pc : Pc + p_in] = Jin.reshape(n * ny, p_in)
         J[:, P:] = Jc[:, Pc:]
+        return self._through_output_blocks(z, J, Pc + p_in), J
+
+    def _input_effects(self, un: np.ndarray) -> tuple[np.ndarray, list[int]]:
+        """The input blocks' parameter effects on their outputs (N, p_in) and the
+        channel of each column."""
+        cols, chans = [np.zeros((un.shape[0], 0))], []
+        for i, b in enumerate(self.input_blocks):
+            if b is not None:
+                edge = self._edge(b, un[:, i], self.input_range[i])
+                # beyond a recorded range: the parameters' effect at the range's end
+                G = b.jacobian(un[:, i] if edge is None else edge)
+                cols.append(G)
+                chans += [i] * G.shape[1]
+        return np.ascontiguousarray(np.hstack(cols)), chans
+
+    def _through_output_blocks(self, z: np.ndarray, J: np.ndarray, k: int) -> np.ndarray:
+        """Normalised outputs for the core's outputs ``z``; ``J`` (the core's output
+        sensitivities, output blocks' and ``h``'s columns from ``k`` still zero) turned
+        in place into the outputs' by the chain rule."""
+        ny = len(self.outputs)
         y = self.block_outputs(z) - self.output_bias
-        k = Pc + p_in
+        p_out = sum(b.to_vector().size for b in self.output_blocks if b is not None)
+        h = k + p_out
         for j, b in enumerate(self.output_blocks):
             rows = slice(j, None, ny)
             if b is not None:
@@ -464,16 +647,75 @@ class BlockStateSpace(ForwardSensitivities, Model):
                 n = b.to_vector().size
                 J[rows, k : k + n] = b.jacobian(at)
                 k += n
-            J[rows, Pc + p_in + p_out + j] = 1.0
-        return y + self.output_bias, J
+            J[rows, h + j] = 1.0
+        return y + self.output_bias
+
+    def _loop_offsets(self) -> np.ndarray:
+        """Where each group of the loop kernel's columns starts
+        (:func:`~blockid._kernels.loop.loop_sensitivity`), and its column count last."""
+        nx, nu, ny, nl = self.nx, len(self.inputs), len(self.outputs), len(self.loop_blocks)
+        p_in = sum(b.to_vector().size for b in self.input_blocks if b is not None)
+        p_loop = sum(b.to_vector().size for b in self.loop_blocks)
+        sizes = [nx * nx, nx * (nu + nl), ny * nx, ny * (nu + nl)]
+        o_b, o_c, o_d, o_e = np.cumsum([0, *sizes])[1:]
+        o_cp = o_e + nx + ny  # after e and the unused F
+        o_dp = o_cp + nl * nx
+        o_in = o_dp + nl * nu
+        o_loop = o_in + p_in
+        o_x0 = o_loop + p_loop
+        return np.array([o_b, o_c, o_d, o_e, o_cp, o_dp, o_in, o_loop, o_x0, o_x0 + nx],
+                        dtype=np.int64)  # fmt: skip
+
+    def _loop_jacobian_piece(
+        self, un: np.ndarray, x: np.ndarray, S: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`jacobian_piece` with loop blocks: the run fixes the trajectory, the
+        blocks give their slopes and parameter effects on it, and the compiled walk
+        (:func:`~blockid._kernels.loop.loop_sensitivity`) carries ``S`` (nx, columns
+        of :meth:`_loop_offsets`) through the piece."""
+        n, ny, nx = un.shape[0], len(self.outputs), self.nx
+        w = self.block_inputs(un)
+        Xs, P, Q, z, x_end = self._loop_run(w, x)
+        x[:] = x_end
+        Gin, chin = self._input_effects(un)
+        slopes = np.zeros(P.shape)
+        cols, chl = [np.zeros((n, 0))], []
+        for l, b in enumerate(self.loop_blocks):
+            edge = self._edge(b, P[:, l], self.loop_range[l])
+            at = P[:, l] if edge is None else edge
+            slopes[:, l] = b.derivative(at)
+            G = b.jacobian(at)
+            cols.append(G)
+            chl += [l] * G.shape[1]
+        offsets = self._loop_offsets()
+        o_x0 = int(offsets[8])
+        Js = np.zeros((n * ny, o_x0 + nx))
+        core = self.core
+        with np.errstate(all="ignore"):
+            loop_sensitivity(
+                *(writable(m, float) for m in (core.A, core.B, core.C, core.D, self.Cp, self.Dp)),
+                Xs, np.ascontiguousarray(np.hstack((w, Q))), slopes, Gin,
+                np.array(chin, dtype=np.int64), np.ascontiguousarray(np.hstack(cols)),
+                np.array(chl, dtype=np.int64), offsets, S, Js,
+            )  # fmt: skip
+        P_all = self.free_parameters().size
+        J = np.zeros((n * ny, P_all + nx))
+        J[:, :o_x0] = Js[:, :o_x0]
+        J[:, P_all:] = Js[:, o_x0:]
+        return self._through_output_blocks(z, J, o_x0), J
 
     @property
     def linear_in_state(self) -> bool:
-        """Whether the output is linear in ``x(0)`` (no output block)."""
-        return all(b is None for b in self.output_blocks)
+        """Whether the output is linear in ``x(0)`` (no output block, no loop block)."""
+        return not self.loop_blocks and all(b is None for b in self.output_blocks)
 
     def _sensitivity_start(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         nx = self.nx
+        if self.loop_blocks:
+            offsets = self._loop_offsets()
+            S = np.zeros((nx, int(offsets[-1])))
+            S[:, int(offsets[8]) :] = np.eye(nx)
+            return np.array(x0, dtype=float), S, None  # type: ignore[return-value]
         Pc = self.core.free_parameters().size
         S = np.zeros((nx, Pc + nx))
         S[:, Pc:] = np.eye(nx)
@@ -484,20 +726,25 @@ class BlockStateSpace(ForwardSensitivities, Model):
         """Numbers, one per entry of :meth:`free_parameters` (standard errors), shaped
         like :attr:`parameters`; the unused column is left out."""
         values = np.asarray(values, dtype=float).reshape(-1)
-        nx, nu, ny = self.nx, len(self.inputs), len(self.outputs)
-        sizes = [nx * nx, nx * nu, ny * nx, ny * nu, nx, ny]
+        nx, nu, ny, nl = self.nx, len(self.inputs), len(self.outputs), len(self.loop_blocks)
+        nv = nu + nl
+        sizes = [nx * nx, nx * nv, ny * nx, ny * nv, nx, ny, nl * nx, nl * nu]
         parts = np.split(values[: sum(sizes)], np.cumsum(sizes)[:-1])
-        shapes = [(nx, nx), (nx, nu), (ny, nx), (ny, nu)]
+        B, D = parts[1].reshape(nx, nv), parts[3].reshape(ny, nv)
         out: dict[str, Any] = {
-            k: part.reshape(sh).tolist() for k, part, sh in zip("ABCD", parts, shapes, strict=False)
+            "A": parts[0].reshape(nx, nx).tolist(),
+            "B": B[:, :nu].tolist(),
+            "C": parts[2].reshape(ny, nx).tolist(),
+            "D": D[:, :nu].tolist(),
         }
+        if nl:
+            out.update(Bq=B[:, nu:].tolist(), Dq=D[:, nu:].tolist(),
+                       Cp=parts[6].reshape(nl, nx).tolist(),
+                       Dp=parts[7].reshape(nl, nu).tolist())  # fmt: skip
         out["e"] = parts[4].tolist()
         out["h"] = values[-ny:].tolist()
         k = sum(sizes)
-        for side, channels, blocks in (
-            ("input", self.inputs, self.input_blocks),
-            ("output", self.outputs, self.output_blocks),
-        ):
+        for side, channels, blocks in self._sides():
             for c, b in zip(channels, blocks, strict=True):
                 if b is not None:
                     n = b.to_vector().size
@@ -539,6 +786,11 @@ class BlockStateSpace(ForwardSensitivities, Model):
         un = self.normalised_input(u)
         _, z, _ = self.run(un)
         out: dict[str, float] = {}
+        if self.loop_blocks:
+            P = self._loop_run(self.block_inputs(un), None)[1]
+            for l, name in enumerate(self.loops):
+                if np.all(np.isfinite(self.loop_range[l])):
+                    out[f"p {name}"] = excursion(tuple(self.loop_range[l]), P[:, l])
         for i, b in enumerate(self.input_blocks):
             if b is not None and np.all(np.isfinite(self.input_range[i])):
                 value = excursion(tuple(self.input_range[i]), un[:, i])
@@ -557,6 +809,19 @@ class BlockStateSpace(ForwardSensitivities, Model):
         un = self.normalised_input(u)
         _, z, _ = self.run(un)
         curves = []
+        if self.loop_blocks:
+            P = self._loop_run(self.block_inputs(un), None)[1]
+            for l, (name, b) in enumerate(zip(self.loops, self.loop_blocks, strict=True)):
+                if not np.all(np.isfinite(P[:, l])):
+                    continue
+                grid = np.linspace(P[:, l].min(), P[:, l].max(), n_points)
+                curves.append({
+                    "title": f"loop block {name} ({b.kind})",
+                    "x": grid,
+                    "y": np.asarray(b(grid), dtype=float),
+                    "xlabel": f"{name} (its argument Cp x + Dp w, normalised)",
+                    "ylabel": f"q{l + 1} (into the core, normalised)",
+                })  # fmt: skip
         for i, (c, b) in enumerate(zip(self.inputs, self.input_blocks, strict=True)):
             if b is None:
                 continue
@@ -606,6 +871,20 @@ class BlockStateSpace(ForwardSensitivities, Model):
             "output_blocks": blocks(self.output_blocks),
             "input_range": [pair(r) for r in self.input_range],
             "output_range": [pair(r) for r in self.output_range],
+            **(
+                {
+                    "loop": {
+                        "blocks": [b.to_dict() for b in self.loop_blocks],
+                        "Cp": self.Cp.tolist(),
+                        "Dp": self.Dp.tolist(),
+                        "Bq": self.Bq.tolist(),
+                        "Dq": self.Dq.tolist(),
+                        "range": [pair(r) for r in self.loop_range],
+                    }
+                }
+                if self.loop_blocks
+                else {}
+            ),  # fmt: skip
             "normalisation": {
                 "input_offset": self.input_offset.tolist(),
                 "input_scale": self.input_scale.tolist(),
@@ -621,9 +900,13 @@ class BlockStateSpace(ForwardSensitivities, Model):
         def blocks(key: str) -> list[Any]:
             return [None if b is None else block_from_dict(b) for b in data.get(key) or []] or None
 
+        loop = data.get("loop") or {}
         try:
             return cls(
                 data["inputs"], data["outputs"], data["A"], data["B"], data["C"], data["D"],
+                loop_blocks=[block_from_dict(b) for b in loop.get("blocks", [])] or None,
+                Cp=loop.get("Cp"), Dp=loop.get("Dp"), Bq=loop.get("Bq"), Dq=loop.get("Dq"),
+                loop_range=loop.get("range"),
                 input_blocks=blocks("input_blocks"), output_blocks=blocks("output_blocks"),
                 state_bias=data.get("state_bias"), output_bias=data.get("output_bias"),
                 input_offset=norm.get("input_offset"), input_scale=norm.get("input_scale"),

@@ -254,7 +254,13 @@ def _spec(model: Any) -> dict[str, Any]:
     if isinstance(model, PolynomialStateSpace):
         return {"form": "state-space", "max_lag": model.max_lag, "iterations": INITIAL_ITERATIONS}
     if isinstance(model, BlockStateSpace):
-        _check_kinds([b for b in (*model.input_blocks, *model.output_blocks) if b is not None])
+        _check_kinds(
+            [
+                b
+                for b in (*model.input_blocks, *model.loop_blocks, *model.output_blocks)
+                if b is not None
+            ]
+        )
         return {
             "form": "block-state-space",
             "max_lag": model.max_lag,
