@@ -197,6 +197,30 @@ def mimo_loop_record(kind, n=2000, snr_db=40.0, seed=1):
     return Dataset.from_arrays(u, y, inputs=["u1", "u2"], outputs=["y1", "y2"]), u, y_true
 
 
+def tank_overflow_plant():
+    """An upper tank (level ``x1``) that overflows, draining faster beyond level 0.8 (a
+    dead zone of its state fed back: a static block on a state, not on the output),
+    measured as the level of a second tank it fills: one input, one output."""
+    from blockid.blocks import DeadZone
+    from blockid.models.block_state_space import BlockStateSpace
+
+    return BlockStateSpace(
+        ["u"], ["y"], [[0.95, 0.0], [0.3, 0.85]], [[0.5], [0.0]], [[0.0, 1.0]], [[0.0]],
+        loop_blocks=[DeadZone(-10.0, 0.8, 1e-9, 1.0)], Cp=[[1.0, 0.0]], Dp=[[0.0]],
+        Bq=[[-0.6], [0.0]], Dq=[[0.0]],
+    )  # fmt: skip
+
+
+def tank_overflow_record(n=2000, snr_db=40.0, seed=1):
+    """``(data, u, y_true)``: :func:`tank_overflow_plant` filled by a staircase of
+    uniform levels on [0, 1] held 10 samples each, white output noise at ``snr_db``."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(0.0, 1.0, n // 10 + 1), 10)[:n, None]
+    y_true = tank_overflow_plant().simulate(u)
+    y = y_true + rng.standard_normal(y_true.shape) * y_true.std() * 10 ** (-snr_db / 20)
+    return Dataset.from_arrays(u, y, inputs=["u"], outputs=["y"]), u, y_true
+
+
 def _arx_data(n=200, seed=0):
     # y(t) = 0.5 y(t-1) + u(t-1), noise free
     rng = np.random.default_rng(seed)

@@ -143,3 +143,21 @@ def test_candidates_are_told_apart_by_every_option_and_kept_once():
     assert a == b and hash(a) == hash(b) and a != c and a.model_key == c.model_key
     assert unique([a, b, c, a]) == [a, c]
     assert c.label == "arx(na=1, nb=1)"
+
+
+def test_block_state_candidates_cover_the_plans_then_each_loop_family():
+    from blockid.workflows.search_space import block_state_candidates
+
+    plans = [("polynomial:degree=3", None)]
+    found = block_state_candidates(
+        ["polynomial-state-space", "block-state-space"], [2, 3], plans, {"max_nfev": 5},
+        ("saturation", "dead-zone"),
+    )  # fmt: skip
+    assert [(c.options["nx"], c.options.get("input_block"), c.options.get("loop_block"))
+            for c in found] == [
+        (2, "polynomial:degree=3", None), (2, None, "saturation"), (2, None, "dead-zone"),
+        (3, "polynomial:degree=3", None), (3, None, "saturation"), (3, None, "dead-zone"),
+    ]  # fmt: skip
+    assert all(c.structure == "block-state-space" for c in found)
+    only_loops = block_state_candidates(["block-state-space"], [2], (), {}, ("saturation",))
+    assert [c.options for c in only_loops] == [{"nx": 2, "loop_block": "saturation"}]

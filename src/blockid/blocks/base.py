@@ -301,6 +301,19 @@ class StaticBlock(Block):
         default) for any other block, which the loop evaluates in Python."""
         return None
 
+    def compiled_form(self) -> tuple[str, np.ndarray] | None:
+        """The block as the compiled loop of a block state-space model evaluates it
+        (:mod:`blockid._kernels.loop`): ``("table", [n, breakpoints, values,
+        slope_left, slope_right])`` for a block that :meth:`piecewise_linear` describes
+        (the default), ``("polynomial", [m, c_0 .. c_m-1])`` or
+        ``("two-segment-polynomial", [m, f, p])``; None for any other block, which the
+        loop evaluates in Python."""
+        table = self.piecewise_linear()
+        if table is None:
+            return None
+        xs, ys, left, right = table
+        return "table", np.r_[len(xs), xs, ys, left, right].astype(float)
+
     def feedback_mask(self) -> np.ndarray:
         """Which entries of :meth:`to_vector` an estimator may move when the block feeds
         the output back around a linear block

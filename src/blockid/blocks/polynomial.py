@@ -257,6 +257,9 @@ class Polynomial(_PlottableStaticBlock):
     def __call__(self, u: np.ndarray) -> np.ndarray:
         return npoly.polyval(_as_input(u), self._powers)
 
+    def compiled_form(self) -> tuple[str, np.ndarray]:
+        return "polynomial", np.r_[self._powers.size, self._powers].astype(float)
+
     def derivative(self, u: np.ndarray) -> np.ndarray:
         r""":math:`dw/du = \sum_l l\, c_l\, u^{l-1}`, element-wise (same shape as ``u``)."""
         return npoly.polyval(_as_input(u), npoly.polyder(self._powers))
@@ -528,6 +531,9 @@ class TwoSegmentPolynomial(_PlottableStaticBlock):
     def g(self) -> np.ndarray:
         """Coefficients :math:`g_l = f_l + p_l` of the polynomial for ``u < 0``."""
         return self.f + self.p
+
+    def compiled_form(self) -> tuple[str, np.ndarray]:
+        return "two-segment-polynomial", np.r_[self.f.size, self.f, self.p].astype(float)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         u = _as_input(u)

@@ -140,23 +140,15 @@ def _matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:
 def _pack(blocks: tuple[StaticBlock, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The loop blocks as the compiled loop's codes, packed coefficients and offsets
     (:mod:`blockid._kernels.loop`); None if one of them is not of a compiled kind."""
-    from blockid.blocks.polynomial import Polynomial, TwoSegmentPolynomial
-
+    codes = {"polynomial": KIND_POLYNOMIAL, "table": KIND_TABLE,
+             "two-segment-polynomial": KIND_TWO_SEGMENT}  # fmt: skip
     kinds, parts = [], []
     for b in blocks:
-        table = b.piecewise_linear()
-        if isinstance(b, TwoSegmentPolynomial):
-            kinds.append(KIND_TWO_SEGMENT)
-            parts.append(np.r_[b.f.size, b.f, b.p])
-        elif isinstance(b, Polynomial):
-            kinds.append(KIND_POLYNOMIAL)
-            parts.append(np.r_[b._powers.size, b._powers])
-        elif table is not None:
-            xs, ys, left, right = table
-            kinds.append(KIND_TABLE)
-            parts.append(np.r_[len(xs), xs, ys, left, right])
-        else:
+        form = b.compiled_form()
+        if form is None:
             return None
+        kinds.append(codes[form[0]])
+        parts.append(form[1])
     ptr = np.r_[0, np.cumsum([len(c) for c in parts])].astype(np.int64)
     coef = np.concatenate(parts) if parts else np.zeros(0)
     return np.array(kinds, dtype=np.int64), np.ascontiguousarray(coef, dtype=float), ptr

@@ -56,6 +56,12 @@ class Effort:
         (None, "polynomial:degree=3"),
         ("polynomial:degree=3", "polynomial:degree=3"),
     )
+    #: loop-block families of the block state-space candidates (a loop per output, one
+    #: family for all): searched on data of several inputs or outputs, and with
+    #: ``loop_single`` on one input and one output too, where no chain structure holds
+    #: a static block on a combination of the states
+    loop_plans: tuple[str, ...] = ("saturation", "dead-zone")
+    loop_single: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -74,6 +80,7 @@ EFFORTS: dict[str, Effort] = {
                 ("polynomial:degree=3", None), (None, "polynomial:degree=3"),
                 ("polynomial:degree=3", "polynomial:degree=3"),
             ),
+            loop_single=False,
         ),
         Effort(
             name="standard", folds=4, folds_long=3, max_order=8, max_delay=20, linear_keep=2,

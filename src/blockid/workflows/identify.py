@@ -1061,10 +1061,13 @@ def _state_space(
     found = candidates(chosen)
     if found:
         search.run("nonlinear state space", found, True)
-    if asked or search.data.n_inputs > 1 or search.data.n_outputs > 1:
+    several = search.data.n_inputs > 1 or search.data.n_outputs > 1
+    if asked or several or eff.loop_single:
         # static blocks per channel: on one input and one output the chain structures
         # (Hammerstein, Wiener, ...) hold these models with polynomial linear blocks, so
-        # the default search leaves them out there
-        blocks = block_state_candidates(states, chosen, eff.block_state_plans, screen)
+        # the default search leaves them out there and tries the loop blocks only, which
+        # no chain holds (a static block on a combination of the states)
+        plans = eff.block_state_plans if asked or several else ()
+        blocks = block_state_candidates(states, chosen, plans, screen, eff.loop_plans)
         if blocks:
             search.run("block state space", blocks, True)

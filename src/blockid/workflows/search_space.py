@@ -319,20 +319,24 @@ def block_state_candidates(
     nxs: Sequence[int],
     plans: Sequence[tuple[str | None, str | None]],
     iterations: dict[str, Any],
+    loops: Sequence[str] = (),
 ) -> list[Candidate]:
     """The state-space structures with blocks (those taking ``input_block``) at every
     state dimension in ``nxs`` and every ``(input block, output block)`` of ``plans``
-    (one family on every channel; None: no block on that side)."""
+    (one family on every channel; None: no block on that side), then, for structures
+    taking ``loop_block``, a loop per output with each family of ``loops``."""
     out = []
     for name in structures:
         decl = STRUCTURES[name]
         accepted = decl.accepted(None)
         if decl.orders != "state" or "input_block" not in accepted:
             continue
+        blocks = [{"input_block": left, "output_block": right} for left, right in plans]
+        if "loop_block" in accepted:
+            blocks += [{"loop_block": family} for family in loops]
         for nx in nxs:
-            for left, right in plans:
-                options = {"nx": int(nx), "input_block": left, "output_block": right,
-                           **iterations}  # fmt: skip
+            for plan in blocks:
+                options = {"nx": int(nx), **plan, **iterations}
                 kept = {k: v for k, v in options.items() if k in accepted and v is not None}
                 out.append(Candidate(name, kept))
     return unique(out)
