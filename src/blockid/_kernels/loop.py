@@ -126,6 +126,20 @@ def loop_simulate(A, B, C, D, e, Cp, Dp, kinds, coef, ptr, lo, hi, w, x, X, P, Q
             x[r] = xn[r]
 
 
+@njit(cache=True)
+def _product(M, S, out, add):
+    """``out (+)= M @ S`` (rows of ``M``; the sum over its columns in order, the
+    columns of ``S`` innermost)."""
+    for r in range(M.shape[0]):
+        if not add:
+            for j in range(S.shape[1]):
+                out[r, j] = 0.0
+        for c in range(M.shape[1]):
+            m = M[r, c]
+            for j in range(S.shape[1]):
+                out[r, j] += m * S[c, j]
+
+
 @njit(cache=True, nogil=True)
 def loop_sensitivity(A, B, C, D, Cp, Dp, X, V, slope, Gin, chin, Gl, chl, offsets, S, J):
     """Walk ``S = ∂x/∂[θ, x(0)]`` (nx, n_cols; updated in place) over a simulated
@@ -137,57 +151,57 @@ def loop_sensitivity(A, B, C, D, Cp, Dp, X, V, slope, Gin, chin, Gl, chl, offset
     column ``j`` acting on channel ``chin[j]`` (``chl[j]``). ``offsets`` gives where
     each group of columns starts: ``[B, C, D, e, C_p, D_p, input blocks, loop blocks,
     x(0)]``; columns before ``B`` are ``A`` (row-major, like every matrix here) and the
-    core's unused ``F`` lies between ``e`` and ``C_p``."""
+    core's unused ``F`` lies between ``e`` and ``C_p``. Every column at once, the
+    columns innermost: matrix products, then each entry's own term."""
     N = X.shape[0]
     nx, ny, nl = A.shape[0], C.shape[0], Cp.shape[0]
     nv = V.shape[1]
     nu = nv - nl
-    oB, oC, oD, oE, oCp, oDp, oIn, oLoop, oX0 = (
+    oB, oC, oD, oE, oCp, oDp, oIn, oLoop = (
         offsets[0], offsets[1], offsets[2], offsets[3], offsets[4], offsets[5], offsets[6],
-        offsets[7], offsets[8],
+        offsets[7],
     )  # fmt: skip
     ncol = S.shape[1]
     Sn = np.empty((nx, ncol))
-    dv = np.empty(nv)
-    dp = np.empty(nl)
-    ds = np.empty(nx)
+    dV = np.zeros((nv, ncol))
+    dP = np.empty((nl, ncol))
+    Jk = np.empty((ny, ncol))
+    Bw, Bq, Dw, Dq = B[:, :nu], B[:, nu:], D[:, :nu], D[:, nu:]
     for k in range(N):
-        for j in range(ncol):
-            for c in range(nx):
-                ds[c] = S[c, j]
-            for i in range(nv):
-                dv[i] = 0.0
-            if oIn <= j < oLoop:
-                dv[chin[j - oIn]] = Gin[k, j - oIn]
-            for l in range(nl):
-                dp[l] = _affine(Cp, ds, Dp, dv, l, nu)
-            if oCp <= j < oDp:
-                idx = j - oCp
-                dp[idx // nx] += X[k, idx % nx]
-            elif oDp <= j < oIn:
-                idx = j - oDp
-                dp[idx // nu] += V[k, idx % nu]
-            for l in range(nl):
-                dv[nu + l] = slope[k, l] * dp[l]
-            if oLoop <= j < oX0:
-                dv[nu + chl[j - oLoop]] += Gl[k, j - oLoop]
-            for r in range(ny):
-                J[k * ny + r, j] = _affine(C, ds, D, dv, r, nv)
-            if oC <= j < oD:
-                idx = j - oC
-                J[k * ny + idx // nx, j] += X[k, idx % nx]
-            elif oD <= j < oE:
-                idx = j - oD
-                J[k * ny + idx // nv, j] += V[k, idx % nv]
-            for r in range(nx):
-                Sn[r, j] = _affine(A, ds, B, dv, r, nv)
-            if j < oB:
-                Sn[j // nx, j] += X[k, j % nx]
-            elif oB <= j < oC:
-                idx = j - oB
-                Sn[idx // nv, j] += V[k, idx % nv]
-            elif oE <= j < oE + nx:
-                Sn[j - oE, j] += 1.0
+        dV[:, :] = 0.0
+        for j in range(oLoop - oIn):
+            dV[chin[j], oIn + j] = Gin[k, j]
+        _product(Cp, S, dP, False)
+        _product(Dp, dV[:nu], dP, True)
+        for idx in range(nl * nx):
+            dP[idx // nx, oCp + idx] += X[k, idx % nx]
+        for idx in range(nl * nu):
+            dP[idx // nu, oDp + idx] += V[k, idx % nu]
+        for l in range(nl):
+            s = slope[k, l]
+            for j in range(ncol):
+                dV[nu + l, j] = s * dP[l, j]
+        for j in range(Gl.shape[1]):
+            dV[nu + chl[j], oLoop + j] += Gl[k, j]
+        _product(C, S, Jk, False)
+        _product(Dw, dV[:nu], Jk, True)
+        _product(Dq, dV[nu:], Jk, True)
+        for idx in range(ny * nx):
+            Jk[idx // nx, oC + idx] += X[k, idx % nx]
+        for idx in range(ny * nv):
+            Jk[idx // nv, oD + idx] += V[k, idx % nv]
+        for r in range(ny):
+            for j in range(ncol):
+                J[k * ny + r, j] = Jk[r, j]
+        _product(A, S, Sn, False)
+        _product(Bw, dV[:nu], Sn, True)
+        _product(Bq, dV[nu:], Sn, True)
+        for idx in range(nx * nx):
+            Sn[idx // nx, idx] += X[k, idx % nx]
+        for idx in range(nx * nv):
+            Sn[idx // nv, oB + idx] += V[k, idx % nv]
+        for r in range(nx):
+            Sn[r, oE + r] += 1.0
         for r in range(nx):
             for j in range(ncol):
                 S[r, j] = Sn[r, j]

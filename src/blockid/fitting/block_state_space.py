@@ -27,6 +27,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from blockid._kernels import writable
+from blockid._kernels.state_space import channel_response
 from blockid.blocks.base import Block, StaticBlock, block_template, channel_specs
 from blockid.data.dataset import Dataset
 from blockid.errors import ParameterError
@@ -149,82 +151,109 @@ def _loop_start(
 ) -> BlockStateSpace:
     """Each loop's starting argument and shape. With the loops open (``Bq = Dq = 0``)
     the model is the linear start, and the first-order effect of opening a loop is the
-    span of its ``Bq``, ``Dq`` columns of the Jacobian. Arguments tried: the loop's
-    output's linear prediction (a Lur'e loop) and each mode of the start
-    (:func:`_modal_directions`: the middle of a Wiener-Hammerstein path is a filtered
-    input), scaled to unit spread; shapes: :data:`LOOP_SHAPES`. Loop by loop, the
-    pair whose columns, beside the linear core's and the loops already chosen, explain
-    most of the start's simulation error is kept (each pair once)."""
-    pieces = []
-    for e, x0 in zip(data.experiments, x0s, strict=True):
-        n = min(e.n_samples, LOOP_START_SAMPLES)
-        pieces.append((template.normalised_input(e.u[:n]), template.normalised_output(e.y[:n]),
-                       x0))  # fmt: skip
-    nl = len(template.loop_blocks)
+    span of its ``Bq``, ``Dq`` columns of the Jacobian: the linear core's response to
+    the loop block's output ``q = φ(p)`` injected into each state and each output
+    (:func:`_injected`). Arguments tried: the loop's output's linear prediction (a
+    Lur'e loop) and each mode of the start (:func:`_modal_directions`: the middle of a
+    Wiener-Hammerstein path is a filtered input), scaled to unit spread; shapes:
+    :data:`LOOP_SHAPES`. Loop by loop, the pair whose columns explain most of the
+    start's simulation error beyond the linear model's own columns (and the loops
+    already chosen) is kept, each pair once."""
+    runs, Js, rs = [], [], []
     names = template.free_parameter_names()
     mask = template.parameter_mask(feedthrough)
-    linear = [i for i, n in enumerate(names) if mask[i] and n[0] in "ABCD" and n[1] == "["]
-    columns = [
-        [i for i, n in enumerate(names)
-         if n.startswith(("Bq[", "Dq[")) and int(n[3:-1].split(",")[1]) == l]
-        for l in range(nl)
-    ]  # fmt: skip
+    keep = [i for i, n in enumerate(names) if mask[i] and n[0] in "ABCD" and n[1] == "["]
+    keep += list(range(mask.size, mask.size + template.nx))  # the initial state's
+    for e, x0 in zip(data.experiments, x0s, strict=True):
+        n = min(e.n_samples, LOOP_START_SAMPLES)
+        u, y = template.normalised_input(e.u[:n]), template.normalised_output(e.y[:n])
+        w = template.block_inputs(u)
+        X, _, _, z, _ = template._loop_run(w, x0)  # the loops open: the linear start
+        with np.errstate(all="ignore"):
+            out, J = template.jacobian_piece(u, *template._sensitivity_start(x0))
+        Js.append(J[:, keep])
+        rs.append((y - out).reshape(-1))
+        runs.append((X, w, _output_slopes(template, z)))
+    base, r = np.vstack(Js), np.concatenate(rs)
+    if not (np.all(np.isfinite(base)) and np.all(np.isfinite(r))):
+        return template
+    Q = _orthonormal(base)
+    r = r - Q @ (Q.T @ r)
+    nl = len(template.loop_blocks)
     arguments: list[tuple[np.ndarray, np.ndarray]] = [(template.Cp, template.Dp)]
     for row in _modal_directions(template.A):
         arguments.append((np.tile(row, (nl, 1)), np.zeros_like(template.Dp)))
-    r, base = None, None
-    options: list[list[tuple[tuple[int, int], np.ndarray, Any]]] = [[] for _ in range(nl)]
-    for a, (Cp, Dp) in enumerate(arguments):
-        trial = template.replace(Cp=Cp, Dp=Dp)
-        P = np.vstack([trial._loop_run(trial.block_inputs(u), x0)[1] for u, _, x0 in pieces])
-        spread = np.maximum(P.std(axis=0), 1e-12)
-        trial = trial.replace(Cp=Cp / spread[:, None], Dp=Dp / spread[:, None])
-        P = P / spread
-        for k, (fraction, dead_zone) in enumerate(
-            (f, dz) for f in LOOP_SHAPES for dz in (False, True)
-        ):
-            shapes = [_shaped(b, P[:, l], fraction, dead_zone)
-                      for l, b in enumerate(template.loop_blocks)]  # fmt: skip
-            shaped = trial.replace(loop_blocks=shapes)
-            Js, rs = [], []
-            for u, y, x0 in pieces:
-                with np.errstate(all="ignore"):
-                    out, J = shaped.jacobian_piece(u, *shaped._sensitivity_start(x0))
-                Js.append(J)
-                rs.append((y - out).reshape(-1))
-            J = np.vstack(Js)
-            if not np.all(np.isfinite(J)):
-                continue
-            if r is None:
-                r, base = np.concatenate(rs), J[:, linear]
-            for l in range(nl):
-                # the own-output argument differs per loop; a mode is one argument for all
-                key = (a if a else -1 - l, k)
-                options[l].append((key, J[:, columns[l]], (trial.Cp[l], trial.Dp[l], shapes[l])))
-    if r is None:
-        return template
-    chosen, used, picks = base, set(), []
-    for l in range(nl):
-        best = (-np.inf, None, None)
-        for key, cols, pick in options[l]:
-            if key in used:
-                continue
-            both = np.hstack((chosen, cols))
-            beta = np.linalg.lstsq(both, r, rcond=None)[0]
-            gain = float(r @ r - np.sum((r - both @ beta) ** 2))
-            if gain > best[0]:
-                best = (gain, key, (cols, pick))
+    shapes = [(f, dz) for f in LOOP_SHAPES for dz in (False, True)]
+    used: set[tuple[int, int]] = set()
+    picks = []
+    for l, family in enumerate(template.loop_blocks):
+        best: tuple[float, Any, Any, Any] = (-np.inf, None, None, None)
+        for a, (Cp, Dp) in enumerate(arguments):
+            ps = [X @ Cp[l] + w @ Dp[l] for X, w, _ in runs]
+            spread = max(float(np.concatenate(ps).std()), 1e-12)
+            ps = [p / spread for p in ps]
+            for k, (fraction, dead_zone) in enumerate(shapes):
+                key = (a if a else -1 - l, k)  # the own-output argument differs per loop
+                if key in used:
+                    continue
+                block = _shaped(family, np.concatenate(ps), fraction, dead_zone)
+                cols = np.vstack([
+                    _injected(template, np.asarray(block(p), dtype=float), slopes)
+                    for p, (_, _, slopes) in zip(ps, runs, strict=True)
+                ])  # fmt: skip
+                if not np.all(np.isfinite(cols)):
+                    continue
+                cols -= Q @ (Q.T @ cols)
+                beta = np.linalg.lstsq(cols, r, rcond=None)[0]
+                gain = float(r @ r - np.sum((r - cols @ beta) ** 2))
+                if gain > best[0]:
+                    best = (gain, key, (Cp[l] / spread, Dp[l] / spread, block), cols)
         if best[1] is None:
-            picks.append((template.Cp[l], template.Dp[l], template.loop_blocks[l]))
+            picks.append((template.Cp[l], template.Dp[l], family))
             continue
         used.add(best[1])
-        chosen = np.hstack((chosen, best[2][0]))
-        picks.append(best[2][1])
+        picks.append(best[2])
+        extra = _orthonormal(best[3])
+        r = r - extra @ (extra.T @ r)
+        Q = np.hstack((Q, extra))
     return template.replace(
         Cp=np.array([p[0] for p in picks]),
         Dp=np.array([p[1] for p in picks]),
         loop_blocks=[p[2] for p in picks],
     )
+
+
+def _orthonormal(M: np.ndarray) -> np.ndarray:
+    """An orthonormal basis of the columns' span (singular values above 1e-10 of the
+    largest: the linear model's columns are dependent, its state basis not unique)."""
+    U, sv, _ = np.linalg.svd(M, full_matrices=False)
+    return U[:, sv > 1e-10 * max(float(sv[0]) if sv.size else 0.0, 1e-300)]
+
+
+def _output_slopes(model: BlockStateSpace, z: np.ndarray) -> np.ndarray:
+    """The output blocks' slopes along the core's outputs ``z`` (1 without a block)."""
+    slopes = np.ones_like(z)
+    for j, b in enumerate(model.output_blocks):
+        if b is not None:
+            edge = model._edge(b, z[:, j], model.output_range[j])
+            slopes[:, j] = b.derivative(z[:, j] if edge is None else edge)
+    return slopes
+
+
+def _injected(model: BlockStateSpace, q: np.ndarray, slopes: np.ndarray) -> np.ndarray:
+    """The outputs' response to ``q`` injected into each state and each core output
+    through the linear core (the Jacobian's ``Bq`` and ``Dq`` columns of one loop at
+    ``Bq = Dq = 0``), rows ``k * ny + j``, columns the states then the outputs."""
+    nx, ny, n = model.nx, len(model.outputs), q.size
+    m = nx + ny
+    B = np.hstack((np.eye(nx), np.zeros((nx, ny))))
+    D = np.hstack((np.zeros((ny, nx)), np.eye(ny)))
+    out = np.zeros((n, ny, m))
+    G = np.ascontiguousarray(np.repeat(q[:, None], m, axis=1))
+    with np.errstate(all="ignore"):
+        channel_response(writable(model.A, float), B, writable(model.C, float), D,
+                         np.arange(m, dtype=np.int64), G, np.zeros((nx, m)), out)  # fmt: skip
+    return (out * slopes[:, :, None]).reshape(n * ny, m)
 
 
 def _loop_gains(model: BlockStateSpace, p: np.ndarray, q: np.ndarray) -> BlockStateSpace:
