@@ -281,7 +281,8 @@ def test_a_static_block_on_a_state_gets_a_loop_block_which_no_chain_holds():
     blocks on the input and output), chooses one, and it simulates fresh data within
     1 % of the noise-free output, better than every other structure's best by half."""
     data, _, _ = tank_overflow_record(1500)
-    effort = Effort("loop", 3, 2, 3, 2, 1, 1, 15, 10_000, 1, 40, 0, ((2, "full"),), 60, 2)
+    effort = Effort("loop", 3, 2, 3, 2, 1, 1, 15, 10_000, 1, 40, 0, ((2, "full"),), 60, 2,
+                    loop_single=True)  # fmt: skip
     result = identify(data, effort=effort, jobs=1)
     chosen = result.selected.candidate
     assert chosen.structure == "block-state-space" and "loop_block" in chosen.options

@@ -61,7 +61,7 @@ class Effort:
     #: ``loop_single`` on one input and one output too, where no chain structure holds
     #: a static block on a combination of the states
     loop_plans: tuple[str, ...] = ("saturation", "dead-zone")
-    loop_single: bool = True
+    loop_single: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -80,21 +80,20 @@ EFFORTS: dict[str, Effort] = {
                 ("polynomial:degree=3", None), (None, "polynomial:degree=3"),
                 ("polynomial:degree=3", "polynomial:degree=3"),
             ),
-            loop_single=False,
         ),
         Effort(
             name="standard", folds=4, folds_long=3, max_order=8, max_delay=20, linear_keep=2,
             families=None, screen_nfev=30, screen_samples=20_000, finalists=3,
             final_nfev=150, grow_steps=3,
             state_plans=((2, "full"), (3, "states"), (3, "full")), state_parameters=300,
-            state_keep=2, final_samples=50_000,
+            state_keep=2, final_samples=50_000, loop_single=True,
         ),
         Effort(
             name="thorough", folds=5, folds_long=3, max_order=10, max_delay=30, linear_keep=3,
             families=None, screen_nfev=60, screen_samples=50_000, finalists=5,
             final_nfev=300, grow_steps=4,
             state_plans=((2, "full"), (3, "states"), (3, "full"), (4, "states")),
-            state_parameters=1200, state_keep=3, final_samples=None,
+            state_parameters=1200, state_keep=3, final_samples=None, loop_single=True,
         ),
     )
 }  # fmt: skip
