@@ -181,7 +181,7 @@ def test_loops_have_their_curves_ranges_and_names(lure):
     assert titles == ["loop block p1 (saturation)", "loop block p2 (saturation)"]
     names = m.free_parameter_names()
     assert "Bq[0,1]" in names and "Cp[1,3]" in names and "loop p2: upper" in names
-    assert set(m.shaped(np.zeros(names.__len__()))) >= {"Bq", "Dq", "Cp", "Dp", "loop block p2"}
+    assert set(m.shaped(np.zeros(len(names)))) >= {"Bq", "Dq", "Cp", "Dp", "loop block p2"}
 
 
 def test_a_loop_named_by_its_output_and_an_unknown_output_named():

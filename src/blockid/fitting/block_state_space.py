@@ -235,8 +235,7 @@ def _output_slopes(model: BlockStateSpace, z: np.ndarray) -> np.ndarray:
     slopes = np.ones_like(z)
     for j, b in enumerate(model.output_blocks):
         if b is not None:
-            edge = model._edge(b, z[:, j], model.output_range[j])
-            slopes[:, j] = b.derivative(z[:, j] if edge is None else edge)
+            slopes[:, j] = b.derivative(model._at(b, z[:, j], model.output_range[j]))
     return slopes
 
 

@@ -490,6 +490,13 @@ class BlockStateSpace(ForwardSensitivities, Model):
             return None
         return np.clip(s, seen[0], seen[1])
 
+    def _at(self, block: StaticBlock, s: np.ndarray, seen: np.ndarray) -> np.ndarray:
+        """Where a block's slope and parameter effects are taken for the argument ``s``:
+        ``s`` itself, or the end of the range ``seen`` beyond which it follows its
+        tangent (:meth:`_edge`)."""
+        edge = self._edge(block, s, seen)
+        return s if edge is None else edge
+
     def _apply(self, block: StaticBlock, s: np.ndarray, seen: np.ndarray) -> np.ndarray:
         """``block`` on ``s``; beyond the range recorded in estimation a polynomial block
         continues along its tangent instead of running away, as the chains' blocks do."""
@@ -615,9 +622,8 @@ class BlockStateSpace(ForwardSensitivities, Model):
         cols, chans = [np.zeros((un.shape[0], 0))], []
         for i, b in enumerate(self.input_blocks):
             if b is not None:
-                edge = self._edge(b, un[:, i], self.input_range[i])
                 # beyond a recorded range: the parameters' effect at the range's end
-                G = b.jacobian(un[:, i] if edge is None else edge)
+                G = b.jacobian(self._at(b, un[:, i], self.input_range[i]))
                 cols.append(G)
                 chans += [i] * G.shape[1]
         return np.ascontiguousarray(np.hstack(cols)), chans
@@ -633,8 +639,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
         for j, b in enumerate(self.output_blocks):
             rows = slice(j, None, ny)
             if b is not None:
-                edge = self._edge(b, z[:, j], self.output_range[j])
-                at = z[:, j] if edge is None else edge  # the tangent's slope beyond the range
+                at = self._at(b, z[:, j], self.output_range[j])  # the tangent's beyond it
                 J[rows, :] *= b.derivative(at)[:, None]
                 n = b.to_vector().size
                 J[rows, k : k + n] = b.jacobian(at)
@@ -673,8 +678,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
         slopes = np.zeros(P.shape)
         cols, chl = [np.zeros((n, 0))], []
         for l, b in enumerate(self.loop_blocks):
-            edge = self._edge(b, P[:, l], self.loop_range[l])
-            at = P[:, l] if edge is None else edge
+            at = self._at(b, P[:, l], self.loop_range[l])
             slopes[:, l] = b.derivative(at)
             G = b.jacobian(at)
             cols.append(G)
