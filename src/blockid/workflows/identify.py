@@ -66,6 +66,17 @@ numbers. (EMPS: an integrating Hammerstein model scored 18.2 mm against the ARX'
 21.3, but its folds' errors were 12, 28 and 16 mm against 49, 7 and 27: mean log ratio
 -0.16, standard error 0.82; it tested 47.7 mm against the ARX's 8.8.)
 
+**An integrator at the longer horizon too.** An integrator's free-run error grows
+with the horizon without bound (an offset in its input is summed), so folds a quarter of
+the record long understate it. A best candidate with an integrator (and the first
+linear model without one, above) is therefore scored once more, over the estimation
+data's two halves (each fitted on one half and simulated over the other, the same
+rule); unless it is then better, the candidates with an integrator are put after the
+others, with a note. (DaISy ball and beam: an output-error model with an integrator beat
+every linear one on all four folds of 125 samples, but erred 0.145 and 0.133 over the
+halves against 0.095 and 0.084 without integrator; it drifted to 0.232 on the test half
+against the ARX's 0.071.) Two to four fits, only when an integrator would be chosen.
+
 **Deterministic.** The search is a fixed amount of work: no stage depends on the
 clock, so the same data, options and version give the same model, bit for bit, on a
 busy or an idle machine and with any number of ``jobs``
@@ -442,6 +453,20 @@ class _Search:
         self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
         return [self.scores[c.key] for c in candidates if c.key in self.scores]
 
+    def score_on(
+        self, plan: FoldPlan, stage: str, candidates: Sequence[Candidate]
+    ) -> list[list[FoldScore]]:
+        """Every candidate's fold scores on another fold ``plan`` (with the training
+        limit of a finalist), in the order given; not kept among the search's scores."""
+        limit = self.effort.final_samples if self.long else None
+        tasks = [_Task(c, fold, limit, self.n_init) for c in candidates for fold in plan.folds]
+        t0 = time.perf_counter()
+        self.stages.append({"stage": stage, "candidates": len(candidates), "fits": len(tasks)})
+        results = self.runner.map(_fit_and_score, tasks)
+        self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
+        k = len(plan)
+        return [list(results[j * k : (j + 1) * k]) for j in range(len(candidates))]
+
     def _combine(self, cand: Candidate, stage: str, folds: list[FoldScore]) -> Score:
         score = Score(cand, stage, list(folds), seconds=sum(f.seconds for f in folds))
         failed = [(i, f) for i, f in enumerate(folds) if f.reason]
@@ -629,6 +654,59 @@ def _earned(eligible: list[Score]) -> tuple[list[Score], dict[str, Any] | None]:
     return [base] + [s for s in eligible if s is not base], info
 
 
+def _integrating(score: Score) -> bool:
+    return bool(score.candidate.options.get("integrator"))
+
+
+def _long_horizon(
+    search: _Search, eligible: list[Score], notes: list[str]
+) -> tuple[list[Score], dict[str, Any] | None]:
+    """``eligible`` with the integrating candidates put last when the first is one and it
+    does not beat the best linear model without integrator over the estimation data's
+    two halves as well (module docstring), and the check's numbers (None when the first
+    candidate has no integrator or there is no linear model to compare it with)."""
+    best = eligible[0]
+    if not _integrating(best):
+        return eligible, None
+    base = next((s for s in eligible if not _beyond_linear(s)), None)
+    if base is None:
+        return eligible, None
+    halves = fold_plan(search.data, 2)
+    pair = search.score_on(halves, "long horizon", [best.candidate, base.candidate])
+    scores = [
+        _combine_folds(np.array([f.relative for f in folds]), search.rule) * search.spread
+        if all(not f.reason for f in folds)
+        else math.inf
+        for folds in pair
+    ]
+    kept = math.isfinite(scores[0]) and scores[0] < scores[1]
+    info = {
+        "integrating": best.candidate.label,
+        "linear": base.candidate.label,
+        "folds": halves.text,
+        "integrating_rmse": scores[0],
+        "linear_rmse": scores[1],
+        "integrating_fold_rmse": [f.rmse for f in pair[0]],
+        "integrating_failed": next((f.reason for f in pair[0] if f.reason), None),
+        "linear_fold_rmse": [f.rmse for f in pair[1]],
+        "integrator_kept": kept,
+    }
+    if kept:
+        return eligible, info
+    failed = next((f.reason for f in pair[0] if f.reason), "")
+    notes.append(
+        f"{best.candidate.label} scored best, but an integrator's free-run error grows with "
+        f"the horizon: fitted on one half of the estimation data and simulated over the "
+        f"other it erred "
+        + (f"({failed})" if failed else f"{scores[0]:.4g}")
+        + f" against {scores[1]:.4g} for the linear {base.candidate.label}, so the "
+        "candidates with an integrator were put after the others"
+    )
+    return [s for s in eligible if not _integrating(s)] + [
+        s for s in eligible if _integrating(s)
+    ], info
+
+
 def _fold_rmse(score: Score) -> float:
     """The folds' errors pooled (root mean square): the held-back error a refit's error
     on its own data is compared with (the score's geometric mean weighs a poor fold less,
@@ -722,14 +800,18 @@ def identify(
         except (BlockidError, ImportError) as exc:
             notes.append(f"orders test skipped: {exc}")
 
+    horizon: dict[str, Any] | None = None
     with TaskRunner(data, min(jobs, 64)) as runner:
         search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
         _stages(search, chosen, recommended, notes, asked=bool(asked))
         ranked_all = search.ranked()
         eligible = [s for s in ranked_all if s.candidate.structure in chosen]
-    if not eligible:
-        raise EstimationError(_nothing_fitted(search, chosen))
-    eligible, earned = _earned(eligible)
+        if not eligible:
+            raise EstimationError(_nothing_fitted(search, chosen))
+        eligible, earned = _earned(eligible)
+        eligible, horizon = _long_horizon(search, eligible, notes)
+        if horizon is not None and not horizon["integrator_kept"]:
+            eligible, earned = _earned(eligible)
     fit, selected = None, None
     short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
     for s in eligible:
@@ -796,6 +878,7 @@ def identify(
         "cut_by_time_limit": search.cut,
         "time_limit": time_limit,
         "beyond_linear": earned,
+        "long_horizon": horizon,
     }
     return IdentifyResult(
         selected=selected,
