@@ -1,16 +1,17 @@
-"""Boundaries in the fitters: an input at rest (exactly 0) and the stability margin."""
+"""Boundaries in the fitters: an input at rest (exactly 0) and the stability margin (fixed
+on short records, one over the record's length on long ones)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from blockid.blocks import TwoSegmentPolynomial
+from blockid.blocks import LinearBlock, TwoSegmentPolynomial
 from blockid.data import Dataset
 from blockid.errors import EstimationError
-from blockid.fitting import check_model, fit_key_term_rls, refine
+from blockid.fitting import check_model, fit_key_term_rls, fit_model, refine
 from blockid.fitting.checks import STABILITY_MARGIN
-from blockid.models import Hammerstein
+from blockid.models import ChainModel, Hammerstein
 
 # A jump at u = 0 (f_0 = 0.3, g_0 = f_0 + p_0 = -0.2): which segment u = 0 belongs to
 # changes w(0) by 0.5.
@@ -116,3 +117,33 @@ def test_a_pole_just_outside_the_margin_is_refused(kind):
         check_model(model, data, "the test method")
     with pytest.raises(EstimationError, match="starting model's linear block is unstable"):
         refine(model, data)
+
+
+def test_the_margin_widens_on_a_record_longer_than_its_time_constant():
+    from blockid.fitting.checks import margin_for, stability_margin
+
+    assert margin_for(800) == STABILITY_MARGIN and margin_for(25_000) == pytest.approx(4e-5)
+    data = Dataset.from_arrays(np.zeros(20_000), np.zeros(20_000))
+    assert stability_margin(data) == pytest.approx(5e-5)
+
+
+@pytest.mark.parametrize("structure", ["output-error", "state-space"])
+def test_a_slow_plant_sampled_fast_gets_its_pole(structure):
+    # a first-order plant whose time constant is 3 000 samples (pole 0.999667, beyond the
+    # fixed 0.999 that pinned such fits before), 20 000 samples of slow steps, 40 dB
+    pole = float(np.exp(-1.0 / 3000.0))
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 20), 1000)
+    plant = LinearBlock(1, 1, 1, [-pole], [1.0 - pole])
+    y = ChainModel("u", "y", [plant]).simulate(u)[:, 0]
+    y = y + 0.01 * np.std(y) * rng.standard_normal(y.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    options = {"na": 1, "nb": 1, "nk": 1} if structure == "output-error" else {"nx": 1}
+    fit = fit_model(data, structure, **options)
+    (fitted,) = np.abs(fit.model.poles())
+    assert fitted == pytest.approx(pole, abs=2e-5)  # measured: within 1e-6
+    # the fitted model rests at the data's operating point: start it from measured outputs
+    truth = ChainModel("u", "y", [plant]).simulate(u)[:, 0]
+    sim = fit.model.simulate(u.reshape(-1, 1), y[:5].reshape(-1, 1))[:, 0]
+    # measured: 0.034 (output-error) and 0.0011 (state space) of the output's spread
+    assert np.sqrt(np.mean((sim - truth) ** 2)) < 0.05 * np.std(truth)

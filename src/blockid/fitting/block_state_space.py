@@ -16,7 +16,8 @@ error, with the exact Jacobian walked forward in time
 into ``J^T J`` in pieces of ``CHUNK`` samples; the directions in which the parameters
 are not unique (the state basis, a gain or constant a block shares with the core) are
 left alone (``null_space``). A candidate with an eigenvalue of ``A`` outside the circle
-of radius ``1 - STABILITY_MARGIN`` or a non-finite or exploding run is rejected.
+of radius ``1 - margin`` (:func:`~blockid.fitting.checks.stability_margin`) or a
+non-finite or exploding run is rejected.
 """
 
 from __future__ import annotations

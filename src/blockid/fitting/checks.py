@@ -5,7 +5,9 @@ data; blockid reports that instead of handing out a bad model. A model is accept
 
 * all parameters are finite,
 * its linear block is stable with a margin: every pole inside the circle of radius
-  ``1 - STABILITY_MARGIN`` (0.999). A pole on the unit circle (e.g. at -1, an
+  ``1 - STABILITY_MARGIN`` (0.999), or ``1 - 1/n`` on an experiment of ``n`` samples
+  when that is wider (:func:`stability_margin`: a mode that slow is an integrator for
+  all the record shows). A pole on the unit circle (e.g. at -1, an
   undamped oscillation at the Nyquist frequency) can look harmless on estimation data
   and ring on any other record,
 * its free-run simulation on the estimation data is finite and does not explode,
@@ -27,7 +29,7 @@ the estimation data makes the block-oriented model a linear one in disguise (a
 Hammerstein fit that stayed at its ARX start, input-block coefficients ~1e-19; a block
 affine by its form, such as a degree-1 polynomial carrying an input offset, is not
 noted). A fitted linear block with a pole within twice the stability margin of the
-unit circle (``|p| >= 1 - 2 STABILITY_MARGIN``) sits on the margin the fit enforces: near
+unit circle (``|p| >= 1 - 2 margin``) sits on the margin the fit enforces: near
 +1 the plant probably integrates, and an explicit integrator (``integrator=1``, a block
 whose pole at 1 is not fitted) is the model to try. The notes belong in the result's
 ``settings["warnings"]``.
@@ -48,6 +50,8 @@ from blockid.models.arx import ARX
 __all__ = [
     "LINEARITY_TOLERANCE",
     "STABILITY_MARGIN",
+    "margin_for",
+    "stability_margin",
     "simulation_mse",
     "linear_baseline",
     "check_model",
@@ -56,8 +60,33 @@ __all__ = [
     "rest_notes",
 ]
 
-#: Poles must lie inside the circle of radius ``1 - STABILITY_MARGIN``.
+#: Poles must lie inside the circle of radius ``1 - STABILITY_MARGIN`` on records of up
+#: to ``1 / STABILITY_MARGIN`` samples; on longer ones inside ``1 - 1 / n``
+#: (:func:`stability_margin`).
 STABILITY_MARGIN = 1e-3
+
+
+def margin_for(n_samples: int) -> float:
+    """The stability margin a fit keeps on a record of ``n_samples`` samples:
+    :data:`STABILITY_MARGIN`, or ``1 / n_samples`` when that is smaller.
+
+    A pole at ``1 - 1/n`` has a time constant of ``n`` samples: over the record it cannot
+    be told from an integrator, and a fit is allowed to go that far. A fixed 0.999 is a
+    time constant of 1 000 samples, which on a plant sampled fast was a leak the fit
+    pressed against (EMPS, 1 kHz: a position that must hold for seconds; linear
+    state-space fits pinned at 0.999 tested 41 and 36 mm, at ``1 - 1/n`` 22 and 5.3 mm).
+
+    >>> margin_for(500), margin_for(25_000)
+    (0.001, 4e-05)
+    """
+    return STABILITY_MARGIN if n_samples <= 0 else min(STABILITY_MARGIN, 1.0 / n_samples)
+
+
+def stability_margin(data: Dataset) -> float:
+    """:func:`margin_for` the longest experiment of ``data``."""
+    return margin_for(max((e.n_samples for e in data.experiments), default=0))
+
+
 #: A static block whose largest deviation from its best affine fit over the estimation
 #: data is below this fraction of its output spread counts as linear.
 LINEARITY_TOLERANCE = 1e-6
@@ -113,11 +142,12 @@ def check_model(
     theta = model.free_parameters()
     if not np.all(np.isfinite(theta)):
         raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
-    if not model.is_stable(STABILITY_MARGIN):
+    margin = stability_margin(data)
+    if not model.is_stable(margin):
         rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
             f"{method} returned a linear block that is unstable or on the edge of stability "
-            f"(largest pole magnitude {rho:.10g}, limit {1 - STABILITY_MARGIN:g}); its "
+            f"(largest pole magnitude {rho:.10g}, limit {1 - margin:g}); its "
             "simulation would diverge or ring, so no model is returned. See docs/convergence.md"
         )
     mse = simulation_mse(model, data)
@@ -169,12 +199,13 @@ def rest_notes(model: Any, data: Dataset) -> list[str]:
     ]
 
 
-def margin_notes(model: Any) -> list[str]:
+def margin_notes(model: Any, margin: float = STABILITY_MARGIN) -> list[str]:
     """Warnings for fitted linear blocks with a pole on the stability margin.
 
-    A pole with ``|p| >= 1 - 2 STABILITY_MARGIN`` sits where the fit's stability bound
-    stops it. Near +1 (within ``2 STABILITY_MARGIN``) the plant probably integrates: a
-    pole at 0.999 is a leak that lets a simulated position drift; the note suggests an
+    A pole with ``|p| >= 1 - 2 margin`` sits where the fit's stability bound (``margin``:
+    :func:`stability_margin` of the estimation data) stops it. Near +1 (within
+    ``2 margin``) the plant probably integrates: a
+    pole at the margin is a leak that lets a simulated position drift; the note suggests an
     explicit integrator (the structures that take one are read from the registry).
     Integrators themselves pass :meth:`is_stable` and give no note. Models without
     linear blocks (ARX, networks) give none.
@@ -183,7 +214,7 @@ def margin_notes(model: Any) -> list[str]:
 
     linear = getattr(model, "linear_blocks", ())
     integrates = sum(getattr(b, "integrates", 0) for b in getattr(model, "blocks", ()))
-    near = 2.0 * STABILITY_MARGIN
+    near = 2.0 * margin
     notes = []
     for k, block in enumerate(linear):
         if block.is_stable(near):
@@ -197,7 +228,7 @@ def margin_notes(model: Any) -> list[str]:
         text = (
             f"the {which} has a pole at {shown} (magnitude {abs(worst):.6g}), within "
             f"{near:g} of the unit circle: it sits on the stability margin the fit keeps "
-            f"(|p| < {1 - STABILITY_MARGIN:g}). "
+            f"(|p| < {1 - margin:g}). "
         )
         takes = [s.name for s in STRUCTURES.values() if "integrator" in s.accepted(None)]
         if at_one.any() and integrates < 2:
@@ -259,7 +290,7 @@ def linear_block_notes(model: Any, data: Dataset) -> list[str]:
     list of str
         One note per such block, meant for ``settings["warnings"]``.
     """
-    notes = margin_notes(model)
+    notes = margin_notes(model, stability_margin(data))
     blocks = getattr(model, "blocks", ())
     if not blocks or not hasattr(model, "block_inputs"):  # ARX, networks, feedback loops
         return notes

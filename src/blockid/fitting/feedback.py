@@ -48,7 +48,7 @@ from blockid.blocks.base import LinearFamily, StaticBlock
 from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError, ParameterError
-from blockid.fitting.checks import simulation_mse
+from blockid.fitting.checks import simulation_mse, stability_margin
 from blockid.fitting.initial import _lagged, _least_squares, _stabilise
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
@@ -78,14 +78,15 @@ def _candidates(
     n_lin = na + nb
     out: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     theta = _least_squares(Phi[:, :n_lin], target, "linear ARX")
-    out["linear ARX (c = 0)"] = (_stabilise(theta[:na]), theta[na:], np.zeros(r - 1))
+    margin = stability_margin(data)
+    out["linear ARX (c = 0)"] = (_stabilise(theta[:na], margin), theta[na:], np.zeros(r - 1))
     if r < 2:
         return out
     try:
         theta = _least_squares(Phi, target, "equation error with feedback terms")
     except EstimationError:
         return out  # e.g. y too small for its powers to be told apart: start linear
-    a, b = _stabilise(theta[:na]), theta[na:n_lin]
+    a, b = _stabilise(theta[:na], margin), theta[na:n_lin]
     D = theta[n_lin:].reshape(nb, r - 1)  # D[i, m - 2] = b_i c_m
     U, s, Vt = np.linalg.svd(np.column_stack((b, D)), full_matrices=False)
     if abs(Vt[0, 0]) > 1e-8:  # [b | D] = s u v^T = b [1, c]
@@ -166,7 +167,7 @@ def _shape_start(data: Dataset, template: LinearFeedback, shape: Any) -> LinearF
         theta = _minimum_norm_fit(Phi, target)
         if not np.all(np.isfinite(theta)):
             return None
-        a, b = _stabilise(theta[:na]), theta[na : na + nb]
+        a, b = _stabilise(theta[:na], stability_margin(data)), theta[na : na + nb]
         D = theta[na + nb :].reshape(nb, -1)  # D[i] = b_i theta_N
         if build is not None:
             U, sv, Vt = np.linalg.svd(np.column_stack((b, D)), full_matrices=False)
@@ -213,7 +214,9 @@ def initial_feedback_block(
         Phi, target = _regression(data, na, nb, nk, 1, template.max_lag)
         theta = _least_squares(Phi, target, "linear ARX")
         models["linear ARX, block as given"] = template.replace(
-            linear=LinearBlock(na, nb, nk, _stabilise(theta[:na]), theta[na:])
+            linear=LinearBlock(
+                na, nb, nk, _stabilise(theta[:na], stability_margin(data)), theta[na:]
+            )
         )
     scores = {}
     for name, model in models.items():

@@ -72,7 +72,7 @@ from blockid.defaults import DEGREE
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
 from blockid.fitting import arx as arx_fitting
-from blockid.fitting.checks import STABILITY_MARGIN, simulation_mse
+from blockid.fitting.checks import STABILITY_MARGIN, margin_for, simulation_mse, stability_margin
 from blockid.fitting.registry import STRUCTURES
 from blockid.models.block import BlockModel
 
@@ -206,15 +206,16 @@ def _minimum_norm(chunks: Chunks) -> tuple[np.ndarray, float]:
     return v, float(residual)
 
 
-def _stabilise(a: np.ndarray) -> np.ndarray:
-    """Move poles on or outside the unit circle inside: ``p -> 0.99 / conj(p)``, and at
-    most radius 0.99 (a start for the refinement, which needs poles inside radius
-    ``1 - STABILITY_MARGIN``)."""
+def _stabilise(a: np.ndarray, margin: float = STABILITY_MARGIN) -> np.ndarray:
+    """``a`` as it is when its poles lie inside radius ``1 - margin`` (the refinement's
+    bound, :func:`~blockid.fitting.checks.stability_margin`); else poles on or outside
+    the unit circle moved inside, ``p -> 0.99 / conj(p)``, and every pole at most at
+    radius 0.99 (a start for the refinement)."""
     if a.size == 0:
         return a
     poles = np.roots(np.concatenate(([1.0], a)))
     mag = np.abs(poles)
-    if np.all(mag < 1.0 - STABILITY_MARGIN):
+    if np.all(mag < 1.0 - margin):
         return a
     fixed = np.where(mag < 1.0, poles, 0.99 * poles / np.maximum(mag, 1e-300) ** 2)
     fixed = np.where(np.abs(fixed) >= 0.99, 0.99 * fixed / np.abs(fixed), fixed)
@@ -260,7 +261,7 @@ def _arx_fit(
 
     chunks = _row_chunks(list(zip(w, z, strict=True)), n0, rows)
     theta = _chunked_least_squares(chunks, "linear block")
-    return _stabilise(theta[:na]), theta[na:]
+    return _stabilise(theta[:na], margin_for(max(len(x) for x in z))), theta[na:]
 
 
 def _rank_one_fit(
@@ -291,7 +292,7 @@ def _rank_one_fit(
         return np.column_stack(cols), zi[n0:]
 
     theta = _chunked_least_squares(_row_chunks(list(zip(u, z, strict=True)), n0, rows), what)
-    a = _stabilise(theta[:na])
+    a = _stabilise(theta[:na], margin_for(max(len(x) for x in z)))
     C = theta[na + k0 :].reshape(nb, -1)  # C[i, l] = b_i theta_l: rank one by (B1)-(B2)
     U, s, Vt = np.linalg.svd(C, full_matrices=False)
     b = U[:, 0] * s[0]
@@ -425,7 +426,7 @@ def _input_and_linear(
 def _score(model: BlockModel, data: Dataset) -> float:
     try:
         with np.errstate(all="ignore"):
-            stable = model.is_stable(STABILITY_MARGIN)
+            stable = model.is_stable(stability_margin(data))
             return simulation_mse(model, data) if stable else np.inf
     except BlockidError:
         return np.inf

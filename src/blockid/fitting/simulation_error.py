@@ -78,7 +78,7 @@ from blockid.blocks.base import Block
 from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
-from blockid.fitting.checks import STABILITY_MARGIN, check_model, simulation_mse
+from blockid.fitting.checks import check_model, margin_for, simulation_mse, stability_margin
 from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.levenberg_marquardt import levenberg_marquardt
 from blockid.fitting.registry import checked
@@ -167,6 +167,7 @@ class _Problem:
         self.segments = segments
         self.tracker = tracker
         self.n0 = template.max_lag
+        self.margin = margin_for(max(s.y.shape[0] for s in segments))
         y_fit = np.concatenate([s.y[self.n0 : s.n_fit] for s in segments])
         self.size = y_fit.size
         self.limit = _EXPLODE * (float(np.var(y_fit)) + 1e-300)  # MSE bound
@@ -192,7 +193,7 @@ class _Problem:
             model = self.template.with_free_parameters(theta)
         except BlockidError:
             return None
-        if not model.is_stable(STABILITY_MARGIN):
+        if not model.is_stable(self.margin):
             return None
         return self.with_ranges(model, theta)
 
@@ -475,7 +476,7 @@ def refine(
         raise EstimationError(
             "refinement cannot start: the starting model's parameters are not finite"
         )
-    if not model.is_stable(STABILITY_MARGIN):
+    if not model.is_stable(stability_margin(data)):
         rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
             "refinement cannot start: the starting model's linear block is unstable "

@@ -40,8 +40,8 @@ each piece added in a helper thread while the kernel walks the next one
 bit for bit; ``docs/performance.md`` has the time it saves).
 The parameters are unique only up to the state basis; the damping keeps the steps
 defined. A candidate with an eigenvalue of ``A`` outside the circle of radius
-``1 - STABILITY_MARGIN``, or a non-finite or exploding run, is rejected (the damping
-grows).
+``1 - margin`` (:func:`~blockid.fitting.checks.stability_margin` of the data), or a
+non-finite or exploding run, is rejected (the damping grows).
 
 **PNLSS.** :func:`fit_polynomial_state_space` starts from the refined linear model
 (``E = F = 0``: the start is the best linear approximation, so the fit never ends worse
@@ -67,7 +67,7 @@ from blockid._kernels.state_space import pnlss_simulate
 from blockid.data.dataset import Dataset
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
-from blockid.fitting.checks import STABILITY_MARGIN
+from blockid.fitting.checks import margin_for, stability_margin
 from blockid.fitting.levenberg_marquardt import levenberg_marquardt
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
@@ -207,14 +207,15 @@ def _lq(sig: _Signals, s: int) -> np.ndarray:
     return R.T / np.sqrt(used)
 
 
-def _stable(A: np.ndarray) -> np.ndarray:
-    """``A`` with eigenvalues outside the unit circle reflected inside (``λ -> 1/λ̄``)."""
+def _stable(A: np.ndarray, margin: float) -> np.ndarray:
+    """``A`` with eigenvalues outside radius ``1 - margin`` reflected inside
+    (``λ -> (1 - 2 margin)/λ̄``)."""
     lam, V = np.linalg.eig(A)
-    bad = np.abs(lam) >= 1.0 - STABILITY_MARGIN
+    bad = np.abs(lam) >= 1.0 - margin
     if not bad.any():
         return A
-    lam = np.where(bad, 1.0 / np.conj(lam) * (1.0 - 2 * STABILITY_MARGIN), lam)
-    lam = np.where(np.abs(lam) >= 1.0 - STABILITY_MARGIN, lam * 0.99, lam)
+    lam = np.where(bad, 1.0 / np.conj(lam) * (1.0 - 2 * margin), lam)
+    lam = np.where(np.abs(lam) >= 1.0 - margin, lam * 0.99, lam)
     return np.real(V @ np.diag(lam) @ np.linalg.inv(V))
 
 
@@ -351,7 +352,7 @@ def subspace(
     gamma = W_inv @ U[:, :n] * np.sqrt(sv[:n])
     C = gamma[:l]
     A = np.linalg.lstsq(gamma[:-l], gamma[l:], rcond=None)[0]
-    A = _stable(A)
+    A = _stable(A, stability_margin(data))
     B, D, x0s, bias = _bd_x0(A, C, sig, feedthrough)
     sig = replace(sig, output_offset=sig.output_offset + bias * sig.output_scale, y=[
         np.ascontiguousarray(y - bias) for y in sig.y])  # fmt: skip
@@ -376,6 +377,7 @@ class _Problem:
     def __init__(self, template: Any, sig: _Signals, feedthrough: bool):
         self.template = template
         self.sig = sig
+        self.margin = margin_for(max(len(u) for u in sig.u))
         full = template.free_parameters()
         self.free = template.parameter_mask(feedthrough)
         self.full = full
@@ -398,7 +400,7 @@ class _Problem:
             model = self.template.with_free_parameters(full)
         except (OrderError, ParameterError):  # a block refusing its parameters: rejected
             return None, x0s
-        if not model.is_stable(STABILITY_MARGIN):
+        if not model.is_stable(self.margin):
             return None, x0s
         return model, x0s
 
@@ -579,7 +581,7 @@ def _check(model: PolynomialStateSpace, data: Dataset, method: str) -> dict[str,
     """Finite, stable, a finite free run on the estimation data; its metrics."""
     if not np.all(np.isfinite(model.free_parameters())):
         raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
-    if not model.is_stable(STABILITY_MARGIN):
+    if not model.is_stable(stability_margin(data)):
         rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
             f"{method} returned an unstable state matrix (largest eigenvalue magnitude "

@@ -42,7 +42,8 @@ from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
-from blockid.fitting.checks import STABILITY_MARGIN, simulation_mse
+from blockid.fitting.checks import margin_for, simulation_mse, stability_margin
+from blockid.fitting.initial import _stabilise
 from blockid.fitting.result import FitResult
 from blockid.fitting.simulation_error import refine
 from blockid.models.block import ChainModel, WienerHammerstein
@@ -75,20 +76,7 @@ def _arx(u: list[np.ndarray], y: list[np.ndarray], na: int, nb: int, nk: int):
     scale = np.sqrt(np.mean(Phi**2, axis=0))
     scale[scale == 0] = 1.0
     theta = BatchLeastSquares().fit(Phi / scale, target).coef_ / scale
-    return _stable(theta[:na]), theta[na:]
-
-
-def _stable(a: np.ndarray) -> np.ndarray:
-    """Poles outside radius 0.99 reflected inside (a start for the refinement)."""
-    if a.size == 0:
-        return a
-    poles = np.roots(np.concatenate(([1.0], a)))
-    mag = np.abs(poles)
-    if np.all(mag < 1.0 - STABILITY_MARGIN):
-        return a
-    fixed = np.where(mag < 1.0, poles, 0.99 * poles / np.maximum(mag, 1e-300) ** 2)
-    fixed = np.where(np.abs(fixed) >= 0.99, 0.99 * fixed / np.abs(fixed), fixed)
-    return np.real(np.poly(fixed))[1:]
+    return _stabilise(theta[:na], margin_for(max(len(x) for x in y))), theta[na:]
 
 
 def best_linear_approximation(
@@ -277,7 +265,7 @@ def fit_wiener_hammerstein(
     failures = []
     for _, g1, g2, c, sx in scored[:starts]:
         model = _normalised(data, g1, g2, c, sx)
-        if model is None or not model.is_stable(STABILITY_MARGIN):
+        if model is None or not model.is_stable(stability_margin(data)):
             continue
         try:
             fit = refine(model, data, **options)
