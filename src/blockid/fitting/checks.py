@@ -74,7 +74,7 @@ def margin_for(n_samples: int) -> float:
     be told from an integrator, and a fit is allowed to go that far. A fixed 0.999 is a
     time constant of 1 000 samples, which on a plant sampled fast was a leak the fit
     pressed against (EMPS, 1 kHz: a position that must hold for seconds; linear
-    state-space fits pinned at 0.999 tested 41 and 36 mm, at ``1 - 1/n`` 22 and 5.3 mm).
+    state-space fits pinned at 0.999 tested 41 and 36 mm, at ``1 - 1/n`` 21 and 7.0 mm).
 
     >>> margin_for(500), margin_for(25_000)
     (0.001, 4e-05)
@@ -147,7 +147,7 @@ def check_model(
         rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
             f"{method} returned a linear block that is unstable or on the edge of stability "
-            f"(largest pole magnitude {rho:.10g}, limit {1 - margin:g}); its "
+            f"(largest pole magnitude {rho:.10g}, limit {1 - margin:.10g}); its "
             "simulation would diverge or ring, so no model is returned. See docs/convergence.md"
         )
     mse = simulation_mse(model, data)
@@ -202,8 +202,9 @@ def rest_notes(model: Any, data: Dataset) -> list[str]:
 def margin_notes(model: Any, margin: float = STABILITY_MARGIN) -> list[str]:
     """Warnings for fitted linear blocks with a pole on the stability margin.
 
-    A pole with ``|p| >= 1 - 2 margin`` sits where the fit's stability bound (``margin``:
-    :func:`stability_margin` of the estimation data) stops it. Near +1 (within
+    A pole with ``|p| >= 1 - 2 margin`` sits where the fit's stability bound stops it;
+    give ``margin`` as :func:`stability_margin` of the estimation data (the default, the
+    fixed :data:`STABILITY_MARGIN`, is the bound of records up to 1 000 samples). Near +1 (within
     ``2 margin``) the plant probably integrates: a
     pole at the margin is a leak that lets a simulated position drift; the note suggests an
     explicit integrator (the structures that take one are read from the registry).
@@ -228,7 +229,7 @@ def margin_notes(model: Any, margin: float = STABILITY_MARGIN) -> list[str]:
         text = (
             f"the {which} has a pole at {shown} (magnitude {abs(worst):.6g}), within "
             f"{near:g} of the unit circle: it sits on the stability margin the fit keeps "
-            f"(|p| < {1 - margin:g}). "
+            f"(|p| < {1 - margin:.10g}). "
         )
         takes = [s.name for s in STRUCTURES.values() if "integrator" in s.accepted(None)]
         if at_one.any() and integrates < 2:

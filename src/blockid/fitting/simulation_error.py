@@ -476,12 +476,16 @@ def refine(
         raise EstimationError(
             "refinement cannot start: the starting model's parameters are not finite"
         )
-    if not model.is_stable(stability_margin(data)):
+    margin = stability_margin(data)
+    if not model.is_stable(margin):
         rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
-            "refinement cannot start: the starting model's linear block is unstable "
-            f"(largest pole magnitude {rho:.4g}), so its simulation error is not defined. "
-            "Start from the default initial estimate (method simulation-error) instead"
+            "refinement cannot start: the starting model's linear block is unstable or "
+            f"beyond the stability margin (largest pole magnitude {rho:.10g}, limit "
+            f"{1 - margin:.10g} on these data: 0.999, or 1 - 1/n on an experiment of "
+            "n > 1000 samples), so its simulation error is not defined or not allowed. "
+            "Start from the default initial estimate (method simulation-error) instead, "
+            "or refine on a record longer than the pole's time constant"
         )
     t_start = time.perf_counter()
     tracker = _Tracker(patience=int(patience))

@@ -581,11 +581,13 @@ def _check(model: PolynomialStateSpace, data: Dataset, method: str) -> dict[str,
     """Finite, stable, a finite free run on the estimation data; its metrics."""
     if not np.all(np.isfinite(model.free_parameters())):
         raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
-    if not model.is_stable(stability_margin(data)):
+    margin = stability_margin(data)
+    if not model.is_stable(margin):
         rho = float(np.max(np.abs(model.poles())))
         raise EstimationError(
-            f"{method} returned an unstable state matrix (largest eigenvalue magnitude "
-            f"{rho:.6g}); no model is returned: try another order"
+            f"{method} returned an unstable state matrix, or one beyond the stability "
+            f"margin (largest eigenvalue magnitude {rho:.10g}, limit {1 - margin:.10g}); "
+            "no model is returned: try another order"
         )
     ys, sims = [], []
     for e in data.experiments:
