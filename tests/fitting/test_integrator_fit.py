@@ -8,7 +8,7 @@ from blockid.blocks import Integrator, LinearBlock, Polynomial, TwoSegmentPolyno
 from blockid.data import Dataset
 from blockid.errors import ParameterError
 from blockid.fitting import fit_model
-from blockid.fitting.checks import STABILITY_MARGIN, margin_notes
+from blockid.fitting.checks import STABILITY_MARGIN, margin_for, margin_notes
 from blockid.models import ARX, ChainModel
 
 LINEAR = LinearBlock(2, 2, 1, [-1.2, 0.35], [1.0, 0.4])  # poles 0.7 and 0.5
@@ -77,13 +77,21 @@ def test_margin_notes_only_for_fitted_poles_near_the_circle():
     near = LinearBlock(1, 1, 1, [-(1 - 1.5 * STABILITY_MARGIN)], [1.0])
     inside = LinearBlock(1, 1, 1, [-0.99], [1.0])
     ringing = LinearBlock(1, 1, 1, [1 - 1.5 * STABILITY_MARGIN], [1.0])  # pole near -1
-    assert margin_notes(ChainModel("u", "y", [inside, Integrator(1)])) == []
-    (note,) = margin_notes(ChainModel("u", "y", [near, Integrator(1)]))
+    m = STABILITY_MARGIN
+    assert margin_notes(ChainModel("u", "y", [inside, Integrator(1)]), m) == []
+    (note,) = margin_notes(ChainModel("u", "y", [near, Integrator(1)]), m)
     assert "integrator=2" in note  # one integrator already: suggest the second
-    (note,) = margin_notes(ChainModel("u", "y", [ringing]))
+    (note,) = margin_notes(ChainModel("u", "y", [ringing]), m)
     assert "integrates" not in note and "nearly undamped" in note
     arx = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-0.9995]}}, b={"y": {"u": [1.0]}})
-    assert margin_notes(arx) == []
+    assert margin_notes(arx, m) == []
+    # on a record of 25 000 samples the margin is 4e-5: 1 - 1.5e-3 is well inside it,
+    # and a pole at 1 - 6e-5 is the one on the margin
+    long = margin_for(25_000)
+    assert margin_notes(ChainModel("u", "y", [near, Integrator(1)]), long) == []
+    edge = LinearBlock(1, 1, 1, [-(1 - 1.5 * long)], [1.0])
+    (note,) = margin_notes(ChainModel("u", "y", [edge]), long)
+    assert "integrator=1" in note and "0.99996" in note
 
 
 def test_the_option_is_checked_and_offered_where_it_applies():

@@ -199,14 +199,13 @@ def rest_notes(model: Any, data: Dataset) -> list[str]:
     ]
 
 
-def margin_notes(model: Any, margin: float = STABILITY_MARGIN) -> list[str]:
-    """Warnings for fitted linear blocks with a pole on the stability margin.
+def margin_notes(model: Any, margin: float) -> list[str]:
+    """Warnings for fitted linear blocks with a pole on the stability margin ``margin``
+    (:func:`stability_margin` of the estimation data).
 
-    A pole with ``|p| >= 1 - 2 margin`` sits where the fit's stability bound stops it;
-    give ``margin`` as :func:`stability_margin` of the estimation data (the default, the
-    fixed :data:`STABILITY_MARGIN`, is the bound of records up to 1 000 samples). Near +1 (within
-    ``2 margin``) the plant probably integrates: a
-    pole at the margin is a leak that lets a simulated position drift; the note suggests an
+    A pole with ``|p| >= 1 - 2 margin`` sits where the fit's stability bound stops it.
+    Near +1 (within ``2 margin``) the plant probably integrates: a pole at the margin is
+    a leak that lets a simulated position drift; the note suggests an
     explicit integrator (the structures that take one are read from the registry).
     Integrators themselves pass :meth:`is_stable` and give no note. Models without
     linear blocks (ARX, networks) give none.

@@ -428,32 +428,14 @@ class _Search:
         limit = None
         if self.long:
             limit = self.effort.screen_samples if screen else self.effort.final_samples
-        tasks = [_Task(c, fold, limit, self.n_init) for c in new for fold in self.plan.folds]
-        t0 = time.perf_counter()
-        self.stages.append({"stage": stage, "candidates": len(new), "fits": len(tasks)})
-        deadline = self.deadline if capped else None
-        if capped and self.expired():
-            self.cut = True
-            tasks = []
-        count = [0]
-        k = len(self.plan)
-
-        def done(i: int, result: FoldScore) -> None:
-            count[0] += 1
-            if self.progress is not None:
-                self.progress(stage, count[0], len(tasks), new[i // k].label)
-
-        results = self.runner.map(_fit_and_score, tasks, done=done, deadline=deadline)
-        if any(r is None for r in results) or (new and not tasks):
-            self.cut = True
-        for j, cand in enumerate(new):
-            folds = results[j * k : (j + 1) * k]
-            if not tasks or any(f is None for f in folds):
+        for cand, folds in zip(
+            new, self._fold_scores(stage, new, self.plan, limit, capped), strict=True
+        ):
+            if folds is None:
                 continue  # cut by the time limit: not scored
             score = self._combine(cand, stage, folds)
             self.scores[cand.key] = score
             self.order.append(score)
-        self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
         return [self.scores[c.key] for c in candidates if c.key in self.scores]
 
     def score_on(
@@ -461,21 +443,48 @@ class _Search:
     ) -> list[list[FoldScore]] | None:
         """Every candidate's fold scores on another fold ``plan`` (with the training
         limit of a finalist), in the order given; not kept among the search's scores.
-        None when the time limit cuts it (``cut`` is then set)."""
+        None when the time limit cuts it."""
         limit = self.effort.final_samples if self.long else None
+        results = self._fold_scores(stage, candidates, plan, limit)
+        if any(r is None for r in results):
+            return None
+        return [r for r in results if r is not None]
+
+    def _fold_scores(
+        self,
+        stage: str,
+        candidates: Sequence[Candidate],
+        plan: FoldPlan,
+        limit: int | None,
+        capped: bool = True,
+    ) -> list[list[FoldScore] | None]:
+        """Each candidate fitted and scored on every fold of ``plan`` (in a worker, the
+        stage recorded with its time, progress reported): its fold scores in order, or
+        None where the time limit (when ``capped``) cut it, and ``cut`` is then set."""
         tasks = [_Task(c, fold, limit, self.n_init) for c in candidates for fold in plan.folds]
         t0 = time.perf_counter()
         self.stages.append({"stage": stage, "candidates": len(candidates), "fits": len(tasks)})
-        if self.expired():
-            self.cut = True
-            return None
-        results = self.runner.map(_fit_and_score, tasks, deadline=self.deadline)
-        self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
-        if any(r is None for r in results):
-            self.cut = True
-            return None
+        if capped and self.expired():
+            tasks = []
+        count = [0]
         k = len(plan)
-        return [list(results[j * k : (j + 1) * k]) for j in range(len(candidates))]
+
+        def done(i: int, result: FoldScore) -> None:
+            count[0] += 1
+            if self.progress is not None:
+                self.progress(stage, count[0], len(tasks), candidates[i // k].label)
+
+        deadline = self.deadline if capped else None
+        results = self.runner.map(_fit_and_score, tasks, done=done, deadline=deadline)
+        out: list[list[FoldScore] | None] = []
+        for j in range(len(candidates)):
+            folds = results[j * k : (j + 1) * k]
+            complete = len(folds) == k and all(f is not None for f in folds)
+            out.append(list(folds) if complete else None)
+        if any(f is None for f in out):
+            self.cut = True
+        self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
+        return out
 
     def _combine(self, cand: Candidate, stage: str, folds: list[FoldScore]) -> Score:
         score = Score(cand, stage, list(folds), seconds=sum(f.seconds for f in folds))
