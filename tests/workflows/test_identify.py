@@ -2,6 +2,7 @@
 the same answer on any machine and with any number of workers."""
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -136,8 +137,11 @@ def test_no_candidate_is_fitted_twice(structures):
     result = identify(data, structures=structures, effort=SMALL, jobs=1)
     keys = [s.candidate.key for s in result.ranked + result.rejected]
     assert len(keys) == len(set(keys))
-    fits = sum(stage["fits"] for stage in result.search["stages"])
+    fits = sum(stage["fits"] for stage in result.search["stages"] if stage["stage"] != "refit")
     assert fits == len(keys) * len(result.search["folds"])
+    # the refit: the direct fit and one start from each fold's model (SMALL: 4 allowed)
+    refit = [stage for stage in result.search["stages"] if stage["stage"] == "refit"]
+    assert [stage["fits"] for stage in refit][-1] == 1 + len(result.search["folds"])
     # the answer is refitted on all the estimation data, not a fold's training part
     assert result.fit.n_samples == data.experiments[0].n_samples
 
@@ -413,10 +417,10 @@ def test_a_refit_stopped_short_of_the_cross_validated_score_is_fitted_longer():
     short = Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1, "input_block": "dead-zone",
                                       "max_nfev": 1})  # fmt: skip
     notes = []
-    first = _refit(short, data, 0.0098, 10, notes)  # 0.0106 on its own data: within 10 %
+    first, _ = _refit(short, data, 0.0098, 10, notes)  # 0.0106 on its own data: within 10 %
     assert notes == []
     notes = []
-    longer = _refit(short, data, 0.009, 10, notes)  # 0.0106 > 1.1 x 0.009
+    longer, _ = _refit(short, data, 0.009, 10, notes)  # 0.0106 > 1.1 x 0.009
     assert len(notes) == 1 and "max_nfev = 3" in notes[0]
     own = longer.estimation_metrics["rmse"]["y"]
     assert own < 0.95 * first.estimation_metrics["rmse"]["y"]  # measured 0.00982 vs 0.01057
@@ -428,18 +432,18 @@ def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stop
     ftol at its linear start), so it is refused with the numbers, whatever stopped it;
     identify then fits the next candidate."""
     from blockid.errors import EstimationError
-    from blockid.workflows.identify import _refit
+    from blockid.workflows.identify import _fell_short, _refit
     from blockid.workflows.search_space import Candidate
 
     data = dead_zone_record()
     converged = Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1, "input_block": "dead-zone",
                                           "max_nfev": 30})  # fmt: skip
-    fit = _refit(converged, data, 0.0098, 10, [])
+    fit, own = _refit(converged, data, 0.0098, 10, [])
     assert "max_nfev" not in str(fit.settings.get("stop_reason"))  # it converged
-    own = fit.estimation_metrics["rmse"]["y"]
+    assert own == pytest.approx(fit.estimation_metrics["rmse"]["y"], rel=0.05)
     with pytest.raises(EstimationError, match="did not find what the folds found"):
-        _refit(converged, data, own / 2.5, 10, [])
-    assert _refit(converged, data, own / 1.5, 10, []) is not None  # within the factor
+        _fell_short(fit, own, own / 2.5)
+    _fell_short(fit, own, own / 1.5)  # within the factor: no error
 
 
 def test_when_every_refit_falls_short_the_first_is_returned_with_a_note(monkeypatch):
@@ -579,3 +583,68 @@ def test_multivariable_feedback_and_wiener_hammerstein_plants_get_a_polynomial_s
     assert result.selected.candidate.structure == "polynomial-state-space"
     fit = evaluate(result.model, fresh, "simulation").metrics["fit_percent"]
     assert min(fit.values()) > 99.5
+
+
+def test_a_refit_worse_than_a_start_from_a_folds_model_is_replaced(monkeypatch):
+    """The refit on all data is one start of a nonconvex fit; the folds' models refined
+    on all data are others, and the lowest free-run error on the estimation data wins.
+    Here the direct fit is made to stop after one evaluation: a warm start replaces it,
+    with a note and the numbers in the JSON."""
+    import json
+
+    from blockid.workflows import identify as module
+
+    real = module._refit
+
+    def stunted(candidate, data, cv_rmse, n_init, notes):
+        return real(candidate.with_options(max_nfev=1), data, math.inf, n_init, notes)
+
+    monkeypatch.setattr(module, "_refit", stunted)
+    data = dead_zone_record(600)
+    result = identify(data, structures=["hammerstein"], effort=SMALL, jobs=1)
+    warm = result.search["warm_starts"][0]
+    assert warm["chosen"].startswith("the model fitted without fold")
+    assert warm["rmse"] < 0.5 * warm["direct_rmse"]
+    assert len(warm["starts"]) == len(result.search["folds"])  # SMALL allows 4, 3 folds
+    note = next(n for n in result.notes if "refined on all of them from its models" in n)
+    assert warm["chosen"] in note
+    assert result.fit.settings["initial"] == warm["chosen"]
+    own = result.fit.model.simulate(data.experiments[0].u)[:, 0] - data.experiments[0].y[:, 0]
+    assert np.sqrt(np.mean(own[10:] ** 2)) < 0.02  # the plant's noise is 0.01
+    json.dumps(result.to_dict(), allow_nan=False)
+
+
+def test_least_squares_is_refitted_once():
+    data = dead_zone_record(600)
+    result = identify(data, structures=["arx"], effort=SMALL, jobs=1)
+    refit = [s for s in result.search["stages"] if s["stage"] == "refit"]
+    assert [s["fits"] for s in refit] == [1] and result.search["warm_starts"] == []
+
+
+EMPS = Path(__file__).parents[2] / ".." / "shared" / "data" / "emps" / "DATA_EMPS.csv"
+
+
+@pytest.mark.benchdata
+@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data (../shared/data) absent")
+def test_on_emps_a_start_from_a_folds_model_finds_what_the_direct_refit_misses():
+    """The real record of the fault: the chosen block state space (a dead zone in the
+    loop) fitted on all 24 841 samples stalls at 10.1 mm on its own data, while the
+    folds reached 5.2 mm on data they never saw; refined on all data from the model
+    fitted without fold 1 it reaches 3.0 mm (and tests 3.4 mm on DATA_EMPS_PULSES
+    against the published linear model's 5.53)."""
+    import pandas as pd
+
+    from blockid.data.folds import fold_plan
+    from blockid.workflows.identify import _final_fit, _Start
+    from blockid.workflows.search_space import Candidate
+
+    frame = pd.read_csv(EMPS)
+    data = Dataset.from_arrays(frame["vir"].to_numpy(), frame["qm"].to_numpy(), ["vir"], ["qm"])
+    # as the standard search chose it: a candidate of the block state-space stage
+    cand = Candidate("block-state-space", {"nx": 2, "loop_block": "dead-zone", "max_nfev": 30})
+    fold = fold_plan(data, 3).folds[0]  # a long record: 3 folds; the search's 50 samples
+    direct = _final_fit(data, _Start(cand, None, None, 50, 0.0051))
+    warm = _final_fit(data, _Start(cand, fold, None, 50, 0.0051))
+    assert not direct.reason and not warm.reason
+    # measured 0.0101 against 0.0030
+    assert direct.rmse > 0.008 and warm.rmse < 0.5 * direct.rmse

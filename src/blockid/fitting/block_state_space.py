@@ -42,7 +42,7 @@ from blockid.fitting.state_space import (
 )
 from blockid.models.block_state_space import BlockStateSpace
 
-__all__ = ["fit_block_state_space", "near_identity"]
+__all__ = ["fit_block_state_space", "near_identity", "with_block_ranges"]
 
 
 def _spec_block(spec: Any, output: bool, where: str) -> StaticBlock | None:
@@ -290,6 +290,27 @@ def _shaped(block: StaticBlock, p: np.ndarray, fraction: float, dead_zone: bool)
         return block
 
 
+def with_block_ranges(model: BlockStateSpace, data: Dataset) -> BlockStateSpace:
+    """``model`` with the ranges its blocks' arguments cover on ``data`` (each experiment
+    from the state its first outputs give) recorded for the extrapolation checks, and
+    each loop block's gain set by :func:`_loop_gains`."""
+    un = [model.normalised_input(e.u) for e in data.experiments]
+    x_fit = [model.initial_state(e.u, e.y[: 4 * model.nx]) for e in data.experiments]
+    z_all = np.vstack([model.run(u, x0)[1] for u, x0 in zip(un, x_fit, strict=True)])
+    u_all = np.vstack(un)
+    ranges: dict[str, Any] = {}
+    if model.loop_blocks:
+        runs = [model._loop_run(model.block_inputs(u), x0) for u, x0 in zip(un, x_fit, strict=True)]
+        p, q = np.vstack([r[1] for r in runs]), np.vstack([r[2] for r in runs])
+        ranges["loop_range"] = np.column_stack((p.min(axis=0), p.max(axis=0)))
+        model = _loop_gains(model, p, q)
+    return model.replace(
+        input_range=np.column_stack((u_all.min(axis=0), u_all.max(axis=0))),
+        output_range=np.column_stack((z_all.min(axis=0), z_all.max(axis=0))),
+        **ranges,
+    )
+
+
 def fit_block_state_space(
     data: Dataset,
     *,
@@ -390,21 +411,7 @@ def fit_block_state_space(
         template, data, initial_states=x0s, feedthrough=feedthrough, max_nfev=max_nfev,
         ftol=ftol, xtol=xtol, gtol=gtol,
     )  # fmt: skip
-    # the ranges the blocks' arguments covered, for the extrapolation checks
-    x_fit = [model.initial_state(e.u, e.y[: 4 * model.nx]) for e in data.experiments]
-    zs = [model.run(u, x0)[1] for u, x0 in zip(un, x_fit, strict=True)]
-    z_all = np.vstack(zs)
-    ranges: dict[str, Any] = {}
-    if loops:
-        runs = [model._loop_run(model.block_inputs(u), x0) for u, x0 in zip(un, x_fit, strict=True)]
-        p, q = np.vstack([r[1] for r in runs]), np.vstack([r[2] for r in runs])
-        ranges["loop_range"] = np.column_stack((p.min(axis=0), p.max(axis=0)))
-        model = _loop_gains(model, p, q)
-    model = model.replace(
-        input_range=np.column_stack((u_all.min(axis=0), u_all.max(axis=0))),
-        output_range=np.column_stack((z_all.min(axis=0), z_all.max(axis=0))),
-        **ranges,
-    )
+    model = with_block_ranges(model, data)
     method = f"subspace+block-state-space ({model.kind})"
     metrics = _check(model, data, method)  # type: ignore[arg-type]
     settings = {

@@ -39,6 +39,7 @@ __all__ = [
     "DEFAULT_METHOD",
     "accepted_options",
     "fit_model",
+    "refine_from",
     "resolve_options",
     "default_centring",
     "run_method",
@@ -113,6 +114,69 @@ def fit_model(
         if hasattr(result.model, "with_ranges") and not result.model.ranges:
             model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
             result = replace(result, model=model)
+    return _finish(result, data, structure, uncertainty)
+
+
+def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> FitResult:
+    """``model``, a fit of ``structure`` (on other data: a part of ``data``, say), refined
+    on ``data``'s free-run simulation error and checked as :func:`fit_model` checks.
+
+    The model keeps its form: orders, blocks, integrators and its offsets (a centred fit
+    keeps the means of the data it was fitted on as its operating point). ``options``
+    are the fit's options (as given to :func:`fit_model`); the refinement's own
+    (``max_nfev``, ``tail_fraction``, ``patience``, tolerances, ``feedthrough``) apply
+    and the rest, which shaped the start, are ignored. The ranges of the internal
+    signals are recorded on ``data``. ``identify`` refines each fold's model on all the
+    estimation data this way when the direct fit falls short of the folds.
+    """
+    from blockid.fitting.simulation_error import refine
+
+    decl, method, options = resolve_options(structure, None, options)
+    if method != "simulation-error":
+        raise ParameterError(
+            f"refine_from continues a simulation-error fit; {structure} is fitted by {method}",
+            parameter="structure",
+        )
+    tolerances = {k: options[k] for k in ("max_nfev", "ftol", "xtol", "gtol") if k in options}
+    if not decl.block_oriented:  # the state-space structures
+        from blockid.fitting.block_state_space import with_block_ranges
+        from blockid.fitting.state_space import (
+            _check,
+            _solver_settings,
+            refine_state_space,
+            with_observed_range,
+        )
+        from blockid.models.block_state_space import BlockStateSpace
+
+        fitted, info = refine_state_space(
+            model, data, feedthrough=bool(options.get("feedthrough", False)), **tolerances
+        )
+        if isinstance(fitted, BlockStateSpace):
+            fitted = with_block_ranges(fitted, data)
+        elif np.isfinite(np.asarray(model.observed_lower)).any():  # its monomials' range
+            fitted = with_observed_range(fitted, data)
+        how = f"{structure} refined from a given model"
+        result = FitResult(
+            model=fitted,
+            method=how,
+            settings={
+                **_solver_settings(info, int(options.get("max_nfev", 100))),
+                "refinement": info,
+            },
+            estimation_metrics=_check(fitted, data, how),
+            n_samples=int(sum(e.n_samples for e in data.experiments)),
+            history={"seconds": info["seconds"]},
+            metrics_mode="simulation",
+        )
+    else:
+        extra = {k: options[k] for k in ("tail_fraction", "patience") if k in options}
+        result = refine(model, data, **tolerances, **extra)
+    result = replace(result, settings={**result.settings, "initial": "given model"})
+    return _finish(result, data, structure, False)
+
+
+def _finish(result: FitResult, data: Dataset, structure: str, uncertainty: bool) -> FitResult:
+    """A fit's last checks: a finite error, notes on its linear blocks and its rest."""
     mse = result.estimation_metrics.get("mse", {})
     if not all(np.isfinite(v) for v in mse.values()):
         raise EstimationError(

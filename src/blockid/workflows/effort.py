@@ -62,6 +62,11 @@ class Effort:
     #: a static block on a combination of the states
     loop_plans: tuple[str, ...] = ("saturation", "dead-zone")
     loop_single: bool = False
+    #: folds whose models are refined on all estimation data beside the chosen
+    #: candidate's direct refit (its warm starts), on a record shorter than
+    #: LONG_RECORD samples and on a longer one
+    warm_starts: int = 4
+    warm_starts_long: int = 3
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -75,7 +80,8 @@ EFFORTS: dict[str, Effort] = {
             name="quick", folds=3, folds_long=2, max_order=5, max_delay=10, linear_keep=1,
             families=3, screen_nfev=15, screen_samples=10_000, finalists=2, final_nfev=60,
             grow_steps=1, state_plans=((2, "full"), (3, "states")), state_parameters=300,
-            state_keep=2, final_samples=20_000,
+            state_keep=2, final_samples=20_000, warm_starts=2,
+            warm_starts_long=1,
             block_state_plans=(
                 ("polynomial:degree=3", None), (None, "polynomial:degree=3"),
                 ("polynomial:degree=3", "polynomial:degree=3"),
@@ -94,6 +100,7 @@ EFFORTS: dict[str, Effort] = {
             final_nfev=300, grow_steps=4,
             state_plans=((2, "full"), (3, "states"), (3, "full"), (4, "states")),
             state_parameters=1200, state_keep=3, final_samples=None, loop_single=True,
+            warm_starts=5,
         ),
     )
 }  # fmt: skip
