@@ -618,6 +618,10 @@ def test_a_refit_worse_than_a_start_from_a_folds_model_is_replaced(monkeypatch):
     own = result.fit.model.simulate(data.experiments[0].u)[:, 0] - data.experiments[0].y[:, 0]
     assert np.sqrt(np.mean(own[10:] ** 2)) < 0.02  # the plant's noise is 0.01
     json.dumps(result.to_dict(), allow_nan=False)
+    # the warm starts in two workers (the direct fit stays here): the same model, bit for bit
+    two = identify(data, structures=["hammerstein"], effort=SMALL, jobs=2)
+    assert two.search["warm_starts"] == result.search["warm_starts"]
+    assert np.array_equal(two.fit.model.free_parameters(), result.fit.model.free_parameters())
 
 
 def test_least_squares_is_refitted_once():
