@@ -645,7 +645,7 @@ def test_on_emps_a_start_from_a_folds_model_finds_what_the_direct_refit_misses()
     import pandas as pd
 
     from blockid.data.folds import fold_plan
-    from blockid.workflows.identify import _final_fit, _Start
+    from blockid.workflows.identify import _final_fit, _segment_rmse, _Start
     from blockid.workflows.search_space import Candidate
 
     frame = pd.read_csv(EMPS)
@@ -654,13 +654,13 @@ def test_on_emps_a_start_from_a_folds_model_finds_what_the_direct_refit_misses()
     cand = Candidate("block-state-space", {"nx": 2, "loop_block": "dead-zone", "max_nfev": 30})
     plan = fold_plan(data, 3)  # a long record: 3 folds; the search's 50 samples
     parts = tuple(s for f in plan.folds for s in f.test)
-    direct = _final_fit(data, _Start(cand, None, None, 50, 0.0051, parts))
+    direct = _final_fit(data, _Start(cand, None, None, 50, 0.0051))
     warm = _final_fit(data, _Start(cand, plan.folds[0], None, 50, 0.0051, parts))
     assert not direct.reason and not warm.reason
-    # measured 0.0101 against 0.0030 over the whole record, and from the folds' starts
-    # WARM_FROM_FOLDS
+    # measured 0.0101 against 0.0030 over the whole record; from the folds' starts (the
+    # comparison identify makes) 0.0085 against 0.0032
     assert direct.rmse > 0.008 and warm.rmse < 0.5 * direct.rmse
-    assert warm.segment_rmse < 0.5 * direct.segment_rmse
+    assert warm.segment_rmse < 0.5 * _segment_rmse(direct.fit.model, data, parts, 50)
 
 
 def test_a_warm_start_replaces_the_direct_fit_only_when_better_by_more_than_the_tie():

@@ -514,16 +514,17 @@ class _Search:
         parts = tuple(s for f in self.plan.folds for s in f.test)
         t0 = time.perf_counter()
         self.stages.append({"stage": "refit", "candidates": 1, "fits": 1})
-        first = _Start(cand, None, limit, self.n_init, score.rmse, parts)
         with _single_threaded(), helper_threads(self.runner.jobs > 1):
-            direct = _final_fit(self.data, first)
+            direct = _final_fit(self.data, _Start(cand, None, limit, self.n_init, score.rmse))
         out = [("the direct fit", direct)]
         eff = self.effort
         count = min(eff.warm_starts_long if self.long else eff.warm_starts, len(score.folds))
-        held_back = _fold_rmse(score)
-        if direct.rmse is None or not direct.rmse > REFIT_SLACK * held_back or count < 1:
+        if direct.rmse is None or not direct.rmse > REFIT_SLACK * _fold_rmse(score) or count < 1:
             self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
             return out  # least squares (one optimum), or the fit found what the folds did
+        if direct.fit is not None:  # scored as the warm starts are (one BLAS thread)
+            with _single_threaded(), np.errstate(all="ignore"):
+                direct.segment_rmse = _segment_rmse(direct.fit.model, self.data, parts, self.n_init)
         best = sorted(range(len(score.folds)), key=lambda i: (score.folds[i].relative, i))
         folds = [self.plan.folds[i] for i in best[:count]]
         tasks = [_Start(cand, fold, limit, self.n_init, score.rmse, parts) for fold in folds]
@@ -675,6 +676,12 @@ def _own_rmse(model: Any, data: Dataset, n_init: int) -> float:
     return _pooled(evaluate(model, data, "simulation", initial_samples=n_init), data)[0]
 
 
+def _segment_rmse(model: Any, data: Dataset, segments: Sequence[Segment], n_init: int) -> float:
+    """A model's free-run RMSE from the start of each of ``segments`` (its initial state
+    from each one's first ``n_init`` outputs), pooled: how the search scores a fold."""
+    return _own_rmse(model, materialise(data, segments), n_init)
+
+
 def _fell_short(fit: Any, own: float | None, fold_rmse: float) -> None:
     """Refuse a refit whose own-data error is more than ``REFIT_FAILED`` times the
     folds' pooled error on data they never saw (:class:`RefitFellShort`)."""
@@ -699,15 +706,15 @@ class _Start:
     limit: int | None
     n_init: int
     cv_rmse: float
-    segments: tuple[Segment, ...] = ()  # the folds' held-back parts, scored from each start
+    segments: tuple[Segment, ...] = ()  # a warm start's: the folds' held-back parts
 
 
 @dataclass
 class _Started:
     """What one :class:`_Start` gave: the fit, its free-run RMSE on all estimation data
-    (None: a fit without an evaluation limit) and from the start of every fold's
-    held-back part (its initial state estimated from that part's first ``n_init``
-    outputs, as the search scores), or why it failed."""
+    (None: a fit without an evaluation limit) and, once there are warm starts to compare
+    it with, from the start of every fold's held-back part (:func:`_segment_rmse`), or
+    why it failed."""
 
     fit: Any = None
     rmse: float | None = math.inf
@@ -739,10 +746,8 @@ def _final_fit(data: Dataset, task: _Start) -> _Started:
             if trust.reasons:
                 raise EstimationError(trust.reasons[0])
             out.fit, out.rmse = fit, rmse
-        if task.segments:
             with np.errstate(all="ignore"):
-                parts = materialise(data, task.segments)
-                out.segment_rmse = _own_rmse(out.fit.model, parts, task.n_init)
+                out.segment_rmse = _segment_rmse(fit.model, data, task.segments, task.n_init)
     except Exception as exc:  # noqa: BLE001 - one start must not end the search
         out.fit, out.reason = None, _reason(exc)
     return out
