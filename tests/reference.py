@@ -8,7 +8,9 @@ import ...``).
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
+from blockid._kernels.state_space import monomials
 from blockid.blocks import Polynomial
 from blockid.blocks.base import StaticBlock
 from blockid.data import Dataset
@@ -341,3 +343,123 @@ def mimo_delays_record(delays, n=1500, seed=0, noise=0.02):
         y[t, 1] = 0.6 * y[t - 1, 1] + 0.6 * u[t - c, 0] - 0.5 * u[t - d, 1]
     y += noise * rng.standard_normal(y.shape)
     return Dataset.from_arrays(u, y, ["u1", "u2"], ["y1", "y2"])
+
+
+# ----------------------------------------------------- polynomial state space, one pass
+@njit(cache=True)
+def _slopes(z, expo, lo, hi, nx, out):
+    """``out[j, i] = ∂ζ_j / ∂x_i`` (0 where ``x_i`` is clipped)."""
+    nm, nz = expo.shape
+    for j in range(nm):
+        for i in range(nx):
+            p = expo[j, i]
+            if p == 0 or not (lo[i] < z[i] < hi[i]):
+                out[j, i] = 0.0
+                continue
+            d = p * z[i] ** (p - 1)
+            for k in range(nz):
+                q = expo[j, k]
+                if k != i and q:
+                    zk = min(max(z[k], lo[k]), hi[k])
+                    d *= zk**q
+            out[j, i] = d
+
+
+@njit(cache=True)
+def pnlss_jacobian(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J):
+    """The polynomial state space's sensitivity walk in one pass, sample by sample,
+    every column on one thread: the slow twin of ``blockid._kernels.state_space``'s
+    two-pass, column-parallel walk (``pnlss_walk``).
+
+    ``x`` (nx,) and ``S`` (nx, P) hold the state and its sensitivity at the piece's
+    first sample and are updated in place to those after its last (so a record can be
+    walked in pieces; start with ``S = [0 | I]``). ``P`` is the number of model
+    parameters plus ``nx`` (the initial state). Row ``k * ny + i`` of ``J`` (N ny, P)
+    receives ``∂y_i(k)/∂[θ, x(0)]``; ``y`` (N, ny) the output.
+    """
+    N = u.shape[0]
+    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
+    P = S.shape[1]
+    o_b = nx * nx
+    o_c = o_b + nx * nu
+    o_d = o_c + ny * nx
+    o_e = o_d + ny * nu
+    o_f = o_e + nx * nm
+    z = np.empty(nx + nu)
+    zeta = np.empty(nm)
+    dz = np.empty((nm, nx))
+    jx = np.empty((nx, nx))
+    jy = np.empty((ny, nx))
+    xn = np.empty(nx)
+    Sn = np.empty((nx, P))
+    for k in range(N):
+        for i in range(nx):
+            z[i] = x[i]
+        for i in range(nu):
+            z[nx + i] = u[k, i]
+        monomials(z, expo, lo, hi, zeta)
+        _slopes(z, expo, lo, hi, nx, dz)
+        # the local Jacobians of the output and state maps with respect to x
+        for i in range(ny):
+            for j in range(nx):
+                acc = C[i, j]
+                for m in range(nm):
+                    acc += F[i, m] * dz[m, j]
+                jy[i, j] = acc
+        for i in range(nx):
+            for j in range(nx):
+                acc = A[i, j]
+                for m in range(nm):
+                    acc += E[i, m] * dz[m, j]
+                jx[i, j] = acc
+        # output and its sensitivity
+        for i in range(ny):
+            acc = 0.0
+            for j in range(nx):
+                acc += C[i, j] * x[j]
+            for j in range(nu):
+                acc += D[i, j] * u[k, j]
+            for j in range(nm):
+                acc += F[i, j] * zeta[j]
+            y[k, i] = acc
+            row = k * ny + i
+            for p in range(P):
+                J[row, p] = 0.0
+            for j in range(nx):
+                c = jy[i, j]
+                if c != 0.0:
+                    for p in range(P):
+                        J[row, p] += c * S[j, p]
+            for j in range(nx):
+                J[row, o_c + i * nx + j] += x[j]
+            for j in range(nu):
+                J[row, o_d + i * nu + j] += u[k, j]
+            for j in range(nm):
+                J[row, o_f + i * nm + j] += zeta[j]
+        # state and its sensitivity
+        for i in range(nx):
+            acc = 0.0
+            for j in range(nx):
+                acc += A[i, j] * x[j]
+            for j in range(nu):
+                acc += B[i, j] * u[k, j]
+            for j in range(nm):
+                acc += E[i, j] * zeta[j]
+            xn[i] = acc
+            for p in range(P):
+                Sn[i, p] = 0.0
+            for j in range(nx):
+                c = jx[i, j]
+                if c != 0.0:
+                    for p in range(P):
+                        Sn[i, p] += c * S[j, p]
+            for j in range(nx):
+                Sn[i, i * nx + j] += x[j]
+            for j in range(nu):
+                Sn[i, o_b + i * nu + j] += u[k, j]
+            for j in range(nm):
+                Sn[i, o_e + i * nm + j] += zeta[j]
+        for i in range(nx):
+            x[i] = xn[i]
+            for p in range(P):
+                S[i, p] = Sn[i, p]

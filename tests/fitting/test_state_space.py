@@ -243,14 +243,15 @@ def test_the_refinement_rejects_a_start_that_explodes_and_says_so():
         refine_state_space(wild, data, initial_states=[np.zeros(wild.nx)])
 
 
-@pytest.mark.parametrize("helper", [False, True])
-def test_the_normal_equations_are_the_dense_jacobian_s_with_or_without_the_helper_thread(
-    helper, monkeypatch
+@pytest.mark.parametrize("threads", [1, 3])
+def test_the_normal_equations_are_the_dense_jacobian_s_on_any_number_of_threads(
+    threads, monkeypatch
 ):
     """``J^T J`` and ``-J^T r``, summed over pieces of two experiments, equal those of
-    the whole Jacobian stacked at once; the helper thread that adds the pieces changes
-    nothing, bit for bit."""
+    the whole Jacobian stacked at once; the number of threads that sum the tiles changes
+    nothing, bit for bit (several tiles: ``TILE`` made small)."""
     from blockid.fitting import state_space as ss
+    from blockid.fitting import threads as th
 
     plant = SYSTEMS["2 in, 2 out, 3 states"]
     from blockid.data.dataset import Experiment
@@ -260,15 +261,17 @@ def test_the_normal_equations_are_the_dense_jacobian_s_with_or_without_the_helpe
                    [Experiment(f"e{i}", r.u, r.y) for i, r in enumerate(rec)])  # fmt: skip
     start = fit_polynomial_state_space(data, nx=3, degree=2, max_nfev=2).model
     monkeypatch.setattr(ss, "CHUNK", 256)  # several pieces per experiment
+    monkeypatch.setattr(th, "TILE", 16)  # several tiles
     sig = ss._normalised(data)
     problem = ss._Problem(start, sig, feedthrough=True)
     x0s = [np.full(3, 0.1), np.full(3, -0.2)]
     theta = np.concatenate([start.free_parameters()[problem.free], *x0s])
-    with ss.helper_threads(helper):
+    with th.fit_threads(threads):
         H, g = problem.normal_equations(theta)
-    with ss.helper_threads(not helper):
+    with th.fit_threads(1 if threads > 1 else 2):
         H2, g2 = problem.normal_equations(theta)
     assert np.array_equal(H, H2) and np.array_equal(g, g2)
+    assert np.array_equal(H, H.T)
     # the reference: each experiment's whole Jacobian in one piece
     nm, nx = problem.n_model, 3
     kept = np.r_[np.flatnonzero(problem.free), problem.full.size + np.arange(nx)]

@@ -39,3 +39,76 @@ def test_channel_response_matches_the_equations_and_carries_its_state():
     channel_response(A, B, C, D, chans, G[60:].copy(), X, second)
     np.testing.assert_allclose(np.concatenate((first, second)), want, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(X, X_end, rtol=1e-12, atol=1e-12)
+
+
+# ------------------------------------------------------------ the two-pass parallel walk
+def _pnlss_arrays(rng, nx, nu, ny, degree=3, bound=1.0):
+    from blockid.models.state_space import monomial_exponents
+
+    expo = monomial_exponents(nx, nu, degree, "full", constant=True)
+    nm = expo.shape[0]
+    A = np.diag(rng.uniform(0.3, 0.8, nx)) + 0.05 * rng.standard_normal((nx, nx))
+    return (A, rng.standard_normal((nx, nu)), rng.standard_normal((ny, nx)),
+            rng.standard_normal((ny, nu)), 0.05 * rng.standard_normal((nx, nm)),
+            0.05 * rng.standard_normal((ny, nm)), expo, np.full(nx + nu, -bound),
+            np.full(nx + nu, bound))  # fmt: skip
+
+
+def _walked(arrays, u, x0, columns=None, pieces=(0,)):
+    """``pnlss_walk`` over ``u`` cut at ``pieces``, the state carried: (y, J, x, S)."""
+    from blockid._kernels.state_space import INITIAL, pnlss_columns, pnlss_walk
+
+    nx, nu, ny, nm = arrays[0].shape[0], arrays[1].shape[1], arrays[2].shape[0], arrays[6].shape[0]
+    desc = pnlss_columns(nx, nu, ny, nm) if columns is None else columns
+    S = np.zeros((nx, desc[0].size))
+    init = np.flatnonzero(desc[0] == INITIAL)
+    S[desc[1][init], init] = 1.0
+    x = x0.copy()
+    ys, Js = [], []
+    for a, b in zip(pieces, [*pieces[1:], u.shape[0]], strict=True):
+        y, J = np.zeros((b - a, ny)), np.zeros(((b - a) * ny, desc[0].size))
+        pnlss_walk(*arrays, np.ascontiguousarray(u[a:b]), x, S, y, J, desc)
+        ys.append(y)
+        Js.append(J)
+    return np.vstack(ys), np.vstack(Js), x, S
+
+
+def test_the_parallel_walk_is_its_single_threaded_twin_bit_for_bit():
+    """The two-pass walk (trajectory, then column blocks on numba's threads) gives the
+    one-pass walk's (``reference.py``) outputs, sensitivities, carried state and carried sensitivity
+    exactly, over more columns than one block and in pieces."""
+    from blockid._kernels.state_space import COLUMN_BLOCK
+
+    from reference import pnlss_jacobian
+
+    for seed, (nx, nu, ny) in enumerate([(2, 1, 2), (3, 2, 1), (5, 1, 1)]):
+        rng = np.random.default_rng(seed)
+        arrays = _pnlss_arrays(rng, nx, nu, ny)
+        u = rng.standard_normal((400, nu))
+        x0 = 0.3 * rng.standard_normal(nx)
+        y, J, x, S = _walked(arrays, u, x0, pieces=(0, 150, 151))
+        P = J.shape[1]
+        S0 = np.zeros((nx, P))
+        S0[:, P - nx :] = np.eye(nx)
+        y1, J1, x1 = np.zeros((400, ny)), np.zeros((400 * ny, P)), x0.copy()
+        pnlss_jacobian(*arrays, u, x1, S0, y1, J1)
+        assert P > COLUMN_BLOCK or seed < 2
+        assert np.array_equal(y, y1) and np.array_equal(J, J1)
+        assert np.array_equal(x, x1) and np.array_equal(S, S0)
+
+
+def test_the_walk_of_chosen_columns_is_those_columns_of_the_whole_walk():
+    """A fit asks for its free columns only, in its order: the same numbers."""
+    from blockid._kernels.state_space import pnlss_columns
+
+    rng = np.random.default_rng(4)
+    arrays = _pnlss_arrays(rng, 3, 1, 2)
+    u = rng.standard_normal((200, 1))
+    x0 = 0.2 * rng.standard_normal(3)
+    _, J_all, _, _ = _walked(arrays, u, x0)
+    chosen = np.r_[40 : J_all.shape[1], 5, 0:3]  # any subset, any order
+    desc = tuple(
+        np.ascontiguousarray(d[chosen]) for d in pnlss_columns(3, 1, 2, arrays[6].shape[0])
+    )
+    _, J, _, _ = _walked(arrays, u, x0, columns=desc)
+    assert np.array_equal(J, J_all[:, chosen])

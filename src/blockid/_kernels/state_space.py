@@ -26,14 +26,48 @@ The parameters ``θ = [A, B, C, D, E, F]`` (each row-major) and the initial stat
 where ``S = ∂x/∂θ`` starts as ``[0 | I]`` (only ``x(0)`` moves ``x(0)``) and ``G``, ``H``
 are the explicit derivatives (``∂x(k+1)/∂A_ij = x_j(k)`` in row ``i``, and so on). A
 clipped coordinate has zero slope.
+
+**The walk in two passes, on every core.** The columns of ``S`` are independent given
+the state trajectory: each is the response of the same time-varying linear system
+``(A + E ∂ζ/∂x, C + F ∂ζ/∂x)`` to its own explicit term. :func:`pnlss_trajectory`
+runs the model over a piece once and keeps, per sample, ``v(k) = [x(k); u(k); ζ(k)]``
+and the two local Jacobians; :func:`pnlss_sensitivities` then walks fixed blocks of
+``COLUMN_BLOCK`` columns in parallel (``prange``). A parameter's column is described by
+its kind (``STATE``: it enters row ``row`` of the state equation as ``v_src``;
+``OUTPUT``: row ``row`` of the output equation; ``INITIAL``: an initial state, no
+explicit term), so a caller asks for exactly the columns it fits, in its order. Each
+column's arithmetic is the same, in the same order, whichever thread walks it and however
+many there are: the result does not depend on the number of threads, bit for bit, and
+equals that of the one-pass walk of the equations above, sample by sample (its slow
+twin in the tests' ``reference.py``).
+A column of the output equation alone (``C``, ``D``, ``F``) never moves the state: its
+sensitivity is its explicit term, with no walk.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
-__all__ = ["channel_response", "monomials", "pnlss_jacobian", "pnlss_simulate"]
+__all__ = [
+    "COLUMN_BLOCK",
+    "INITIAL",
+    "OUTPUT",
+    "STATE",
+    "channel_response",
+    "monomials",
+    "pnlss_columns",
+    "pnlss_sensitivities",
+    "pnlss_simulate",
+    "pnlss_trajectory",
+    "pnlss_walk",
+]
+
+#: Kinds of a parameter's column in :func:`pnlss_sensitivities`.
+STATE, OUTPUT, INITIAL = 0, 1, 2
+#: Columns walked together by one thread: a fixed partition (not one per thread), so
+#: the result is the same with any number of threads.
+COLUMN_BLOCK = 128
 
 
 @njit(cache=True)
@@ -48,25 +82,6 @@ def monomials(z, expo, lo, hi, out):
                 zi = min(max(z[i], lo[i]), hi[i])
                 val *= zi**p
         out[j] = val
-
-
-@njit(cache=True)
-def _slopes(z, expo, lo, hi, nx, out):
-    """``out[j, i] = ∂ζ_j / ∂x_i`` (0 where ``x_i`` is clipped)."""
-    nm, nz = expo.shape
-    for j in range(nm):
-        for i in range(nx):
-            p = expo[j, i]
-            if p == 0 or not (lo[i] < z[i] < hi[i]):
-                out[j, i] = 0.0
-                continue
-            d = p * z[i] ** (p - 1)
-            for k in range(nz):
-                q = expo[j, k]
-                if k != i and q:
-                    zk = min(max(z[k], lo[k]), hi[k])
-                    d *= zk**q
-            out[j, i] = d
 
 
 @njit(cache=True)
@@ -130,104 +145,6 @@ def pnlss_simulate(A, B, C, D, E, F, expo, lo, hi, u, x, y):
 
 
 @njit(cache=True, nogil=True)
-def pnlss_jacobian(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J):
-    """Free run and ``∂y/∂[θ, x(0)]`` over a piece of a record, carrying the state.
-
-    ``x`` (nx,) and ``S`` (nx, P) hold the state and its sensitivity at the piece's
-    first sample and are updated in place to those after its last (so a record can be
-    walked in pieces; start with ``S = [0 | I]``). ``P`` is the number of model
-    parameters plus ``nx`` (the initial state). Row ``k * ny + i`` of ``J`` (N ny, P)
-    receives ``∂y_i(k)/∂[θ, x(0)]``; ``y`` (N, ny) the output.
-    """
-    N = u.shape[0]
-    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
-    P = S.shape[1]
-    o_b = nx * nx
-    o_c = o_b + nx * nu
-    o_d = o_c + ny * nx
-    o_e = o_d + ny * nu
-    o_f = o_e + nx * nm
-    z = np.empty(nx + nu)
-    zeta = np.empty(nm)
-    dz = np.empty((nm, nx))
-    jx = np.empty((nx, nx))
-    jy = np.empty((ny, nx))
-    xn = np.empty(nx)
-    Sn = np.empty((nx, P))
-    for k in range(N):
-        for i in range(nx):
-            z[i] = x[i]
-        for i in range(nu):
-            z[nx + i] = u[k, i]
-        monomials(z, expo, lo, hi, zeta)
-        _slopes(z, expo, lo, hi, nx, dz)
-        # the local Jacobians of the output and state maps with respect to x
-        for i in range(ny):
-            for j in range(nx):
-                acc = C[i, j]
-                for m in range(nm):
-                    acc += F[i, m] * dz[m, j]
-                jy[i, j] = acc
-        for i in range(nx):
-            for j in range(nx):
-                acc = A[i, j]
-                for m in range(nm):
-                    acc += E[i, m] * dz[m, j]
-                jx[i, j] = acc
-        # output and its sensitivity
-        for i in range(ny):
-            acc = 0.0
-            for j in range(nx):
-                acc += C[i, j] * x[j]
-            for j in range(nu):
-                acc += D[i, j] * u[k, j]
-            for j in range(nm):
-                acc += F[i, j] * zeta[j]
-            y[k, i] = acc
-            row = k * ny + i
-            for p in range(P):
-                J[row, p] = 0.0
-            for j in range(nx):
-                c = jy[i, j]
-                if c != 0.0:
-                    for p in range(P):
-                        J[row, p] += c * S[j, p]
-            for j in range(nx):
-                J[row, o_c + i * nx + j] += x[j]
-            for j in range(nu):
-                J[row, o_d + i * nu + j] += u[k, j]
-            for j in range(nm):
-                J[row, o_f + i * nm + j] += zeta[j]
-        # state and its sensitivity
-        for i in range(nx):
-            acc = 0.0
-            for j in range(nx):
-                acc += A[i, j] * x[j]
-            for j in range(nu):
-                acc += B[i, j] * u[k, j]
-            for j in range(nm):
-                acc += E[i, j] * zeta[j]
-            xn[i] = acc
-            for p in range(P):
-                Sn[i, p] = 0.0
-            for j in range(nx):
-                c = jx[i, j]
-                if c != 0.0:
-                    for p in range(P):
-                        Sn[i, p] += c * S[j, p]
-            for j in range(nx):
-                Sn[i, i * nx + j] += x[j]
-            for j in range(nu):
-                Sn[i, o_b + i * nu + j] += u[k, j]
-            for j in range(nm):
-                Sn[i, o_e + i * nm + j] += zeta[j]
-        for i in range(nx):
-            x[i] = xn[i]
-            for p in range(P):
-                S[i, p] = Sn[i, p]
-
-
-@njit(cache=True, nogil=True)
 def channel_response(A, B, C, D, chans, G, X, out):
     """Response of the linear system ``(A, B, C, D)`` to each column of ``G`` entering
     the input channel ``chans[q]``, carrying the states.
@@ -256,3 +173,214 @@ def channel_response(A, B, C, D, chans, G, X, out):
         for i in range(nx):
             for q in range(p):
                 X[i, q] = Xn[i, q]
+
+
+@njit(cache=True, nogil=True)
+def _sparse_exponents(expo):
+    """Each monomial's variables and powers (``count[j]`` of them, ascending variable):
+    the monomials of a few variables each, without a pass over all ``nx + nu``."""
+    nm, nz = expo.shape
+    count = np.zeros(nm, dtype=np.int64)
+    var = np.zeros((nm, nz), dtype=np.int64)
+    power = np.zeros((nm, nz), dtype=np.int64)
+    for j in range(nm):
+        for i in range(nz):
+            if expo[j, i]:
+                var[j, count[j]] = i
+                power[j, count[j]] = expo[j, i]
+                count[j] += 1
+    return count, var, power
+
+
+@njit(cache=True, nogil=True)
+def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY):
+    """Free run over a piece with what the sensitivity walk needs, per sample ``k``:
+    ``V[k] = [x(k); u(k); ζ(k)]``, ``JX[k] = A + E ∂ζ/∂x`` and ``JY[k] = C + F ∂ζ/∂x``
+    (a clipped coordinate has zero slope), over each monomial's own variables only. ``x`` is
+    updated in place to the state after the last sample; ``y`` (N, ny) receives the
+    output."""
+    N = u.shape[0]
+    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
+    count, var, power = _sparse_exponents(expo)
+    top = 0
+    for j in range(nm):
+        for t in range(count[j]):
+            top = max(top, power[j, t])
+    z = np.empty(nx + nu)
+    zp = np.empty((nx + nu, top + 1))  # zp[i, e] = clip(z_i) ** e (the same power)
+    zeta = np.empty(nm)
+    xn = np.empty(nx)
+    for k in range(N):
+        for i in range(nx):
+            z[i] = x[i]
+        for i in range(nu):
+            z[nx + i] = u[k, i]
+        for i in range(nx + nu):
+            zi = min(max(z[i], lo[i]), hi[i])
+            for e in range(top + 1):
+                zp[i, e] = zi**e
+            V[k, i] = z[i]
+        for j in range(nm):
+            val = 1.0
+            for t in range(count[j]):
+                val *= zp[var[j, t], power[j, t]]
+            zeta[j] = val
+            V[k, nx + nu + j] = val
+        for i in range(ny):
+            for j in range(nx):
+                JY[k, i, j] = C[i, j]
+        for i in range(nx):
+            for j in range(nx):
+                JX[k, i, j] = A[i, j]
+        # + E ∂ζ/∂x and F ∂ζ/∂x, monomial by monomial (ascending, as the dense sums)
+        for m in range(nm):
+            for t in range(count[m]):
+                i = var[m, t]
+                if i >= nx or not (lo[i] < z[i] < hi[i]):
+                    continue
+                p = power[m, t]
+                d = p * zp[i, p - 1]  # z_i is inside its range: clip(z_i) = z_i
+                for t2 in range(count[m]):
+                    if t2 != t:
+                        d *= zp[var[m, t2], power[m, t2]]
+                for r in range(nx):
+                    JX[k, r, i] += E[r, m] * d
+                for r in range(ny):
+                    JY[k, r, i] += F[r, m] * d
+        for i in range(ny):
+            acc = 0.0
+            for j in range(nx):
+                acc += C[i, j] * x[j]
+            for j in range(nu):
+                acc += D[i, j] * u[k, j]
+            for j in range(nm):
+                acc += F[i, j] * zeta[j]
+            y[k, i] = acc
+        for i in range(nx):
+            acc = 0.0
+            for j in range(nx):
+                acc += A[i, j] * x[j]
+            for j in range(nu):
+                acc += B[i, j] * u[k, j]
+            for j in range(nm):
+                acc += E[i, j] * zeta[j]
+            xn[i] = acc
+        for i in range(nx):
+            x[i] = xn[i]
+
+
+@njit(cache=True, nogil=True)
+def _walk_block(V, JX, JY, kind, row, src, S, J, c0, c1):
+    """Columns ``c0:c1`` of :func:`pnlss_sensitivities` (one thread's block): the
+    state sensitivities in two local buffers, each output row summed in a third, the
+    innermost loops over the block's columns (vectorised)."""
+    N, ny, nx = JY.shape
+    w = c1 - c0
+    moves = False
+    for q in range(w):
+        if kind[c0 + q] != OUTPUT:
+            moves = True
+        for j in range(nx):
+            if S[j, c0 + q] != 0.0:
+                moves = True
+    if not moves:  # the output equation's columns alone: their explicit terms
+        for k in range(N):
+            for i in range(ny):
+                for q in range(w):
+                    p = c0 + q
+                    J[k * ny + i, p] = V[k, src[p]] if row[p] == i else 0.0
+        return
+    Sb = np.empty((nx, w))
+    Sn = np.empty((nx, w))
+    acc = np.empty(w)
+    for j in range(nx):
+        for q in range(w):
+            Sb[j, q] = S[j, c0 + q]
+    for k in range(N):
+        for i in range(ny):
+            acc[:] = 0.0
+            for j in range(nx):
+                c = JY[k, i, j]
+                for q in range(w):
+                    acc[q] += c * Sb[j, q]
+            for q in range(w):
+                p = c0 + q
+                if kind[p] == OUTPUT and row[p] == i:
+                    acc[q] += V[k, src[p]]
+            J[k * ny + i, c0:c1] = acc
+        for i in range(nx):
+            for q in range(w):
+                Sn[i, q] = 0.0
+            for j in range(nx):
+                c = JX[k, i, j]
+                for q in range(w):
+                    Sn[i, q] += c * Sb[j, q]
+        for q in range(w):
+            p = c0 + q
+            if kind[p] == STATE:
+                Sn[row[p], q] += V[k, src[p]]
+        Sb, Sn = Sn, Sb
+    for j in range(nx):
+        for q in range(w):
+            S[j, c0 + q] = Sb[j, q]
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def pnlss_sensitivities(V, JX, JY, kind, row, src, S, J):
+    """The output sensitivities of a piece from its trajectory (:func:`pnlss_trajectory`),
+    fixed blocks of ``COLUMN_BLOCK`` columns on the threads numba has.
+
+    Column ``p`` is the parameter of kind ``kind[p]`` (:data:`STATE`, :data:`OUTPUT`,
+    :data:`INITIAL`) entering row ``row[p]`` of its equation as ``V[:, src[p]]``.
+    ``S`` (nx, P) carries the state sensitivities across pieces, in place (start: 0, and
+    the unit vector ``e_j`` for the initial state ``x_j(0)``); row ``k * ny + i`` of ``J``
+    (N ny, P) receives ``∂y_i(k)/∂θ_p``.
+    """
+    P = S.shape[1]
+    blocks = (P + COLUMN_BLOCK - 1) // COLUMN_BLOCK
+    for b in prange(blocks):
+        c0 = b * COLUMN_BLOCK
+        _walk_block(V, JX, JY, kind, row, src, S, J, c0, min(P, c0 + COLUMN_BLOCK))
+
+
+def pnlss_columns(nx: int, nu: int, ny: int, nm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(kind, row, src)`` of every column of ``[A, B, C, D, E, F, x(0)]`` (each matrix
+    row-major, the order of the models' free parameters); a caller selects the ones it
+    fits."""
+    kind, row, src = [], [], []
+    for rows, cols, k, first in ((nx, nx, STATE, 0), (nx, nu, STATE, nx), (ny, nx, OUTPUT, 0),
+                                 (ny, nu, OUTPUT, nx), (nx, nm, STATE, nx + nu),
+                                 (ny, nm, OUTPUT, nx + nu)):  # fmt: skip
+        for i in range(rows):
+            for j in range(cols):
+                kind.append(k)
+                row.append(i)
+                src.append(first + j)
+    for j in range(nx):
+        kind.append(INITIAL)
+        row.append(j)
+        src.append(0)
+    return (np.array(kind, dtype=np.int64), np.array(row, dtype=np.int64),
+            np.array(src, dtype=np.int64))  # fmt: skip
+
+
+def pnlss_walk(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J, columns=None):
+    """Free run and ``∂y/∂[θ, x(0)]`` over a piece of a record, carrying the state: the
+    two passes (:func:`pnlss_trajectory`, then :func:`pnlss_sensitivities` on numba's
+    threads).
+
+    ``x`` (nx,) and ``S`` (nx, P) hold the state and its sensitivity at the piece's
+    first sample and are updated in place to those after its last (start with ``S`` 0
+    but 1 at the initial states' own entries). Row ``k * ny + i`` of ``J`` (N ny, P)
+    receives ``∂y_i(k)/∂θ_p``; ``y`` (N, ny) the output. ``columns`` ``(kind, row,
+    src)`` names the columns of ``S`` and ``J`` (default: all of :func:`pnlss_columns`,
+    in its order)."""
+    n = u.shape[0]
+    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
+    if columns is None:
+        columns = pnlss_columns(nx, nu, ny, nm)
+    V = np.empty((n, nx + nu + nm))
+    JX = np.empty((n, nx, nx))
+    JY = np.empty((n, ny, nx))
+    pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY)
+    pnlss_sensitivities(V, JX, JY, *columns, S, J)

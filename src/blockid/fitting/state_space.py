@@ -34,10 +34,10 @@ singular values (on a mildly nonlinear second-order plant: 0.9997, 0.986, 0.43 a
 initial state are refined together by Levenberg-Marquardt on the free-run simulation
 error (:mod:`blockid.fitting.levenberg_marquardt`), the Jacobian computed forward in
 time by a compiled kernel (:mod:`blockid._kernels.state_space`) and summed into
-``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole,
-each piece added in a helper thread while the kernel walks the next one
-(:data:`helper_thread`: the same operations in the same order, so the same result,
-bit for bit; ``docs/performance.md`` has the time it saves).
+``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole;
+the kernel's column blocks and the tiles of ``J^T J`` run on every core the fit may
+use, the same result bit for bit with any number of threads
+(:mod:`blockid.fitting.threads`; ``docs/performance.md`` has the times).
 The parameters are unique only up to the state basis; the damping keeps the steps
 defined. A candidate with an eigenvalue of ``A`` outside the circle of radius
 ``1 - margin`` (:func:`~blockid.fitting.checks.stability_margin` of the data), or a
@@ -55,8 +55,6 @@ are the model's bounds (:class:`~blockid.models.state_space.PolynomialStateSpace
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -71,6 +69,7 @@ from blockid.fitting.checks import margin_for, stability_margin
 from blockid.fitting.levenberg_marquardt import levenberg_marquardt
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
+from blockid.fitting.threads import NormalSums, kernel_threads, threads_for_fit
 from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
 
 __all__ = [
@@ -420,95 +419,29 @@ class _Problem:
         return r
 
     def normal_equations(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``J^T J`` and ``J^T r`` summed piece by piece. The walk of the Jacobian is
-        sequential in time; while it computes one piece a helper thread (when
-        :data:`helper_thread` allows) adds the previous one into ``J^T J``: the same
-        operations in the same order either way, so the result does not depend on it."""
+        """``J^T J`` and ``J^T r`` summed piece by piece, on the threads the fit may
+        use (:mod:`blockid.fitting.threads`: the same result with any number). A model
+        that can walks only the columns it fits."""
         model, x0s = self.split(theta)
         assert model is not None, "the Jacobian is taken at accepted iterates only"
         n_exp, nm, nx = len(self.sig.u), self.n_model, self.nx
         kept = np.r_[np.flatnonzero(self.free), self.full.size + np.arange(nx)]
-        sums = _NormalSums(nm + nx * n_exp)
-        with _PieceQueue(sums.add) as queue:
+        threads = threads_for_fit()
+        with kernel_threads(threads), NormalSums(nm + nx * n_exp, threads) as sums:
             for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
-                carried = model._sensitivity_start(x0)
+                if model.selects_columns:
+                    carried, chosen = model._sensitivity_start(x0, kept), slice(None)
+                else:
+                    carried, chosen = model._sensitivity_start(x0), kept
                 cols = np.r_[np.arange(nm), nm + e * nx + np.arange(nx)]
                 for k0 in range(0, u.shape[0], CHUNK):
                     with np.errstate(all="ignore"):
                         out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried)
-                    queue.put(J, kept, y[k0 : k0 + CHUNK] - out, cols)
-        H, g = sums.result()
+                    sums.add(J[:, chosen], y[k0 : k0 + CHUNK] - out, cols)
+            H, g = sums.result()
         self.tracker.njev += 1
         self.tracker.cost.append(sums.cost / self.size)
         return H, g
-
-
-#: Whether the refinement may add the normal equations in a second thread while it walks
-#: the Jacobian (one core more; the results are the same). Identify's worker processes,
-#: which share the cores already, turn it off (:mod:`blockid.workflows.parallel`).
-helper_thread = True
-
-
-@contextmanager
-def helper_threads(allowed: bool) -> Iterator[None]:
-    """:data:`helper_thread` set to ``allowed`` inside the block (``jobs=1``: one core)."""
-    global helper_thread
-    before, helper_thread = helper_thread, bool(allowed)
-    try:
-        yield
-    finally:
-        helper_thread = before
-
-
-class _NormalSums:
-    """``J^T J``, ``-J^T r`` and ``r^T r``, added piece after piece."""
-
-    def __init__(self, n: int) -> None:
-        self.H = np.zeros((n, n))
-        self.g = np.zeros(n)
-        self.cost = 0.0
-
-    def add(self, J: np.ndarray, kept: np.ndarray, r: np.ndarray, cols: np.ndarray) -> None:
-        J = J[:, kept]
-        r = r.reshape(-1)
-        self.cost += float(r @ r)
-        self.H[np.ix_(cols, cols)] += J.T @ J
-        self.g[cols] -= J.T @ r
-
-    def result(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.H, self.g
-
-
-class _PieceQueue:
-    """Hands pieces to ``add`` in order: in one helper thread when :data:`helper_thread`
-    allows, at most two pieces waiting (memory: a few pieces), else at once."""
-
-    def __init__(self, add: Any) -> None:
-        self.add = add
-        self.pool: Any = None
-        self.waiting: list[Any] = []
-
-    def __enter__(self) -> _PieceQueue:
-        if helper_thread:
-            from concurrent.futures import ThreadPoolExecutor
-
-            self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="blockid-sums")
-        return self
-
-    def put(self, *piece: Any) -> None:
-        if self.pool is None:
-            self.add(*piece)
-            return
-        self.waiting.append(self.pool.submit(self.add, *piece))
-        if len(self.waiting) > 2:
-            self.waiting.pop(0).result()
-
-    def __exit__(self, *exc: Any) -> None:
-        if self.pool is not None:
-            for future in self.waiting:
-                if exc[0] is None:
-                    future.result()
-            self.pool.shutdown(wait=True, cancel_futures=exc[0] is not None)
 
 
 def refine_state_space(

@@ -29,7 +29,7 @@ leaves the remaining directions (the state basis, gains a block does not fix) al
 
 **Derivatives.** :meth:`BlockStateSpace.jacobian_piece` gives the exact sensitivity of
 the simulated output to every parameter and to ``x(0)``, walked forward in time: the
-core's by :func:`~blockid._kernels.state_space.pnlss_jacobian` (the bias ``e`` is its
+core's by :func:`~blockid._kernels.state_space.pnlss_walk` (the bias ``e`` is its
 constant monomial), an input block's through the core by
 :func:`~blockid._kernels.state_space.channel_response`, and an output block's by the
 chain rule (the block's ``derivative`` times the core's sensitivity, plus its own
@@ -57,7 +57,7 @@ from blockid._kernels.loop import (
     loop_sensitivity,
     loop_simulate,
 )
-from blockid._kernels.state_space import channel_response, pnlss_jacobian
+from blockid._kernels.state_space import channel_response, pnlss_walk
 from blockid.blocks.base import Block, StaticBlock, block_from_dict
 from blockid.errors import ModelFileError, OrderError
 from blockid.models.base import Model, excursion
@@ -604,7 +604,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
         z = np.zeros((n, ny))
         Jc = np.zeros((n * ny, Pc + nx))
         core = self.core._arrays()
-        pnlss_jacobian(*core, w, x, S, z, Jc)
+        pnlss_walk(*core, w, x, S, z, Jc)
         Jin = np.zeros((n, ny, p_in))
         if p_in:
             channel_response(core[0], core[1], core[2], core[3],

@@ -39,7 +39,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from blockid._kernels import writable
-from blockid._kernels.state_space import pnlss_jacobian, pnlss_simulate
+from blockid._kernels.state_space import pnlss_columns, pnlss_simulate, pnlss_walk
 from blockid.errors import DataError, ModelFileError, OrderError
 from blockid.models.base import Model, excursion
 
@@ -120,8 +120,14 @@ class ForwardSensitivities:
     ``free_parameters``, ``input_offset``/``input_scale``, ``output_offset``/
     ``output_scale`` and ``max_lag``; the signals' normalisation is here too.
     :class:`PolynomialStateSpace` and
-    :class:`~blockid.models.block_state_space.BlockStateSpace` are such models.
+    :class:`~blockid.models.block_state_space.BlockStateSpace` are such models. A model
+    whose ``_sensitivity_start(x0, columns)`` can keep some of the columns (indices
+    into ``[θ, x(0)]``) sets :attr:`selects_columns`: a fit then walks only those it
+    fits, and the initial state's fit only the state's.
     """
+
+    #: Whether ``_sensitivity_start`` takes ``columns`` (see the class docstring).
+    selects_columns: ClassVar[bool] = False
 
     def normalised_input(self, u: Any) -> np.ndarray:
         u, _ = self._check_signals(u)
@@ -146,9 +152,15 @@ class ForwardSensitivities:
         un = self.normalised_input(u)[:n]
         nx = self.nx
 
+        P = self.free_parameters().size + nx
+
         def linearised(x0: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
             with np.errstate(all="ignore"):
-                y, J = self.jacobian_piece(un, *self._sensitivity_start(x0))
+                if self.selects_columns:  # the initial state's columns alone
+                    start = self._sensitivity_start(x0, np.arange(P - nx, P))
+                else:
+                    start = self._sensitivity_start(x0)
+                y, J = self.jacobian_piece(un, *start)
             r = (yn - y).reshape(-1)
             return float(r @ r), r, J[:, -nx:]
 
@@ -282,6 +294,7 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
     """
 
     structure: ClassVar[str] = "polynomial-state-space"
+    selects_columns: ClassVar[bool] = True
 
     def __init__(
         self,
@@ -502,23 +515,33 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         return x if np.all(np.isfinite(x)) else np.zeros(self.nx)
 
     # ------------------------------------------------------------------ derivatives
-    def _sensitivity_start(self, x0: Any) -> tuple[np.ndarray, np.ndarray]:
-        """The state ``x0`` and its sensitivity ``[0 | I]`` over ``[θ, x(0)]``."""
+    def _sensitivity_start(
+        self, x0: Any, columns: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, ...]]:
+        """The state ``x0``, its sensitivity ``[0 | I]`` over ``[θ, x(0)]`` and the
+        columns' descriptions for the kernel; ``columns`` (indices into ``[θ, x(0)]``)
+        keeps only those, in that order (a fit's free parameters)."""
         P = self.free_parameters().size + self.nx
-        S = np.zeros((self.nx, P))
-        S[:, P - self.nx :] = np.eye(self.nx)
-        return np.array(x0, dtype=float), S
+        nu, ny = self.B.shape[1], len(self.outputs)
+        desc = pnlss_columns(self.nx, nu, ny, self.n_monomials)
+        cols = np.arange(P) if columns is None else np.asarray(columns, dtype=np.int64)
+        desc = tuple(np.ascontiguousarray(d[cols]) for d in desc)
+        S = np.zeros((self.nx, cols.size))
+        initial = cols >= P - self.nx
+        S[cols[initial] - (P - self.nx), np.flatnonzero(initial)] = 1.0
+        return np.array(x0, dtype=float), S, desc
 
     def jacobian_piece(
-        self, un: np.ndarray, x: np.ndarray, S: np.ndarray
+        self, un: np.ndarray, x: np.ndarray, S: np.ndarray, columns: Any = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Normalised outputs (n, ny) and ``∂y/∂[θ, x(0)]`` (rows ``k * ny + i``) over a
-        piece of a record, ``x`` and ``S`` carried in place
-        (:func:`~blockid._kernels.state_space.pnlss_jacobian`)."""
+        """Normalised outputs (n, ny) and ``∂y/∂[θ, x(0)]`` (rows ``k * ny + i``; the
+        columns of :meth:`_sensitivity_start`) over a piece of a record, ``x`` and ``S``
+        carried in place (:func:`~blockid._kernels.state_space.pnlss_walk`, on the
+        threads numba has)."""
         ny = len(self.outputs)
         out = np.zeros((un.shape[0], ny))
-        J = np.zeros((un.shape[0] * ny, S.shape[1]))
-        pnlss_jacobian(*self._arrays(), writable(un), x, S, out, J)
+        J = np.empty((un.shape[0] * ny, S.shape[1]))
+        pnlss_walk(*self._arrays(), writable(un), x, S, out, J, columns)
         return out, J
 
     @property

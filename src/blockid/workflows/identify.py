@@ -499,14 +499,14 @@ class _Search:
         return out
 
     def final_fits(self, score: Score) -> list[tuple[str, _Started]]:
-        """The candidate of ``score`` fitted on all estimation data directly (here, with
-        the state-space helper thread when there are workers) and, when that fit
+        """The candidate of ``score`` fitted on all estimation data directly (here, on as
+        many threads as there are workers) and, when that fit
         simulates its own data more than ``REFIT_SLACK`` times worse than the folds
         simulated data they never saw (pooled), from its models of its
         ``warm_starts`` best folds (by held-back error), in the workers: each start's
         name and result, the direct fit first. The time limit cuts the warm starts,
         never the direct fit (a cut search still returns a model)."""
-        from blockid.fitting.state_space import helper_threads
+        from blockid.fitting.threads import fit_threads
         from blockid.workflows.parallel import _single_threaded
 
         cand = score.candidate
@@ -514,7 +514,7 @@ class _Search:
         parts = tuple(s for f in self.plan.folds for s in f.test)
         t0 = time.perf_counter()
         self.stages.append({"stage": "refit", "candidates": 1, "fits": 1})
-        with _single_threaded(), helper_threads(self.runner.jobs > 1):
+        with _single_threaded(), fit_threads(self.runner.jobs):
             direct = _final_fit(self.data, _Start(cand, None, limit, self.n_init, score.rmse))
         out = [("the direct fit", direct)]
         eff = self.effort

@@ -106,9 +106,9 @@ def _start_worker(memory_name: str, data_meta: tuple[Any, ...]) -> None:
     _WORKER_MEMORY = shared_memory.SharedMemory(name=memory_name)
     _WORKER_DATA = _views(_WORKER_MEMORY.buf, data_meta)
     _single_threaded()  # for the life of the worker (the environment already says so)
-    from blockid.fitting import state_space
+    from blockid.fitting.threads import set_fit_threads
 
-    state_space.helper_thread = False  # the workers share the cores already
+    set_fit_threads(1)  # the workers share the cores already: one thread per fit
 
 
 def _call(fn: Callable[[Dataset, Any], Any], item: Any) -> Any:
@@ -198,9 +198,9 @@ class TaskRunner:
         """
         results: list[Any] = [None] * len(items)
         if self._pool is None:
-            from blockid.fitting.state_space import helper_threads
+            from blockid.fitting.threads import fit_threads
 
-            with _single_threaded(), helper_threads(False):
+            with _single_threaded(), fit_threads(1):
                 for i, item in enumerate(items):
                     if deadline is not None and time.monotonic() > deadline:
                         break
