@@ -1,4 +1,4 @@
-"""Speed and memory of the state-space fits (issue 17).
+"""Speed and memory of the state-space fits (issues 17 and 36).
 
 Usage: ``python benchmarks/bench_state_space.py [--samples 100000] [--nfev 20]
 [--write-docs]``
@@ -9,7 +9,9 @@ written as a CSV. In a fresh process each, as a user would run them, ``blockid f
 --structure state-space --nx 6`` and ``blockid fit --structure polynomial-state-space
 --nx 6 --degree 3 --max-nfev N`` fit it: the wall time and the peak resident memory of
 the process (``ru_maxrss``), against the size of the record in memory (inputs and
-outputs as float64). The issue's bound: within 1.5 GB for 100 000 samples.
+outputs as float64). Then where one iteration of the polynomial fit spends its time,
+on one thread and on two, against the code before the column-parallel walk; and the same
+fit on one thread and on two (the same parameters, bit for bit).
 """
 
 from __future__ import annotations
@@ -22,11 +24,13 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from _report import machine, write_section
 
+from blockid.fitting.state_space import CHUNK
 from blockid.models.state_space import PolynomialStateSpace, monomial_exponents
 
 _CHILD = (
@@ -61,29 +65,119 @@ def measured(command: list[str]) -> tuple[int, float, float]:
     return int(code), int(kb) / 1e6, seconds
 
 
-def helper_thread_runs(u: np.ndarray, y: np.ndarray, nfev: int) -> tuple[float, float, bool, float]:
-    """The PNLSS fit with the refinement's helper thread off, then on: seconds each,
-    whether the parameters are identical, the load average before."""
-    from threadpoolctl import threadpool_limits
-
+def thread_runs(u: np.ndarray, y: np.ndarray, nfev: int) -> tuple[float, float, bool, float]:
+    """The PNLSS fit in this process on one thread, then on two (numba's column blocks
+    and the tiles of ``J^T J``): seconds each, whether the parameters are identical, the
+    load average before."""
     from blockid.data import Dataset
     from blockid.fitting import fit_model
-    from blockid.fitting.state_space import helper_threads
+    from blockid.fitting.threads import fit_threads
 
     data = Dataset.from_arrays(u, y)
     options = {"nx": 6, "degree": 3, "max_nfev": nfev}
     load = os.getloadavg()[0]
     times, params = [], []
-    with threadpool_limits(1):
-        fit_model(data.select(0, 2000), "polynomial-state-space", **{**options, "max_nfev": 2})
-        for on in (False, True):
-            with helper_threads(on):
-                t0 = time.perf_counter()
-                fit = fit_model(data, "polynomial-state-space", **options)
-                times.append(time.perf_counter() - t0)
-            params.append(fit.model.free_parameters())
-            print(f"helper thread {'on' if on else 'off'}: {times[-1]:.1f} s", flush=True)
+    fit_model(data.select(0, 2000), "polynomial-state-space", **{**options, "max_nfev": 2})
+    for threads in (1, 2):
+        with fit_threads(threads):
+            t0 = time.perf_counter()
+            fit = fit_model(data, "polynomial-state-space", **options)
+            times.append(time.perf_counter() - t0)
+        params.append(fit.model.free_parameters())
+        print(f"{threads} thread(s): {times[-1]:.1f} s", flush=True)
     return times[0], times[1], bool(np.array_equal(*params)), load
+
+
+def _timed(fn: Any, repeat: int = 3) -> float:
+    """The median of ``repeat`` runs of ``fn()``, seconds."""
+    runs = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        runs.append(time.perf_counter() - t0)
+    return float(np.median(runs))
+
+
+def profile(u: np.ndarray, y: np.ndarray) -> dict[str, Any]:
+    """Where one iteration of the PNLSS refinement spends its time on this record (the
+    plant's own parameters as the iterate): each part on one thread and on two, and the
+    one-pass walk of the tests' ``reference.py`` with ``J^T J`` of the whole piece on one
+    BLAS thread (the code before the column blocks and tiles) as the reference."""
+    import numba
+    from threadpoolctl import threadpool_limits
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from blockid._kernels import writable
+    from blockid._kernels.state_space import pnlss_sensitivities, pnlss_trajectory
+    from blockid.fitting import state_space as ss
+    from blockid.fitting.threads import NormalSums, kernel_threads
+
+    from reference import pnlss_jacobian
+
+    model = plant()
+    n = len(u)
+    un = np.ascontiguousarray(model.normalised_input(u))
+    yn = np.ascontiguousarray(model.normalised_output(y))
+    free = model.parameter_mask(False)
+    P = int(free.sum()) + model.nx
+    kept = np.r_[np.flatnonzero(free), free.size + np.arange(model.nx)]
+    arrays = model._arrays()
+    nz, nm, ny = model.nx + 1, model.n_monomials, 1
+    pieces = [(k, min(n, k + ss.CHUNK)) for k in range(0, n, ss.CHUNK)]
+    _, S0, desc = model._sensitivity_start(np.zeros(model.nx), kept)
+    trajectories = []
+    for a, b in pieces:
+        V, JX, JY = np.empty((b - a, nz + nm)), np.empty((b - a, 6, 6)), np.empty((b - a, 1, 6))
+        trajectories.append((V, JX, JY))
+    J = np.empty((ss.CHUNK * ny, P))
+
+    def trajectory() -> None:
+        x = np.zeros(model.nx)
+        for (a, b), (V, JX, JY) in zip(pieces, trajectories, strict=True):
+            pnlss_trajectory(*arrays, writable(un[a:b]), x, np.zeros((b - a, 1)), V, JX, JY)
+
+    def sensitivities() -> None:
+        S = S0.copy()
+        for (a, b), (V, JX, JY) in zip(pieces, trajectories, strict=True):
+            pnlss_sensitivities(V, JX, JY, *desc, S, J[: b - a])
+
+    def tiles(threads: int) -> None:
+        with NormalSums(P, threads) as sums:
+            for a, b in pieces:
+                sums.add(J[: b - a], yn[a:b, 0], np.arange(P))
+            sums.result()
+
+    def residual() -> None:
+        model.run(un, np.zeros(model.nx))
+
+    def one_pass() -> None:
+        x, S = np.zeros(model.nx), np.zeros((model.nx, free.size + model.nx))
+        S[:, free.size :] = np.eye(model.nx)
+        H = np.zeros((P, P))
+        with threadpool_limits(1):
+            for a, b in pieces:
+                Jf = np.zeros(((b - a) * ny, S.shape[1]))
+                pnlss_jacobian(*arrays, writable(un[a:b]), x, S, np.zeros((b - a, 1)), Jf)
+                Jk = Jf[:, kept]
+                H += Jk.T @ Jk
+
+    trajectory()
+    sensitivities()  # compiled and warm
+    one_pass()
+    out: dict[str, Any] = {"parameters": P, "load": os.getloadavg()[0]}
+    for threads in (1, 2):
+        with kernel_threads(threads):
+            out[threads] = {
+                "trajectory": _timed(trajectory),
+                "sensitivities": _timed(sensitivities),
+                "normal equations": _timed(lambda t=threads: tiles(t)),
+            }
+    out["one-pass walk and dense J^T J, one thread (before)"] = _timed(one_pass, 2)
+    out["free run (one residual)"] = _timed(residual)
+    H = np.eye(P)
+    out["eigendecomposition of the scaled J^T J (the step)"] = _timed(lambda: np.linalg.eigh(H))
+    out["numba threads"] = numba.config.NUMBA_NUM_THREADS
+    return out
 
 
 def main() -> None:
@@ -116,33 +210,57 @@ def main() -> None:
             code, gb, seconds = measured([*base, *extra, "-o", str(Path(tmp) / "m.json")])
             rows.append((label, code, seconds, gb, load))
             print(rows[-1], flush=True)
-    helper = helper_thread_runs(u, y, args.nfev)
+    prof = profile(u[:, None], y[:, None])
+    print(prof, flush=True)
+    one, two, same, load = thread_runs(u, y, args.nfev)
     lines = [
-        "## State-space fits (issue 17)",
+        "## State-space fits (issues 17 and 36)",
         "",
         f"`python benchmarks/bench_state_space.py` — `blockid fit` in a fresh process on a "
         f"simulated polynomial state-space record of {n:,} samples (6 states, monomials of "
         f"degree 2-3, 40 dB output noise; the record is {data_mb:.1f} MB as float64): wall "
-        "time (reading the CSV and start-up included) and peak resident memory of the "
-        f"process. Machine: {machine()}.",
+        "time (reading the CSV, start-up and the linear start included) and peak resident "
+        f"memory of the process, on every core. Machine: {machine()}.",
         "",
         "| fit | exit | wall s | peak GB | load average |",
         "|---|---:|---:|---:|---:|",
     ]
-    lines += [f"| {lab} | {c} | {s:.0f} | {g:.2f} | {ld:.1f} |" for lab, c, s, g, ld in rows]
-    off, on, same, load = helper
+    lines += [f"| {lab} | {c} | {s:.1f} | {g:.2f} | {ld:.1f} |" for lab, c, s, g, ld in rows]
+    p1, p2 = prof[1], prof[2]
+    total1, total2 = sum(p1.values()), sum(p2.values())
+    before = prof["one-pass walk and dense J^T J, one thread (before)"]
     lines += [
         "",
-        "**The helper thread of the refinement** (`blockid.fitting.state_space.helper_thread`: "
-        "while the compiled kernel walks the Jacobian over one piece of the record, a second "
-        "thread adds the previous piece into the normal equations). The same polynomial "
-        f"state-space fit ({args.nfev} evaluations, one BLAS thread) in this process, with "
-        "the helper thread off and on, one after the other:",
+        f"**Where one iteration goes** (the same record, {prof['parameters']} parameters and "
+        f"initial states, pieces of {CHUNK} samples; median of 3, seconds; load "
+        f"{prof['load']:.1f}; numba threads available: {prof['numba threads']}). One "
+        "iteration forms the normal equations once (the walk, then `J^T J`) and takes one "
+        "or more trial steps (a free run and a solve each):",
         "",
-        "| helper thread | fit s | speed-up | the same parameters, bit for bit | load average |",
+        "| part | 1 thread | 2 threads | speed-up |",
+        "|---|---:|---:|---:|",
+    ]
+    for part in p1:
+        lines.append(f"| {part} | {p1[part]:.3f} | {p2[part]:.3f} | {p1[part] / p2[part]:.2f} |")
+    lines += [
+        f"| **normal equations, all** | {total1:.3f} | {total2:.3f} | {total1 / total2:.2f} |",
+        f"| before: the one-pass walk and `J^T J` of each whole piece, one thread | "
+        f"{before:.3f} | - | {before / total2:.2f} (against 2 threads) |",
+        f"| free run (one trial step's residuals) | {prof['free run (one residual)']:.3f} "
+        "| - | - |",
+        "| eigendecomposition of the scaled `J^T J` (the step) | "
+        f"{prof['eigendecomposition of the scaled J^T J (the step)']:.3f} | - | - |",
+    ]
+    lines += [
+        "",
+        f"**One fit on one thread and on two** (`blockid.fitting.threads.fit_threads`; the "
+        f"same polynomial state-space fit, {args.nfev} evaluations, in this process, one "
+        "after the other):",
+        "",
+        "| threads | fit s | speed-up | the same parameters, bit for bit | load average |",
         "|---|---:|---:|---|---:|",
-        f"| off | {off:.1f} | 1 | - | {load:.1f} |",
-        f"| on | {on:.1f} | {off / on:.2f} | {'yes' if same else '**no**'} | {load:.1f} |",
+        f"| 1 | {one:.1f} | 1 | - | {load:.1f} |",
+        f"| 2 | {two:.1f} | {one / two:.2f} | {'yes' if same else '**no**'} | {load:.1f} |",
     ]
     text = "\n".join(lines)
     print(text)

@@ -113,3 +113,25 @@ def test_refined_recursive_fit_keeps_the_recursion_trajectory():
         np.testing.assert_array_equal(refined.history[key], plain.history[key])
     assert refined.history["names"] == plain.history["names"]
     assert plain.history["theta"].shape == (len(plain.history["update"]), 5)
+
+
+@pytest.mark.parametrize(
+    ("structure", "options"),
+    [
+        ("polynomial-state-space", {"nx": 2, "degree": 2}),
+        ("output-error", {"na": 2, "nb": 2, "nk": 1, "tail_fraction": 0.0}),
+    ],
+)
+def test_a_fit_that_stops_at_its_evaluation_limit_says_so(structure, options):
+    """Stopped by ``max_nfev``, not converged: a warning naming the limit (the CLI prints
+    the fit's warnings on stderr and keeps them in the model file); converged, none."""
+    from reference import squared_state_record
+
+    data = squared_state_record(800)
+    cut = fit_model(data, structure, max_nfev=3, **options)
+    assert "max_nfev" in cut.settings["stop_reason"]
+    notes = [w for w in cut.settings.get("warnings", []) if "evaluation limit" in w]
+    assert notes and "max_nfev = 3" in notes[0]
+    full = fit_model(data, structure, max_nfev=2000, **options)
+    assert "max_nfev" not in full.settings["stop_reason"]
+    assert not [w for w in full.settings.get("warnings", []) if "evaluation limit" in w]

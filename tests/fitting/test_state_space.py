@@ -330,3 +330,43 @@ def test_multivariable_feedback_and_wiener_hammerstein_plants_are_polynomial_sta
 
     assert fit_percent("polynomial-state-space", degree=3, monomials="states") > 99.5
     assert fit_percent("state-space") < 90.0
+
+
+# ------------------------------------------------------------ the polynomial model's order
+def _three_state_cubic():
+    """Three states (a resonance and a slower mode), the first fed back through a cube."""
+    expo = monomial_exponents(3, 1, 3, "states")
+    E = np.zeros((3, expo.shape[0]))
+    E[0, list(map(tuple, expo)).index((3, 0, 0, 0))] = -0.1
+    A = [[1.2, -0.5, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.8]]
+    return PolynomialStateSpace(["u"], ["y"], A, [[1.0], [0.0], [0.6]], [[1.0, 0.4, 1.0]],
+                                [[0.0]], E, np.zeros((1, expo.shape[0])), expo)  # fmt: skip
+
+
+def test_the_polynomial_model_s_order_is_chosen_on_held_back_halves():
+    """Without ``nx``: the plant's three states from linear models scored on the half of
+    the record each never saw; the scan stops two orders past the best, every order's
+    score recorded; a given ``nx`` is taken as it is."""
+    from blockid.fitting.state_space import ORDER_TIE, order_by_validation
+
+    data, _ = _uniform(_three_state_cubic(), 4000, amplitude=0.8, snr_db=40.0)
+    nx, scores = order_by_validation(data, 10)
+    errors = {s["nx"]: s["error"] for s in scores}
+    assert nx == 3
+    assert list(errors) == [1, 2, 3, 4, 5]  # stopped two past the best
+    assert errors[2] > 1.2 * errors[3]  # the third state matters
+    assert errors[3] <= (1 + ORDER_TIE) * min(errors.values())
+    fit = fit_polynomial_state_space(data, degree=2, max_nfev=5)
+    assert fit.settings["nx"] == 3 and fit.settings["order_from"].startswith("cross-validated")
+    assert [s["nx"] for s in fit.settings["order_scores"]] == [1, 2, 3, 4, 5]
+    given = fit_polynomial_state_space(data, nx=2, degree=2, max_nfev=5)
+    assert given.settings["nx"] == 2 and given.settings["order_from"] == "given"
+
+
+def test_a_record_too_short_for_two_folds_falls_back_to_the_canonical_correlations():
+    from blockid.fitting.state_space import order_by_validation
+
+    data, _ = _uniform(_cubic_plant(), 100)
+    assert order_by_validation(data, 10) == (None, [])
+    fit = fit_polynomial_state_space(data, degree=2, max_nfev=3)
+    assert fit.settings["order_from"].startswith("canonical correlations")

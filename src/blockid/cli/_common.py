@@ -187,13 +187,27 @@ def metrics_table(title: str, rows: list[tuple[str, dict[str, dict[str, float]]]
     return table
 
 
+#: Parameter tables longer than this are summarised in one line on the terminal (a
+#: polynomial state space has hundreds of monomial coefficients in an arbitrary basis).
+MAX_PARAMETER_ROWS = 40
+
+
 def print_model(model: Any) -> None:
-    """The parameters of a model (ARX: one row per coefficient) as a table."""
+    """The parameters of a model (ARX: one row per coefficient) as a table; a table of
+    more than ``MAX_PARAMETER_ROWS`` rows as one line saying where they all are."""
     from rich.markup import escape
 
+    rows = model.parameter_table()
+    if len(rows) > MAX_PARAMETER_ROWS:
+        stdout.print(
+            f"{model.structure} model: {len(rows)} parameter entries, not listed here (the "
+            "model file, --json and `blockid report` have them all)",
+            markup=False,
+        )
+        return
     table = Table(title=f"{model.structure} model", title_justify="left")
     table.add_column("parameter")
     table.add_column("value", justify="right")
-    for name, values in model.parameter_table():
+    for name, values in rows:
         table.add_row(escape(name), values)
     stdout.print(table)

@@ -99,7 +99,8 @@ Quiet = Annotated[
     bool,
     shared(
         "quiet",
-        "No progress on stderr (there is none when stderr is not a terminal, nor with --json).",
+        "No progress on stderr (there is none when stderr is not a terminal, nor with --json); "
+        "fit: no parameter table either.",
     ),
 ]
 Seed = Annotated[int, shared("seed", "Random seed: the same seed gives the same run.")]

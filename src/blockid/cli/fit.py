@@ -119,12 +119,13 @@ def fit(
         from blockid.plotting.figures import fit_figures
 
         fit_figures(result, data, plot, overwrite=force)
+    for note in result.settings.get("warnings", []):  # with --json too: stderr
+        stderr.print(f"warning: {note}", markup=False)
     if json_out:
         print_json(model_document(result.model, record))
         return
-    print_model(result.model)
-    for note in result.settings.get("warnings", []):
-        stderr.print(f"warning: {note}", markup=False)
+    if not quiet:
+        print_model(result.model)
     label = "one-step prediction" if result.metrics_mode == "one-step" else "free-run simulation"
     stdout.print(
         metrics_table(

@@ -188,6 +188,7 @@ def _finish(result: FitResult, data: Dataset, structure: str, uncertainty: bool)
     from blockid.fitting.checks import linear_block_notes, rest_notes
 
     notes = linear_block_notes(result.model, data) + rest_notes(result.model, data)
+    notes += _evaluation_limit_notes(result)
     if notes:
         warnings = [*result.settings.get("warnings", []), *notes]
         result = replace(result, settings={**result.settings, "warnings": warnings})
@@ -196,6 +197,19 @@ def _finish(result: FitResult, data: Dataset, structure: str, uncertainty: bool)
 
         result = with_standard_errors(result, data)
     return result
+
+
+def _evaluation_limit_notes(result: FitResult) -> list[str]:
+    """A note when the (last) refinement stopped at its evaluation limit, not converged."""
+    settings = result.settings
+    if "max_nfev" not in str(settings.get("stop_reason", "")):
+        return []
+    limit = settings.get("max_nfev")
+    return [
+        f"the refinement stopped at its evaluation limit (max_nfev = {limit}, "
+        f"{settings.get('iterations', '?')} iterations) before it converged: the model may "
+        "improve with a larger --max-nfev"
+    ]
 
 
 def run_method(decl: Structure, method: str, data: Dataset, options: dict[str, Any]) -> FitResult:

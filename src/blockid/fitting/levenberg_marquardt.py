@@ -46,7 +46,9 @@ def levenberg_marquardt(
     Columns scaled to unit norm (as ``x_scale="jac"``), damping by Nielsen's rule from
     the gain ratio, steps clipped to the bounds; a rejected residual (unstable, invalid
     or exploding candidate: the problem's residuals say so) raises the damping. Stops like
-    ``scipy.optimize.least_squares``: relative cost reduction below ``ftol``, step below
+    MINPACK's ``lmder``: the actual and the predicted relative cost reduction of a step
+    both below ``ftol`` (a step that gains little where the model predicts more is a
+    crawl, not convergence: stopping there left PNLSS fits at twice their error), step below
     ``xtol`` relative to the parameters, every scaled gradient entry below ``gtol``
     times the residual norm (the cosine between the residual and each column), or
     ``max_nfev`` residual evaluations. Returns the final iterate and why it stopped.
@@ -94,7 +96,7 @@ def levenberg_marquardt(
             reduction = cost - cost_new
             small = np.linalg.norm(new - theta) <= xtol * (xtol + np.linalg.norm(theta))
             theta, cost = new, cost_new
-            if reduction <= ftol * (cost + reduction):
+            if max(reduction, predicted) <= ftol * (cost + reduction):
                 return theta, "`ftol` termination condition is satisfied."
             if small:
                 return theta, "`xtol` termination condition is satisfied."

@@ -433,10 +433,17 @@ OPTIONS: dict[str, Option] = _options(
     Option(
         "nx",
         "count",
-        "State dimension (default: where the subspace singular values drop most).",
+        "State dimension (default: state space, where the subspace method's canonical "
+        "correlations drop most; polynomial state space, the smallest order whose linear "
+        "model simulates held-back halves of the data within 2 % of the best).",
         low=1,
     ),
-    Option("max_order", "count", "Largest state dimension the singular values are read to.", low=1),
+    Option(
+        "max_order",
+        "count",
+        "Largest state dimension the default order is chosen among.",
+        low=1,
+    ),
     Option("horizon", "count", "Past and future horizon of the subspace method.", low=2),
     Option(
         "weighting",

@@ -43,6 +43,17 @@ defined. A candidate with an eigenvalue of ``A`` outside the circle of radius
 ``1 - margin`` (:func:`~blockid.fitting.checks.stability_margin` of the data), or a
 non-finite or exploding run, is rejected (the damping grows).
 
+**The PNLSS's order.** Unless ``nx`` is given, :func:`fit_polynomial_state_space`
+chooses it by what matters, the free-run error on data a model never saw: linear models
+of order ``1, 2, ...`` are fitted on each half of the estimation data (two contiguous
+folds, :func:`~blockid.data.folds.fold_plan`) and simulated over the other half from the
+state its first outputs give; the order is the smallest whose pooled error (each output
+over its spread) is within ``ORDER_TIE`` of the best, the scan stopping two orders past
+the best so far (or at ``max_order``). The canonical-correlation gap reads the linear
+dynamics' order; on a nonlinear plant it can read the nonlinearity as states (the
+Silverbox: six, against the two of its documented PNLSS). ``docs/orders.md`` has the
+table on three benchmark sets.
+
 **PNLSS.** :func:`fit_polynomial_state_space` starts from the refined linear model
 (``E = F = 0``: the start is the best linear approximation, so the fit never ends worse
 than it) and refines every parameter with the monomials of degree 2 to ``degree``
@@ -76,6 +87,7 @@ __all__ = [
     "fit_polynomial_state_space",
     "fit_state_space",
     "fit_subspace",
+    "order_by_validation",
     "refine_state_space",
     "signal_statistics",
     "subspace",
@@ -88,6 +100,9 @@ CHUNK = 4096
 NULL_SPACE = 1e-11
 #: A run whose mean squared error exceeds this many times the output variance explodes.
 _EXPLODE = 1e6
+#: Orders whose cross-validated error is within this fraction of the best are ties, the
+#: smallest chosen (the structure search's ``tie``).
+ORDER_TIE = 0.02
 
 
 # ----------------------------------------------------------------------------- signals
@@ -637,6 +652,53 @@ def with_observed_range(model: PolynomialStateSpace, data: Dataset) -> Polynomia
     return model.replace(observed_lower=zz.min(axis=0), observed_upper=zz.max(axis=0))
 
 
+def order_by_validation(
+    data: Dataset, max_order: int, **linear: Any
+) -> tuple[int | None, list[dict[str, Any]]]:
+    """The state dimension among ``1 .. max_order`` whose linear model
+    (:func:`fit_state_space` with the options ``linear``) simulates held-back data best
+    (module docstring: ties to the smallest order), and each order's scores; None (and
+    no scores) when the data are too short for two folds of a few dozen samples."""
+    from blockid.data.folds import fold_plan, materialise
+
+    try:
+        plan = fold_plan(data, 2, min_samples=60)
+    except DataError:
+        return None, []
+    spread = np.maximum(np.vstack([e.y for e in data.experiments]).std(axis=0), 1e-300)
+    scores: list[dict[str, Any]] = []
+    best = None
+    for n in range(1, max_order + 1):
+        squares, count, folds = 0.0, 0, []
+        try:
+            for fold in plan.folds:
+                train, test = materialise(data, fold.train), materialise(data, fold.test)
+                model = fit_state_space(train, nx=n, **linear).model
+                fold_sq, fold_n = 0.0, 0
+                for e in test.experiments:
+                    start = min(50, e.n_samples // 4)
+                    with np.errstate(all="ignore"):
+                        sim = model.simulate(e.u, e.y[:start])
+                    err = ((e.y[start:] - sim[start:]) / spread).ravel()
+                    fold_sq, fold_n = fold_sq + float(err @ err), fold_n + err.size
+                squares, count = squares + fold_sq, count + fold_n
+                folds.append(float(np.sqrt(fold_sq / max(fold_n, 1))))
+        except (EstimationError, OrderError, DataError) as exc:
+            scores.append({"nx": n, "error": None, "reason": str(exc)})
+            break  # a higher order fails as well, or later
+        rmse = float(np.sqrt(squares / max(count, 1)))
+        scores.append({"nx": n, "error": rmse if np.isfinite(rmse) else None, "folds": folds})
+        if np.isfinite(rmse) and (best is None or rmse < best[1]):
+            best = (n, rmse)
+        if best is not None and n >= best[0] + 2:
+            break
+    if best is None:
+        return None, scores
+    limit = (1 + ORDER_TIE) * best[1]
+    chosen = min(s["nx"] for s in scores if s.get("error") is not None and s["error"] <= limit)
+    return chosen, scores
+
+
 def fit_polynomial_state_space(
     data: Dataset,
     *,
@@ -648,7 +710,7 @@ def fit_polynomial_state_space(
     weighting: str = "moesp",
     feedthrough: bool = False,
     margin: float = 0.25,
-    max_nfev: int = 100,
+    max_nfev: int = 500,
     ftol: float = 1e-10,
     xtol: float = 1e-10,
     gtol: float = 1e-10,
@@ -659,7 +721,9 @@ def fit_polynomial_state_space(
     ----------
     data : Dataset
     nx, max_order, horizon, weighting, feedthrough
-        Of the linear start (:func:`fit_state_space`).
+        Of the linear start (:func:`fit_state_space`); without ``nx`` the order is
+        chosen on held-back halves of the data (:func:`order_by_validation`, among
+        ``1 .. max_order``).
     degree : int
         Largest total degree of the monomials (2 to 5; 1 gives the linear model).
     monomials : {"full", "states", "inputs"}
@@ -668,14 +732,29 @@ def fit_polynomial_state_space(
         Widening of the monomials' clipping range beyond the linear start's states and the
         input, as a fraction of each range's width on each side.
     max_nfev, ftol, xtol, gtol
-        Of each refinement (the linear start's and the nonlinear one's).
+        Of each refinement (the linear start's and the nonlinear one's). The nonlinear
+        refinement crawls along curved valleys for a few hundred evaluations before it
+        converges (the Silverbox: 342), hence a larger default than the linear fit's.
     """
     degree, margin = checked("degree", degree), checked("margin", margin)  # one declaration
     t0 = time.perf_counter()
+    order_scores: list[dict[str, Any]] | None = None
+    if nx is None:
+        nx, order_scores = order_by_validation(
+            data, max_order, horizon=horizon, weighting=weighting, feedthrough=feedthrough,
+            max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
+        )  # fmt: skip
     linear = fit_state_space(
         data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
         feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
     )  # fmt: skip
+    if order_scores:
+        linear = replace(linear, settings={
+            **linear.settings,
+            "order_from": "cross-validated linear models (2 folds, smallest within "
+                          f"{ORDER_TIE:.0%} of the best free-run error)",
+            "order_scores": order_scores,
+        })  # fmt: skip
     start = linear.model
     n = start.nx
     if degree == 1:
