@@ -108,7 +108,11 @@ def profile(u: np.ndarray, y: np.ndarray) -> dict[str, Any]:
 
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
     from blockid._kernels import writable
-    from blockid._kernels.state_space import pnlss_sensitivities, pnlss_trajectory
+    from blockid._kernels.state_space import (
+        pnlss_local_jacobians,
+        pnlss_sensitivities,
+        pnlss_trajectory,
+    )
     from blockid.fitting import state_space as ss
     from blockid.fitting.threads import NormalSums, kernel_threads
 
@@ -133,8 +137,13 @@ def profile(u: np.ndarray, y: np.ndarray) -> dict[str, Any]:
 
     def trajectory() -> None:
         x = np.zeros(model.nx)
-        for (a, b), (V, JX, JY) in zip(pieces, trajectories, strict=True):
-            pnlss_trajectory(*arrays, writable(un[a:b]), x, np.zeros((b - a, 1)), V, JX, JY)
+        for (a, b), (V, _, _) in zip(pieces, trajectories, strict=True):
+            pnlss_trajectory(*arrays, writable(un[a:b]), x, np.zeros((b - a, 1)), V)
+
+    def local_jacobians() -> None:
+        A, _, C, _, E, F, expo, lo, hi = arrays
+        for V, JX, JY in trajectories:
+            pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY)
 
     def sensitivities() -> None:
         S = S0.copy()
@@ -162,15 +171,17 @@ def profile(u: np.ndarray, y: np.ndarray) -> dict[str, Any]:
                 H += Jk.T @ Jk
 
     trajectory()
+    local_jacobians()
     sensitivities()  # compiled and warm
     one_pass()
     out: dict[str, Any] = {"parameters": P, "load": os.getloadavg()[0]}
     for threads in (1, 2):
         with kernel_threads(threads):
             out[threads] = {
-                "trajectory": _timed(trajectory),
-                "sensitivities": _timed(sensitivities),
-                "normal equations": _timed(lambda t=threads: tiles(t)),
+                "the free run keeping the trajectory (sequential)": _timed(trajectory),
+                "the local Jacobians of every sample": _timed(local_jacobians),
+                "the sensitivity walk (column blocks)": _timed(sensitivities),
+                "`J^T J` and `J^T r` (tiles)": _timed(lambda t=threads: tiles(t)),
             }
     out["one-pass walk and dense J^T J, one thread (before)"] = _timed(one_pass, 2)
     out["free run (one residual)"] = _timed(residual)
@@ -243,7 +254,7 @@ def main() -> None:
     for part in p1:
         lines.append(f"| {part} | {p1[part]:.3f} | {p2[part]:.3f} | {p1[part] / p2[part]:.2f} |")
     lines += [
-        f"| **normal equations, all** | {total1:.3f} | {total2:.3f} | {total1 / total2:.2f} |",
+        f"| **the normal equations, all** | {total1:.3f} | {total2:.3f} | {total1 / total2:.2f} |",
         f"| before: the one-pass walk and `J^T J` of each whole piece, one thread | "
         f"{before:.3f} | - | {before / total2:.2f} (against 2 threads) |",
         f"| free run (one trial step's residuals) | {prof['free run (one residual)']:.3f} "

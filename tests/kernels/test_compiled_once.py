@@ -38,6 +38,7 @@ SCRIPT = textwrap.dedent(
         "aw_rls_run": rls.aw_rls_run,
         "pnlss_simulate": state_space.pnlss_simulate,
         "pnlss_trajectory": state_space.pnlss_trajectory,
+        "pnlss_local_jacobians": state_space.pnlss_local_jacobians,
         "pnlss_sensitivities": state_space.pnlss_sensitivities,
         "feedback_simulate": feedback.feedback_simulate,
         "feedback_sensitivity": feedback.feedback_sensitivity,

@@ -27,19 +27,20 @@ where ``S = ∂x/∂θ`` starts as ``[0 | I]`` (only ``x(0)`` moves ``x(0)``) an
 are the explicit derivatives (``∂x(k+1)/∂A_ij = x_j(k)`` in row ``i``, and so on). A
 clipped coordinate has zero slope.
 
-**The walk in two passes, on every core.** The columns of ``S`` are independent given
-the state trajectory: each is the response of the same time-varying linear system
+**The walk in passes, on every core.** The columns of ``S`` are independent given the
+state trajectory: each is the response of the same time-varying linear system
 ``(A + E ∂ζ/∂x, C + F ∂ζ/∂x)`` to its own explicit term. :func:`pnlss_trajectory`
 runs the model over a piece once and keeps, per sample, ``v(k) = [x(k); u(k); ζ(k)]``
-and the two local Jacobians; :func:`pnlss_sensitivities` then walks fixed blocks of
-``COLUMN_BLOCK`` columns in parallel (``prange``). A parameter's column is described by
-its kind (``STATE``: it enters row ``row`` of the state equation as ``v_src``;
-``OUTPUT``: row ``row`` of the output equation; ``INITIAL``: an initial state, no
-explicit term), so a caller asks for exactly the columns it fits, in its order. Each
-column's arithmetic is the same, in the same order, whichever thread walks it and however
-many there are: the result does not depend on the number of threads, bit for bit, and
-equals that of the one-pass walk of the equations above, sample by sample (its slow
-twin in the tests' ``reference.py``).
+(the only sequential part); :func:`pnlss_local_jacobians` forms the two local
+Jacobians of every sample, fixed blocks of samples in parallel, and
+:func:`pnlss_sensitivities` walks fixed blocks of ``COLUMN_BLOCK`` columns in parallel
+(``prange``). A parameter's column is described by its kind (``STATE``: it enters row
+``row`` of the state equation as ``v_src``; ``OUTPUT``: row ``row`` of the output
+equation; ``INITIAL``: an initial state, no explicit term), so a caller asks for
+exactly the columns it fits, in its order. Each column's arithmetic is the same, in the
+same order, whichever thread walks it and however many there are: the result does not
+depend on the number of threads, bit for bit, and equals that of the one-pass walk of
+the equations above, sample by sample (its slow twin in the tests' ``reference.py``).
 A column of the output equation alone (``C``, ``D``, ``F``) never moves the state: its
 sensitivity is its explicit term, with no walk.
 """
@@ -56,7 +57,9 @@ __all__ = [
     "STATE",
     "channel_response",
     "monomials",
+    "SAMPLE_BLOCK",
     "pnlss_columns",
+    "pnlss_local_jacobians",
     "pnlss_sensitivities",
     "pnlss_simulate",
     "pnlss_trajectory",
@@ -193,19 +196,25 @@ def _sparse_exponents(expo):
 
 
 @njit(cache=True, nogil=True)
-def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY):
-    """Free run over a piece with what the sensitivity walk needs, per sample ``k``:
-    ``V[k] = [x(k); u(k); ζ(k)]``, ``JX[k] = A + E ∂ζ/∂x`` and ``JY[k] = C + F ∂ζ/∂x``
-    (a clipped coordinate has zero slope), over each monomial's own variables only. ``x`` is
-    updated in place to the state after the last sample; ``y`` (N, ny) receives the
-    output."""
-    N = u.shape[0]
-    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
-    count, var, power = _sparse_exponents(expo)
+def _powers(count, var, power, nm):
+    """The largest power any monomial takes of one variable."""
     top = 0
     for j in range(nm):
         for t in range(count[j]):
             top = max(top, power[j, t])
+    return top
+
+
+@njit(cache=True, nogil=True)
+def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
+    """The free run over a piece, keeping ``V[k] = [x(k); u(k); ζ(k)]`` per sample
+    ``k`` (the sequential part of the walk: :func:`pnlss_local_jacobians` then works on
+    every sample at once). ``x`` is updated in place to the state after the last sample;
+    ``y`` (N, ny) receives the output."""
+    N = u.shape[0]
+    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
+    count, var, power = _sparse_exponents(expo)
+    top = _powers(count, var, power, nm)
     z = np.empty(nx + nu)
     zp = np.empty((nx + nu, top + 1))  # zp[i, e] = clip(z_i) ** e (the same power)
     zeta = np.empty(nm)
@@ -227,27 +236,6 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY):
             zeta[j] = val
             V[k, nx + nu + j] = val
         for i in range(ny):
-            for j in range(nx):
-                JY[k, i, j] = C[i, j]
-        for i in range(nx):
-            for j in range(nx):
-                JX[k, i, j] = A[i, j]
-        # + E ∂ζ/∂x and F ∂ζ/∂x, monomial by monomial (ascending, as the dense sums)
-        for m in range(nm):
-            for t in range(count[m]):
-                i = var[m, t]
-                if i >= nx or not (lo[i] < z[i] < hi[i]):
-                    continue
-                p = power[m, t]
-                d = p * zp[i, p - 1]  # z_i is inside its range: clip(z_i) = z_i
-                for t2 in range(count[m]):
-                    if t2 != t:
-                        d *= zp[var[m, t2], power[m, t2]]
-                for r in range(nx):
-                    JX[k, r, i] += E[r, m] * d
-                for r in range(ny):
-                    JY[k, r, i] += F[r, m] * d
-        for i in range(ny):
             acc = 0.0
             for j in range(nx):
                 acc += C[i, j] * x[j]
@@ -267,6 +255,52 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY):
             xn[i] = acc
         for i in range(nx):
             x[i] = xn[i]
+
+
+#: Samples per task of :func:`pnlss_local_jacobians` (each sample's Jacobians stand alone).
+SAMPLE_BLOCK = 256
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY):
+    """``JX[k] = A + E ∂ζ/∂x`` and ``JY[k] = C + F ∂ζ/∂x`` at every sample of a
+    trajectory (:func:`pnlss_trajectory`'s ``V``), blocks of ``SAMPLE_BLOCK`` samples on
+    numba's threads; a clipped coordinate has zero slope. Each monomial's own variables
+    only, the terms added monomial by monomial in ascending order (the dense sums'
+    order, their zero terms left out: the same numbers)."""
+    N = V.shape[0]
+    nx, ny, nm = A.shape[0], C.shape[0], expo.shape[0]
+    nz = expo.shape[1]
+    count, var, power = _sparse_exponents(expo)
+    top = _powers(count, var, power, nm)
+    blocks = (N + SAMPLE_BLOCK - 1) // SAMPLE_BLOCK
+    for b in prange(blocks):
+        zp = np.empty((nz, top + 1))
+        for k in range(b * SAMPLE_BLOCK, min(N, (b + 1) * SAMPLE_BLOCK)):
+            for i in range(nz):
+                zi = min(max(V[k, i], lo[i]), hi[i])
+                for e in range(top + 1):
+                    zp[i, e] = zi**e
+            for i in range(ny):
+                for j in range(nx):
+                    JY[k, i, j] = C[i, j]
+            for i in range(nx):
+                for j in range(nx):
+                    JX[k, i, j] = A[i, j]
+            for m in range(nm):
+                for t in range(count[m]):
+                    i = var[m, t]
+                    if i >= nx or not (lo[i] < V[k, i] < hi[i]):
+                        continue
+                    p = power[m, t]
+                    d = p * zp[i, p - 1]  # z_i is inside its range: clip(z_i) = z_i
+                    for t2 in range(count[m]):
+                        if t2 != t:
+                            d *= zp[var[m, t2], power[m, t2]]
+                    for r in range(nx):
+                        JX[k, r, i] += E[r, m] * d
+                    for r in range(ny):
+                        JY[k, r, i] += F[r, m] * d
 
 
 @njit(cache=True, nogil=True)
@@ -366,8 +400,8 @@ def pnlss_columns(nx: int, nu: int, ny: int, nm: int) -> tuple[np.ndarray, np.nd
 
 def pnlss_walk(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J, columns=None):
     """Free run and ``∂y/∂[θ, x(0)]`` over a piece of a record, carrying the state: the
-    two passes (:func:`pnlss_trajectory`, then :func:`pnlss_sensitivities` on numba's
-    threads).
+    passes (:func:`pnlss_trajectory`, then :func:`pnlss_local_jacobians` and
+    :func:`pnlss_sensitivities` on numba's threads).
 
     ``x`` (nx,) and ``S`` (nx, P) hold the state and its sensitivity at the piece's
     first sample and are updated in place to those after its last (start with ``S`` 0
@@ -382,5 +416,6 @@ def pnlss_walk(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J, columns=None):
     V = np.empty((n, nx + nu + nm))
     JX = np.empty((n, nx, nx))
     JY = np.empty((n, ny, nx))
-    pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY)
+    pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V)
+    pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY)
     pnlss_sensitivities(V, JX, JY, *columns, S, J)
