@@ -442,17 +442,28 @@ class _Problem:
         n_exp, nm, nx = len(self.sig.u), self.n_model, self.nx
         kept = np.r_[np.flatnonzero(self.free), self.full.size + np.arange(nx)]
         threads = threads_for_fit()
+        ny = self.sig.y[0].shape[1]
+        # two buffers for the pieces (one walked while the other's tiles are summed)
+        buffers = [np.empty((CHUNK * ny, kept.size)) for _ in range(2)]
+        piece = 0
         with kernel_threads(threads), NormalSums(nm + nx * n_exp, threads) as sums:
             for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
-                if model.selects_columns:
-                    carried, chosen = model._sensitivity_start(x0, kept), slice(None)
-                else:
-                    carried, chosen = model._sensitivity_start(x0), kept
                 cols = np.r_[np.arange(nm), nm + e * nx + np.arange(nx)]
                 for k0 in range(0, u.shape[0], CHUNK):
+                    if k0 == 0 and model.selects_columns:
+                        carried = model._sensitivity_start(x0, kept)
+                    elif k0 == 0:
+                        carried = model._sensitivity_start(x0)
                     with np.errstate(all="ignore"):
-                        out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried)
-                    sums.add(J[:, chosen], y[k0 : k0 + CHUNK] - out, cols)
+                        if model.selects_columns:
+                            sums.wait()  # the buffer about to be overwritten is free
+                            out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried,
+                                                          buffer=buffers[piece % 2])  # fmt: skip
+                        else:
+                            out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried)
+                            J = J[:, kept]
+                    sums.add(J, y[k0 : k0 + CHUNK] - out, cols)
+                    piece += 1
             H, g = sums.result()
         self.tracker.njev += 1
         self.tracker.cost.append(sums.cost / self.size)

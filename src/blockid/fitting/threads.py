@@ -129,7 +129,7 @@ class NormalSums:
         next piece; the next :meth:`add` (or :meth:`result`) waits for them first, so
         every tile's sum still runs in the record's order. ``J`` must not be changed
         until then."""
-        self._wait()
+        self.wait()
         r = r.reshape(-1)
         self.cost += float(r @ r)
         self.g[cols] -= J.T @ r
@@ -150,13 +150,14 @@ class NormalSums:
         else:
             self.pending = [self.pool.submit(tile, pair) for pair in pairs]
 
-    def _wait(self) -> None:
+    def wait(self) -> None:
+        """Until the last piece's tiles are summed (its ``J`` free to be reused)."""
         pending, self.pending = self.pending, []
         for future in pending:
             future.result()
 
     def result(self) -> tuple[np.ndarray, np.ndarray]:
         """``J^T J`` (its upper tiles mirrored) and ``-J^T r``."""
-        self._wait()
+        self.wait()
         upper = np.triu(self.H)
         return upper + np.triu(upper, 1).T, self.g

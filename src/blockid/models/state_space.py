@@ -532,15 +532,23 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         return np.array(x0, dtype=float), S, desc
 
     def jacobian_piece(
-        self, un: np.ndarray, x: np.ndarray, S: np.ndarray, columns: Any = None
+        self,
+        un: np.ndarray,
+        x: np.ndarray,
+        S: np.ndarray,
+        columns: Any = None,
+        buffer: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Normalised outputs (n, ny) and ``∂y/∂[θ, x(0)]`` (rows ``k * ny + i``; the
         columns of :meth:`_sensitivity_start`) over a piece of a record, ``x`` and ``S``
         carried in place (:func:`~blockid._kernels.state_space.pnlss_walk`, on the
-        threads numba has)."""
+        threads numba has). ``buffer``: a C-contiguous float array of at least that many
+        rows and exactly those columns to write the Jacobian into (a view of it is
+        returned; a long walk reuses two instead of touching fresh memory each piece)."""
         ny = len(self.outputs)
         out = np.zeros((un.shape[0], ny))
-        J = np.empty((un.shape[0] * ny, S.shape[1]))
+        rows = un.shape[0] * ny
+        J = np.empty((rows, S.shape[1])) if buffer is None else buffer[:rows]
         pnlss_walk(*self._arrays(), writable(un), x, S, out, J, columns)
         return out, J
 
