@@ -84,6 +84,7 @@ def fit_record(
     (None when it failed). Never raises: a failure is a row with status ``error``."""
     from blockid.data import read_data
     from blockid.fitting import fit_model
+    from blockid.fitting.threads import fit_threads
     from blockid.models import model_document
 
     start = time.perf_counter()
@@ -92,7 +93,8 @@ def fit_record(
     text = None
     try:
         data = read_data([path], inputs, outputs, **(read_options or {}))
-        result = fit_model(data, structure, method=method, **(options or {}))
+        with fit_threads(1):  # the fleet runs one fit per worker thread, side by side
+            result = fit_model(data, structure, method=method, **(options or {}))
         doc = model_document(result.model, result.estimation_record())
         text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
         row.update(method=result.method, n_samples=result.n_samples)
