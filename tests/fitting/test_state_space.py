@@ -353,7 +353,7 @@ def test_the_polynomial_model_s_order_is_chosen_on_held_back_halves():
     nx, scores = order_by_validation(data, 10)
     errors = {s["nx"]: s["error"] for s in scores}
     assert nx == 3
-    assert list(errors) == [1, 2, 3, 4, 5]  # stopped two past the best
+    assert list(errors) == [1, 2, 3, 4, 5]  # stopped two past the last clear gain
     assert errors[2] > 1.2 * errors[3]  # the third state matters
     assert errors[3] <= (1 + ORDER_TIE) * min(errors.values())
     fit = fit_polynomial_state_space(data, degree=2, max_nfev=5)

@@ -49,7 +49,7 @@ of order ``1, 2, ...`` are fitted on each half of the estimation data (two conti
 folds, :func:`~blockid.data.folds.fold_plan`) and simulated over the other half from the
 state its first outputs give; the order is the smallest whose pooled error (each output
 over its spread) is within ``ORDER_TIE`` of the best, the scan stopping two orders past
-the best so far (or at ``max_order``). The canonical-correlation gap reads the linear
+the last one that beat the best by more than that (or at ``max_order``). The canonical-correlation gap reads the linear
 dynamics' order; on a nonlinear plant it can read the nonlinearity as states (the
 Silverbox: six, against the two of its documented PNLSS). ``docs/orders.md`` has the
 table on three benchmark sets.
@@ -678,7 +678,7 @@ def order_by_validation(
         return None, []
     spread = np.maximum(np.vstack([e.y for e in data.experiments]).std(axis=0), 1e-300)
     scores: list[dict[str, Any]] = []
-    best = None
+    best, gained = None, 0
     for n in range(1, max_order + 1):
         squares, count, folds = 0.0, 0, []
         try:
@@ -700,8 +700,10 @@ def order_by_validation(
         rmse = float(np.sqrt(squares / max(count, 1)))
         scores.append({"nx": n, "error": rmse if np.isfinite(rmse) else None, "folds": folds})
         if np.isfinite(rmse) and (best is None or rmse < best[1]):
+            if best is None or rmse * (1 + ORDER_TIE) < best[1]:
+                gained = n  # the last order that beat the best by more than a tie
             best = (n, rmse)
-        if best is not None and n >= best[0] + 2:
+        if best is not None and n >= gained + 2:
             break
     if best is None:
         return None, scores
