@@ -211,3 +211,43 @@ def test_version():
 
     r = runner.invoke(app, ["--version"])
     assert r.exit_code == 0 and r.stdout.strip() == f"blockid {__version__}"
+
+
+@pytest.fixture
+def cubic_csv(tmp_path):
+    from reference import squared_state_record
+
+    data = squared_state_record(600)
+    e = data.experiments[0]
+    path = tmp_path / "cubic.csv"
+    pd.DataFrame({"u": e.u[:, 0], "y": e.y[:, 0]}).to_csv(path, index=False)
+    return path
+
+
+def test_fit_quiet_leaves_out_the_parameters_and_a_long_table_is_summarised(cubic_csv, tmp_path):
+    """``-q``: no parameter table; without it, a table of more than 40 entries (a
+    polynomial state space's monomial coefficients) is one line saying where they are;
+    a short table is printed in full."""
+    base = ["fit", str(cubic_csv), "-u", "u", "-y", "y", "-o", str(tmp_path / "m.json"),
+            "--force", "--max-nfev", "3"]  # fmt: skip
+    pnlss = [*base, "--structure", "polynomial-state-space", "--nx", "2", "--degree", "3"]
+    loud = runner.invoke(app, pnlss)
+    assert loud.exit_code == 0, loud.output
+    assert "parameter entries, not listed here" in loud.stdout and "E[" not in loud.stdout
+    quiet = runner.invoke(app, [*pnlss, "-q"])
+    assert quiet.exit_code == 0 and "parameter entries" not in quiet.stdout
+    assert "free-run simulation" in quiet.stdout  # the scores stay
+    arx = runner.invoke(app, [*base, "--structure", "arx", "--na", "2", "--nb", "2", "--nk", "1"])
+    assert arx.exit_code == 0 and "arx model" in arx.stdout and "not listed" not in arx.stdout
+
+
+def test_fit_json_still_prints_the_fit_s_warnings_on_stderr(cubic_csv):
+    """A refinement stopped at ``--max-nfev`` warns on stderr with ``--json`` too, and the
+    document keeps the warning; stdout holds the JSON alone."""
+    r = runner.invoke(app, ["fit", str(cubic_csv), "-u", "u", "-y", "y", "--json",
+                            "--structure", "polynomial-state-space", "--nx", "2",
+                            "--degree", "2", "--max-nfev", "3"])  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert "warning: the refinement stopped at its evaluation limit (max_nfev = 3" in r.stderr
+    doc = json.loads(r.stdout)
+    assert any("evaluation limit" in w for w in doc["estimation"]["settings"]["warnings"])

@@ -40,9 +40,14 @@ def test_the_tiles_sum_to_the_dense_normal_equations(monkeypatch):
 
 
 def test_the_tiles_are_fixed_by_the_size_alone():
-    tiles = th._tiles(2 * th.TILE)
-    assert len(tiles) == 3  # two column blocks: (0, 0), (0, 1), (1, 1)
+    assert len(th._tiles(2 * th.TILE)) == 3  # two column blocks: (0, 0), (0, 1), (1, 1)
+    assert len(th._tiles(4 * th.TILE)) == 10
+    assert len(th._tiles(2 * th.MIN_TILE)) == 3  # a mid-sized problem: still two blocks
     assert th._tiles(10) == [(slice(0, 10), slice(0, 10))]
+    covered = np.zeros((300, 300), dtype=int)
+    for a, b in th._tiles(300):
+        covered[a, b] += 1
+    assert np.all(covered[np.triu_indices(300)] == 1)  # every upper entry, once
 
 
 def test_fit_threads_limits_and_restores():

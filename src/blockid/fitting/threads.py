@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "MIN_TILE",
     "TILE",
     "NormalSums",
     "fit_threads",
@@ -33,6 +34,8 @@ __all__ = [
 #: Columns of ``J^T J`` per tile (about): the tiles are fixed by the number of
 #: parameters, never by the number of threads.
 TILE = 448
+#: The narrowest column block that is still worth a tile of its own.
+MIN_TILE = 64
 
 _limit: int | None = None  # None: every core the process may use
 
@@ -83,8 +86,10 @@ def kernel_threads(n: int) -> Iterator[None]:
 
 
 def _tiles(n: int) -> list[tuple[slice, slice]]:
-    """The upper triangle of an ``n x n`` matrix in fixed tiles (``TILE`` columns)."""
-    count = max(1, round(n / TILE))
+    """The upper triangle of an ``n x n`` matrix in fixed tiles (about ``TILE`` columns;
+    at least two column blocks from ``2 * MIN_TILE`` columns on, so that a mid-sized
+    problem's three products share two threads)."""
+    count = max(round(n / TILE), 2 if n >= 2 * MIN_TILE else 1)
     edges = np.linspace(0, n, count + 1).astype(int)
     cuts = [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True)]
     return [(cuts[i], cuts[j]) for i in range(count) for j in range(i, count)]
