@@ -50,6 +50,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_rls.py --write-docs
 	$(BIN)/python benchmarks/bench_simulation_error.py --write-docs
 	$(BIN)/python benchmarks/bench_key_term.py --write-docs
+	$(BIN)/python benchmarks/bench_state_space.py --write-docs
 
 clean:
 	rm -rf $(VENV) build dist src/*.egg-info

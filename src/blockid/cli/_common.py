@@ -187,21 +187,22 @@ def metrics_table(title: str, rows: list[tuple[str, dict[str, dict[str, float]]]
     return table
 
 
-#: Parameter tables longer than this are summarised in one line on the terminal (a
-#: polynomial state space has hundreds of monomial coefficients in an arbitrary basis).
-MAX_PARAMETER_ROWS = 40
+#: Parameter tables of more values than this are summarised in one line on the terminal
+#: (a polynomial state space has hundreds of monomial coefficients in an arbitrary basis).
+MAX_PARAMETER_VALUES = 60
 
 
 def print_model(model: Any) -> None:
     """The parameters of a model (ARX: one row per coefficient) as a table; a table of
-    more than ``MAX_PARAMETER_ROWS`` rows as one line saying where they all are."""
+    more than ``MAX_PARAMETER_VALUES`` values as one line saying where they all are."""
     from rich.markup import escape
 
     rows = model.parameter_table()
-    if len(rows) > MAX_PARAMETER_ROWS:
+    values = sum(len(text.split(",")) for _, text in rows)
+    if values > MAX_PARAMETER_VALUES:
         stdout.print(
-            f"{model.structure} model: {len(rows)} parameter entries, not listed here (the "
-            "model file, --json and `blockid report` have them all)",
+            f"{model.structure} model: {values} parameter values, not listed here (the model "
+            "file, --json and `blockid report` have them all)",
             markup=False,
         )
         return
