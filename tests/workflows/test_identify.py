@@ -66,6 +66,31 @@ def test_a_dead_zone_plant_gets_its_structure_and_beats_the_linear_model():
     assert result.search["effort"] == "dz" and len(result.search["folds"]) == 3
 
 
+@pytest.mark.parametrize("kind", ["saturation", "dead-zone"])
+def test_a_plant_of_negative_gain_gets_its_block_and_sign(kind):
+    """The issue's plant: a saturation (or dead zone) before a linear block of negative
+    static gain. The search fits and chooses that structure (it once rejected every
+    saturation, dead-zone and backlash candidate: "negate the input"); the sign is
+    b_0 = -1."""
+    from blockid.blocks import Saturation
+
+    block = Saturation(-0.8, 1.0, 1.0) if kind == "saturation" else DeadZone(-0.5, 0.4)
+    plant = Hammerstein("u", "y", input_block=block, na=2, nb=2, nk=1, a=[-1.2, 0.5],
+                        b=[-1.0, -0.4])  # fmt: skip
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(-2, 2, 500), 4)
+    y = plant.simulate(u)[:, 0]
+    data = Dataset.from_arrays(u, y + 0.01 * y.std() * rng.standard_normal(u.size), ["u"], ["y"])
+    effort = Effort("neg", 3, 2, 3, 2, 1, None, 15, 10_000, 2, 40, 1)
+    result = identify(data, structures=["arx", "hammerstein"], effort=effort, jobs=1)
+    chosen = result.selected.candidate
+    assert chosen.structure == "hammerstein" and chosen.options["input_block"] == kind
+    assert result.model.b[0] == -1.0
+    assert result.model.input_block.lower == pytest.approx(block.lower, rel=0.02)
+    assert result.model.input_block.upper == pytest.approx(block.upper, rel=0.02)
+    assert not [s for s in result.rejected if "negate" in s.reason.lower()]
+
+
 def test_validation_data_never_change_the_choice():
     data = dead_zone_record(600)
     val1 = dead_zone_record(600, seed=1)

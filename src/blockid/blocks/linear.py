@@ -116,15 +116,20 @@ class LinearBlock(Block):
         return LinearBlock(self.na, self.nb, self.nk, theta[: self.na], theta[self.na :])
 
     def free_mask(self, after_nonlinear: bool) -> np.ndarray:
-        """After a nonlinear block ``b_0 = 1`` is fixed."""
+        """After a nonlinear block ``b_0`` is fixed (to 1, or to -1: the sign of a plant
+        whose block's slopes must stay positive, :func:`~blockid.fitting.initial.
+        absorbed_gain`)."""
         mask = np.ones(self.na + self.nb, dtype=bool)
         if after_nonlinear:
             mask[self.na] = False
         return mask
 
     def check_normalised(self, after_nonlinear: bool) -> None:
-        if after_nonlinear and self.b[0] != 1.0:
-            raise OrderError(f"b_0 is fixed to 1 when there is an input block (got {self.b[0]})")
+        if after_nonlinear and self.b[0] not in (1.0, -1.0):
+            raise OrderError(
+                f"b_0 is fixed to 1 (or -1, the sign of a negative gain) when there is an "
+                f"input block (got {self.b[0]})"
+            )
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, **self.parameters}

@@ -76,7 +76,7 @@ from blockid.fitting.checks import STABILITY_MARGIN, margin_for, simulation_mse,
 from blockid.fitting.registry import STRUCTURES
 from blockid.models.block import BlockModel
 
-__all__ = ["initial_estimate", "resolve_structure", "scaled_block"]
+__all__ = ["absorbed_gain", "initial_estimate", "resolve_structure", "scaled_block"]
 
 #: Rounds of the alternating scheme for models with an output block.
 _ROUNDS = 3
@@ -111,6 +111,17 @@ def scaled_block(block: Block, gain: float) -> Block:
             "(or the output) and fit again"
         )
     return block.scaled(gain)
+
+
+def absorbed_gain(block: Block, gain: float) -> tuple[Block, float]:
+    """``gain`` moved into ``block`` as far as its family allows: the block scaled by
+    ``gain``, or, for a family whose slopes must be positive (dead zone, saturation,
+    backlash, ...) and a negative ``gain``, by ``|gain|``. Returns the block and the
+    sign left for the linear block's ``b_0`` (1, or -1: a plant of negative gain keeps
+    its sign in the linear block, ``b_0 = -1``, and the block its positive slopes)."""
+    if gain < 0 and not block.linear_in_parameters:
+        return scaled_block(block, -gain), -1.0
+    return scaled_block(block, gain), 1.0
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -330,13 +341,16 @@ def _hammerstein_ls(
 def _profile_fit(
     unit: Block, u: Sequence[np.ndarray], z: Sequence[np.ndarray], template: BlockModel
 ) -> BlockModel | None:
-    """ARX from ``w = unit(u)`` to ``z``, its ``b_0`` moved into the block (None if <= 0)."""
+    """ARX from ``w = unit(u)`` to ``z``, its ``b_0`` moved into the block (its sign
+    kept in the linear block where the block's slopes must stay positive; None if
+    ``b_0`` vanishes)."""
     probe = _cascade(template, unit)
     w = [probe.internal(ui) for ui in u]
     a, b = _arx_fit(w, z, template.na, template.nb, template.nk)
-    if not b[0] > 1e-12 * max(np.max(np.abs(b)), 1e-300):
+    if not abs(b[0]) > 1e-12 * max(np.max(np.abs(b)), 1e-300):
         return None
-    return _cascade(template, scaled_block(unit, b[0]), a, b / b[0])
+    block, sign = absorbed_gain(unit, b[0])
+    return _cascade(template, block, a, sign * b / b[0])
 
 
 def _family_fit(
@@ -347,10 +361,17 @@ def _family_fit(
         vector, a, b = _rank_one_fit(
             u, z, family.regressors, template.na, template.nb, template.nk, "block family"
         )
-        block = family.build(vector)
-    except (EstimationError, ParameterError):  # e.g. an edge beyond the data, a slope <= 0
+    except (EstimationError, ParameterError):
         return None
-    return _cascade(template, block, a, b)
+    # the factorisation's sign is free: (vector, b) or (-vector, -b), b_0 = -1 then; a
+    # family of positive slopes takes the one that builds (a plant of negative gain)
+    for sign in (1.0, -1.0):
+        try:
+            block = family.build(sign * vector)
+        except (EstimationError, ParameterError):  # e.g. an edge beyond the data, a slope <= 0
+            continue
+        return _cascade(template, block, a, sign * b)
+    return None
 
 
 def _candidate(
@@ -368,17 +389,9 @@ def _grid_search(
     shape completed by least squares and scored by its free-run error on ``z``."""
     block = template.input_block
     u_all = np.concatenate(u)
-    a_lin, b_lin = _arx_fit(u, z, template.na, template.nb, template.nk)
     grid = block.initial_grid(u_all)
-    # shapes with positive slopes (backlash, dead zone, saturation) cannot follow a
-    # negative gain; a family fitted by least squares (free values) can
-    profiles = not all(isinstance(g, LinearFamily) for g in grid)
-    if profiles and np.sum(b_lin) / (1.0 + np.sum(a_lin)) < 0:  # static gain of a linear fit
-        raise EstimationError(
-            f"initial estimate: the plant's static gain from u is negative, but a "
-            f"{block.kind} block has positive slopes and b_0 = 1. Negate the input (or the "
-            "output) and fit again"
-        )
+    # shapes with positive slopes (backlash, dead zone, saturation) follow a negative
+    # gain with b_0 = -1 (absorbed_gain): the sign lives in the linear block
     if not grid:
         raise ParameterError(
             f"no initial estimate for a {block.kind or type(block).__name__} input block; "
@@ -392,9 +405,10 @@ def _grid_search(
     best = candidates[int(np.argmin(errors))]
     if best is None:
         raise EstimationError(
-            f"initial estimate: no {block.kind} shape gave positive slopes; the plant's "
-            "gain from u has the opposite sign. Negate the input (or the output) and fit "
-            "again"
+            f"initial estimate: no {block.kind} shape fits the data (every candidate's "
+            "linear block had b_0 = 0 or its block refused its parameters); check the "
+            "input delay nk (a b_0 of zero means nk is too small) or give a starting model "
+            "(initial=...)"
         )
     return best.input_block, best.a, best.b
 
@@ -518,7 +532,8 @@ def _with_output_fit(
     if normalised is None:
         return None, np.concatenate(x)
     out_block, g = normalised
-    if not g > 0:
+    if not g > 0:  # dropped as before: the output path keeps its rule (paper B's comparison
+        # of structures, docs/reproduction.md, was measured with it)
         return None, np.concatenate(x)
     block, b = model.input_block, model.b
     if block is None:

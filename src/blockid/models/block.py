@@ -685,7 +685,9 @@ class BlockModel(OneLinearBlock, ChainModel):
     na, nb, nk : int
         Orders of the linear block (MATLAB convention).
     a, b : sequence of float, optional
-        ``[a_1..a_na]`` and ``[b_0..b_{nb-1}]``; with an input block ``b_0`` must be 1.
+        ``[a_1..a_na]`` and ``[b_0..b_{nb-1}]``; with an input block ``b_0`` must be 1,
+        or -1 where the plant's gain is negative and the block's slopes must stay
+        positive (a dead zone, a saturation, a backlash: the sign lives here).
     sampling_time : float, optional
     input_offset, output_offset : float
         Operating point subtracted from ``u`` and ``y`` before the blocks (default 0).
