@@ -168,7 +168,7 @@ def test_scaled_block_is_the_block_times_the_gain():
     b = Backlash(0.9, 0.4, 1.1, 0.3)
     u = 2 * np.sin(np.arange(200) / 9)
     np.testing.assert_allclose(scaled_block(b, 2.5).simulate(u), 2.5 * b.simulate(u), atol=1e-13)
-    with pytest.raises(EstimationError, match="opposite sign"):
+    with pytest.raises(EstimationError, match="keep the sign in the linear block"):
         scaled_block(DeadZone(0, 0), -1.0)
 
 

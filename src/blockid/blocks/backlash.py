@@ -110,8 +110,8 @@ class Backlash(DynamicBlock):
         if not gain > 0:
             raise ParameterError(
                 f"cannot absorb the gain {gain:.4g} into a backlash, whose slopes must be "
-                "positive: the plant's gain from u has the opposite sign. Negate the input "
-                "(or the output) and fit again"
+                "positive: scale it by the gain's magnitude and keep the sign in the linear "
+                "block after it (b_0 = -1), as the fits do"
             )
         return Backlash(gain * self.m_left, self.c_left, gain * self.m_right, self.c_right)
 

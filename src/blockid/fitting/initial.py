@@ -107,8 +107,8 @@ def scaled_block(block: Block, gain: float) -> Block:
     if not block.linear_in_parameters and not gain > 0:
         raise EstimationError(
             f"cannot absorb the gain {gain:.4g} into a {block.kind} block, whose slopes must "
-            "be positive: the plant's gain from u has the opposite sign. Negate the input "
-            "(or the output) and fit again"
+            "be positive: scale it by the gain's magnitude and keep the sign in the linear "
+            "block after it (b_0 = -1; absorbed_gain does both)"
         )
     return block.scaled(gain)
 
