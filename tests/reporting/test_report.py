@@ -226,3 +226,19 @@ def test_the_command_module_imports_no_heavy_library():
         "assert not heavy, heavy\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_a_fit_stopped_at_its_evaluation_limit_is_named_in_the_report():
+    """The fit's own warnings reach the comparison section, as on stderr and in the
+    model file (issue 36: a fit that stops at ``max_nfev`` says so)."""
+    from blockid.reporting import build_report
+    from blockid.workflows import compare_structures
+
+    from reference import squared_state_record
+
+    data = squared_state_record(800)
+    est, val = data.select(0, 500), data.select(500, 800)
+    result = compare_structures(est, val, ["polynomial-state-space"],
+                                options={"nx": 2, "degree": 2, "max_nfev": 3})  # fmt: skip
+    html = build_report(compare=result, estimation=est, validation=val)
+    assert "stopped at its evaluation limit (max_nfev = 3" in html

@@ -223,7 +223,11 @@ def _comparison(entries: list[Entry], outputs: tuple[str, ...], where: str) -> s
             parts.append(paragraph(f"{e.label} failed: {e.error}", "note"))
         if e.one_step_error:
             parts.append(paragraph(f"{e.label}: no one-step prediction: {e.one_step_error}"))
-        for note in [] if e.simulation is None else e.simulation.warnings:
+        settings = getattr(e.fit, "settings", None) or {}
+        # the fit's own warnings (a refinement stopped at its evaluation limit, ...), then
+        # the scores' (each once)
+        notes = [*settings.get("warnings", []), *(e.simulation.warnings if e.simulation else [])]
+        for note in dict.fromkeys(notes):
             parts.append(paragraph(f"warning: {e.label}: {note}", "note"))
     scored = [e for e in entries if e.simulation is not None]
     if len(scored) > 1:
