@@ -11,11 +11,16 @@ The recursive estimators' defaults differ by estimator on purpose; each entry sa
 
 from __future__ import annotations
 
-__all__ = ["DEGREE", "RECURSIVE", "recursive_default"]
+__all__ = ["DEGREE", "RECURSIVE", "TIE", "recursive_default"]
 
 #: Degree of a polynomial block when none is given: r1 (input block) and r2 (output
 #: block), paper B's r1 = r2 = 3.
 DEGREE = 3
+
+#: Two cross-validated errors within this fraction of each other are a tie, the simpler
+#: candidate taken: ``identify``'s ``tie`` and the polynomial state space's default order
+#: (``blockid.fitting.state_space.ORDER_TIE``).
+TIE = 0.02
 
 #: Defaults of the recursive estimators, by estimator (``fit --method``):
 #:

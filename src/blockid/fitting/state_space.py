@@ -76,6 +76,7 @@ import numpy as np
 from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_simulate
 from blockid.data.dataset import Dataset
+from blockid.defaults import TIE
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.checks import margin_for, stability_margin
@@ -103,8 +104,8 @@ NULL_SPACE = 1e-11
 #: A run whose mean squared error exceeds this many times the output variance explodes.
 _EXPLODE = 1e6
 #: Orders whose cross-validated error is within this fraction of the best are ties, the
-#: smallest chosen (the structure search's ``tie``).
-ORDER_TIE = 0.02
+#: smallest chosen (the structure search's ``tie``, :data:`blockid.defaults.TIE`).
+ORDER_TIE = TIE
 
 
 # ----------------------------------------------------------------------------- signals

@@ -114,6 +114,7 @@ import numpy as np
 
 from blockid.data.dataset import Dataset
 from blockid.data.folds import Fold, FoldPlan, Segment, fold_plan, materialise
+from blockid.defaults import TIE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.trust import Trust, assess
 from blockid.fitting.registry import STRUCTURES, searched_structures
@@ -930,7 +931,7 @@ def identify(
     jobs: int | None = None,
     time_limit: float | None = None,
     rule: str = "geometric-mean",
-    tie: float = 0.02,
+    tie: float = TIE,
     use_orders_test: bool = True,
     progress: Progress | None = None,
 ) -> IdentifyResult:
