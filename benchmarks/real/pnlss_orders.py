@@ -145,7 +145,13 @@ def main() -> int:
                   f"{run['seconds']:.0f} s", run["stop_reason"], flush=True)  # fmt: skip
     if args.write_docs or args.docs_only:
         results = {}
-        for name in titles:
+        for name in SETS:  # every set with results, whatever --only ran this time
+            if name not in titles:
+                try:
+                    bench = ALL[name]()
+                except MissingData:
+                    continue
+                titles[name] = (bench.unit, bench.title)
             runs = [json.loads((RESULTS / f"{name}_{k}.json").read_text())
                     for k in ["default", *map(str, ORDERS)]
                     if (RESULTS / f"{name}_{k}.json").exists()]  # fmt: skip
