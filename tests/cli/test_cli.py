@@ -252,3 +252,12 @@ def test_fit_json_still_prints_the_fit_s_warnings_on_stderr(cubic_csv):
     assert "warning: the refinement stopped at its evaluation limit (max_nfev = 3" in r.stderr
     doc = json.loads(r.stdout)
     assert any("evaluation limit" in w for w in doc["estimation"]["settings"]["warnings"])
+
+
+def test_a_negative_seed_is_one_readable_line(tmp_path):
+    """``example-data --seed -1`` once ended in NumPy's traceback from the random
+    generator; nothing is written."""
+    out = tmp_path / "x.csv"
+    r = runner.invoke(app, ["example-data", "electrohydraulic", "-o", str(out), "--seed", "-1"])
+    assert r.exit_code == 2 and "--seed" in r.stderr and "Traceback" not in r.output
+    assert not out.exists()

@@ -327,3 +327,13 @@ def test_no_fitter_restates_an_options_range():
             if re.search(pattern, text):
                 found.add((rel, name))
     assert found - _OWN_MINIMA == set(), sorted(found - _OWN_MINIMA)
+
+
+def test_a_ragged_order_matrix_is_refused_naming_its_rows():
+    """``--na '1,1;1'`` once ended in a NumPy traceback (inhomogeneous shape)."""
+    from blockid.errors import ParameterError
+    from blockid.fitting.registry import parse_orders
+
+    with pytest.raises(ParameterError, match="as many entries .* got rows of 2, 1"):
+        parse_orders("1,1;1", "na")
+    assert parse_orders("1,1;2,0", "na") == [[1, 1], [2, 0]]

@@ -103,7 +103,9 @@ Quiet = Annotated[
         "fit: no parameter table either.",
     ),
 ]
-Seed = Annotated[int, shared("seed", "Random seed: the same seed gives the same run.")]
+Seed = Annotated[
+    int, shared("seed", "Random seed (>= 0): the same seed gives the same run.", min=0)
+]
 Estimation = Annotated[
     str | None,
     shared("estimation", "Estimation samples (0-based, stop excluded; default: all)."),

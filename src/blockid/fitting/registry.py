@@ -96,6 +96,12 @@ def parse_orders(value: Any, name: str) -> Any:
         )
     if any(v < 0 for row in rows for v in row):
         raise ParameterError(f"{name} must hold whole numbers >= 0; got {text!r}")
+    if len({len(row) for row in rows}) > 1:
+        raise ParameterError(
+            f"{name}={text!r}: every row of the matrix needs as many entries (one per "
+            f"output for na, one per input for nb and nk); got rows of "
+            f"{', '.join(str(len(row)) for row in rows)}"
+        )
     if len(rows) == 1 and len(rows[0]) == 1:
         return rows[0][0]
     return rows
