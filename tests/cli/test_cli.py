@@ -1,6 +1,7 @@
 """The command line, driven as a user would (typer's CliRunner)."""
 
 import json
+import os
 
 import numpy as np
 import pandas as pd
@@ -261,3 +262,26 @@ def test_a_negative_seed_is_one_readable_line(tmp_path):
     r = runner.invoke(app, ["example-data", "electrohydraulic", "-o", str(out), "--seed", "-1"])
     assert r.exit_code == 2 and "--seed" in r.stderr and "Traceback" not in r.output
     assert not out.exists()
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("command", ["fit", "export"])
+def test_a_standard_output_that_cannot_be_written_is_one_readable_line(command, cubic_csv,
+                                                                       tmp_path):  # fmt: skip
+    """stdout on a full device (``> /dev/full``) once ended in a traceback; now one line
+    on stderr naming it, exit 1, and no second error from the interpreter's last flush."""
+    import subprocess
+    import sys
+
+    model = tmp_path / "m.json"
+    fit = ["fit", str(cubic_csv), "-u", "u", "-y", "y", "--structure", "arx", "--na", "2",
+           "--nb", "2", "--nk", "1"]  # fmt: skip
+    runner.invoke(app, [*fit, "-o", str(model)])
+    args = [*fit, "--json"] if command == "fit" else ["export", str(model), "--to", "python"]
+    with open("/dev/full", "w") as full:
+        run = subprocess.run([sys.executable, "-m", "blockid.cli.main", *args], stdout=full,
+                             stderr=subprocess.PIPE, text=True, timeout=300)  # fmt: skip
+    assert run.returncode == 1
+    assert run.stderr.strip().splitlines() == [
+        "error: cannot write standard output: No space left on device"
+    ]

@@ -101,8 +101,27 @@ def cli_errors(fn: Callable[..., Any]) -> Callable[..., Any]:
         except KeyboardInterrupt:
             stderr.print("interrupted; no output file was written")
             raise typer.Exit(code=130) from None
+        except OSError as exc:  # e.g. stdout on a full disk or a closed pipe
+            where = exc.filename or "standard output"
+            stderr.print(f"error: cannot write {where}: {exc.strerror or exc}", markup=False,
+                         soft_wrap=True)  # fmt: skip
+            _quiet_stdout()
+            raise typer.Exit(code=1) from None
 
     return wrapper
+
+
+def _quiet_stdout() -> None:
+    """Standard output to the null device: the interpreter's last flush of a stdout that
+    failed would print a second error at exit."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # no real file descriptor (a test runner)
+        pass
 
 
 def progress_shown(quiet: bool) -> bool:
