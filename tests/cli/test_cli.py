@@ -285,3 +285,16 @@ def test_a_standard_output_that_cannot_be_written_is_one_readable_line(command, 
     assert run.stderr.strip().splitlines() == [
         "error: cannot write standard output: No space left on device"
     ]
+
+
+@pytest.mark.parametrize("command", ["fit", "identify"])
+def test_a_model_file_is_not_written_under_a_table_s_name(command, cubic_csv, tmp_path):
+    """``-o m.csv`` once wrote JSON under a .csv name; now refused before any work,
+    naming the .json it should be, and nothing is written."""
+    out = tmp_path / "m.csv"
+    extra = (
+        ["--structure", "arx", "--na", "2", "--nb", "2", "--nk", "1"] if command == "fit" else []
+    )
+    r = runner.invoke(app, [command, str(cubic_csv), "-u", "u", "-y", "y", "-o", str(out), *extra])
+    assert r.exit_code == 2 and "a model file is JSON, not .csv" in r.stderr
+    assert str(tmp_path / "m.json") in r.stderr and not out.exists()

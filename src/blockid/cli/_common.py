@@ -163,6 +163,19 @@ def refuse_to_overwrite(out: Path | None, force: bool) -> None:
         raise ParameterError(f"{out} exists; pass --force to replace it")
 
 
+def refuse_model_name(out: Path | None) -> None:
+    """Stop before any work when ``-o`` would write a model file (JSON) under another
+    kind's name (``m.csv``: a later reader would take it for a table)."""
+    from blockid.data.files import is_stream
+
+    if out is None or is_stream(out) or out.suffix.lower() in ("", ".json"):
+        return
+    raise ParameterError(
+        f"{out}: a model file is JSON, not {out.suffix}; name it {out.with_suffix('.json')}",
+        parameter="out",
+    )
+
+
 def refuse_figures(folder: Path | None, names: Sequence[str], force: bool) -> None:
     """Stop before any work when ``--plot DIR`` holds a figure the command would write
     and ``--force`` was not given; refuse a DIR that is a file."""

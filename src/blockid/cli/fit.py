@@ -19,6 +19,7 @@ from blockid.cli._common import (
     print_json,
     print_model,
     refuse_figures,
+    refuse_model_name,
     refuse_to_overwrite,
     stderr,
     stdout,
@@ -61,6 +62,7 @@ def _check_output(out: Path | None, json_out: bool, force: bool) -> None:
 
     if out is None and not json_out:
         raise ParameterError("nothing to do: give -o MODEL.json to save the model, or --json")
+    refuse_model_name(out)
     refuse_to_overwrite(out, force)
 
 

@@ -20,6 +20,7 @@ from blockid.cli._common import (
     print_model,
     progress_bar,
     refuse_figures,
+    refuse_model_name,
     refuse_to_overwrite,
     stdout,
 )
@@ -140,6 +141,7 @@ def identify(
         )
     if validation and validation_data:
         raise ParameterError("give --validation or --validation-data, not both")
+    refuse_model_name(out)
     refuse_to_overwrite(out, force)
     refuse_to_overwrite(report, force)
     names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
