@@ -68,3 +68,9 @@ def test_errors_are_one_line(arx_csv, extra, message):
     assert r.exit_code == 2
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and message in lines[0]
+
+
+def test_two_outputs_are_refused_not_silently_cut_to_the_last(arx_csv):
+    """``-y y -y u`` once analysed ``u`` alone without a word."""
+    r = runner.invoke(app, ["orders", str(arx_csv), "-u", "u", "-y", "y", "-y", "u"])
+    assert r.exit_code == 2 and "one output at a time, got 2 (y, u)" in r.stderr

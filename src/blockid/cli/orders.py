@@ -39,7 +39,9 @@ def _count(flag: str, what: str) -> Any:
 def orders(
     data_paths: DataPaths,
     inputs: Inputs,
-    output: Annotated[str, shared("outputs", "Output column to test.")],
+    outputs: Annotated[
+        list[str], shared("outputs", "Output column to test (one; run once per output).")
+    ],
     estimation: Annotated[
         str | None,
         shared("estimation", "Samples to use (default: all)."),
@@ -83,6 +85,13 @@ def orders(
                 parameter="noise",
             ) from None
 
+    if len(outputs) != 1:  # typer once kept the last -y silently
+        raise ParameterError(
+            f"orders tests one output at a time, got {len(outputs)} ({', '.join(outputs)}); "
+            "run it once per output",
+            parameter="outputs",
+        )
+    output = outputs[0]
     data = load_data(data_paths, inputs, [output], ts, time_column, experiment_column, estimation)
     from blockid.fitting.orders import false_nearest_neighbours
 
