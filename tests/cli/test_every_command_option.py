@@ -1413,7 +1413,7 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     **{("simulate", k): v for k, v in _model_command("simulate").items()},
     **{("predict", k): v for k, v in _model_command("predict").items()},
     ("orders", "inputs"): orders_input,
-    ("orders", "output"): orders_output,
+    ("orders", "outputs"): orders_output,
     ("orders", "estimation"): orders_estimation,
     ("orders", "ts"): orders_ts,
     ("orders", "time_column"): orders_time_column,
