@@ -664,8 +664,10 @@ def orders_input(f, calls):
 
 
 def orders_output(f, calls):
-    doc = _json(_orders(f, "-y", "y2", "--json"))
+    doc = _json(_run("orders", f.csv, "-u", "u", "-y", "y2", "--max-na", "2", "--json"))
     assert _tested(calls)[0].outputs == ("y2",) and doc["output"] == "y2"
+    # a second -y is refused, not silently the one analysed
+    _orders(f, "-y", "y2", code=2)
 
 
 def orders_estimation(f, calls):
