@@ -76,7 +76,7 @@ import numpy as np
 from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_simulate
 from blockid.data.dataset import Dataset
-from blockid.defaults import TIE
+from blockid.defaults import MAX_ORDER, TIE, TOLERANCE, WEIGHTING
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.checks import margin_for, stability_margin
@@ -312,9 +312,9 @@ def subspace(
     data: Dataset,
     *,
     nx: int | None = None,
-    max_order: int = 10,
+    max_order: int = MAX_ORDER,
     horizon: int | None = None,
-    weighting: str = "moesp",
+    weighting: str = WEIGHTING,
     feedthrough: bool = False,
 ) -> SubspaceResult:
     """Linear state-space model by subspace identification (module docstring).
@@ -452,13 +452,13 @@ class _Problem:
         with kernel_threads(threads), NormalSums(nm + nx * n_exp, threads) as sums:
             for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
                 cols = np.r_[np.arange(nm), nm + e * nx + np.arange(nx)]
+                own = model.selects_columns  # walks the kept columns alone, into a buffer
+                carried = (
+                    model._sensitivity_start(x0, kept) if own else model._sensitivity_start(x0)
+                )
                 for k0 in range(0, u.shape[0], CHUNK):
-                    if k0 == 0 and model.selects_columns:
-                        carried = model._sensitivity_start(x0, kept)
-                    elif k0 == 0:
-                        carried = model._sensitivity_start(x0)
                     with np.errstate(all="ignore"):
-                        if model.selects_columns:
+                        if own:
                             sums.wait()  # the buffer about to be overwritten is free
                             out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried,
                                                           buffer=buffers[piece % 2])  # fmt: skip
@@ -480,9 +480,9 @@ def refine_state_space(
     initial_states: list[np.ndarray] | None = None,
     feedthrough: bool = True,
     max_nfev: int = 100,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
 ) -> tuple[PolynomialStateSpace, dict[str, Any]]:
     """Refine every parameter of ``model`` (``D`` held where it is without
     ``feedthrough``) and every experiment's initial state on the free-run simulation
@@ -570,15 +570,15 @@ def fit_state_space(
     data: Dataset,
     *,
     nx: int | None = None,
-    max_order: int = 10,
+    max_order: int = MAX_ORDER,
     horizon: int | None = None,
-    weighting: str = "moesp",
+    weighting: str = WEIGHTING,
     feedthrough: bool = False,
     refine: bool = True,
     max_nfev: int = 100,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
 ) -> FitResult:
     """Linear state-space model: subspace estimate, then (``refine``) output error.
 
@@ -643,9 +643,9 @@ def fit_subspace(
     data: Dataset,
     *,
     nx: int | None = None,
-    max_order: int = 10,
+    max_order: int = MAX_ORDER,
     horizon: int | None = None,
-    weighting: str = "moesp",
+    weighting: str = WEIGHTING,
     feedthrough: bool = False,
 ) -> FitResult:
     """The subspace estimate alone (:func:`fit_state_space` with ``refine=False``)."""
@@ -721,15 +721,15 @@ def fit_polynomial_state_space(
     nx: int | None = None,
     degree: int = 3,
     monomials: str = "full",
-    max_order: int = 10,
+    max_order: int = MAX_ORDER,
     horizon: int | None = None,
-    weighting: str = "moesp",
+    weighting: str = WEIGHTING,
     feedthrough: bool = False,
     margin: float = 0.25,
     max_nfev: int = 500,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
 ) -> FitResult:
     """Polynomial nonlinear state-space model started from the best linear one.
 
