@@ -11,11 +11,21 @@ The recursive estimators' defaults differ by estimator on purpose; each entry sa
 
 from __future__ import annotations
 
-__all__ = ["DEGREE", "RECURSIVE", "TIE", "recursive_default"]
+__all__ = ["DEGREE", "MAX_ORDER", "RECURSIVE", "TIE", "TOLERANCE", "WEIGHTING", "recursive_default"]
 
 #: Degree of a polynomial block when none is given: r1 (input block) and r2 (output
 #: block), paper B's r1 = r2 = 3.
 DEGREE = 3
+
+#: The simulation-error refinements' stopping tolerances ``ftol``, ``xtol`` and ``gtol``
+#: (as ``scipy.optimize.least_squares`` reads them; MINPACK's test for ``ftol``): tight,
+#: so that a fit ends at convergence or at its ``max_nfev``, which says so.
+TOLERANCE = 1e-10
+
+#: The largest state dimension a state-space fit reads its default order among, and the
+#: subspace method's weighting (PO-MOESP; ``cva`` the alternative).
+MAX_ORDER = 10
+WEIGHTING = "moesp"
 
 #: Two cross-validated errors within this fraction of each other are a tie, the simpler
 #: candidate taken: ``identify``'s ``tie`` and the polynomial state space's default order

@@ -32,6 +32,7 @@ from blockid._kernels import writable
 from blockid._kernels.state_space import channel_response
 from blockid.blocks.base import Block, StaticBlock, block_template, channel_specs
 from blockid.data.dataset import Dataset
+from blockid.defaults import MAX_ORDER, TOLERANCE, WEIGHTING
 from blockid.errors import ParameterError
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space import (
@@ -318,14 +319,14 @@ def fit_block_state_space(
     output_block: Any = None,
     loop_block: Any = None,
     nx: int | None = None,
-    max_order: int = 10,
+    max_order: int = MAX_ORDER,
     horizon: int | None = None,
-    weighting: str = "moesp",
+    weighting: str = WEIGHTING,
     feedthrough: bool = False,
     max_nfev: int = 100,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
 ) -> FitResult:
     """Static blocks per channel around a linear state-space core (module docstring).
 

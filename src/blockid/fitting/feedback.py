@@ -47,6 +47,7 @@ from blockid.blocks import Polynomial
 from blockid.blocks.base import LinearFamily, StaticBlock
 from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
+from blockid.defaults import TOLERANCE
 from blockid.errors import BlockidError, EstimationError, ParameterError
 from blockid.fitting.checks import simulation_mse, stability_margin
 from blockid.fitting.initial import _lagged, _least_squares, _stabilise
@@ -243,9 +244,9 @@ def fit_feedback(
     max_nfev: int = 200,
     tail_fraction: float = 0.2,
     patience: int = 5,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
     center: bool = False,
 ) -> FitResult:
     """Identify a linear block with a static nonlinearity in feedback by free-run

@@ -76,7 +76,7 @@ from scipy.optimize import least_squares
 
 from blockid.blocks.base import Block
 from blockid.data.dataset import Dataset
-from blockid.defaults import DEGREE
+from blockid.defaults import DEGREE, TOLERANCE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.fitting.checks import check_model, margin_for, simulation_mse, stability_margin
 from blockid.fitting.initial import initial_estimate, resolve_structure
@@ -404,9 +404,9 @@ def refine(
     max_nfev: int = 200,
     tail_fraction: float = 0.2,
     patience: int = 5,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
 ) -> FitResult:
     """Refine any block-oriented model by minimising its free-run simulation error.
 
@@ -591,9 +591,9 @@ def fit_simulation_error(
     max_nfev: int = 200,
     tail_fraction: float = 0.2,
     patience: int = 5,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
 ) -> FitResult:
     """Identify a block-oriented model by minimising its free-run simulation error.
 

@@ -40,6 +40,7 @@ import numpy as np
 from blockid.blocks import Polynomial
 from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
+from blockid.defaults import TOLERANCE
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
 from blockid.fitting.checks import margin_for, simulation_mse, stability_margin
@@ -197,9 +198,9 @@ def fit_wiener_hammerstein(
     max_nfev: int = 200,
     tail_fraction: float = 0.2,
     patience: int = 5,
-    ftol: float = 1e-10,
-    xtol: float = 1e-10,
-    gtol: float = 1e-10,
+    ftol: float = TOLERANCE,
+    xtol: float = TOLERANCE,
+    gtol: float = TOLERANCE,
 ) -> FitResult:
     """Identify a Wiener-Hammerstein model from the BLA's split (module docstring).
 
