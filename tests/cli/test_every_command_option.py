@@ -767,6 +767,13 @@ def identify_jobs(f, calls):
     assert _searched(calls)[2]["jobs"] == 1
 
 
+def identify_scheduler(f, calls):
+    _identify(f, "--scheduler", "tcp://127.0.0.1:8786", "--json")
+    assert _searched(calls)[2]["scheduler"] == "tcp://127.0.0.1:8786"
+    r = _identify(f, "--scheduler", "tcp://127.0.0.1:8786", "--jobs", "2", code=2)
+    assert "not both" in r.stderr
+
+
 def identify_time_limit(f, calls):
     _identify(f, "--time-limit", "7.5", "--json")
     assert _searched(calls)[2]["time_limit"] == 7.5
@@ -1435,6 +1442,7 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("identify", "structures"): identify_structures,
     ("identify", "effort"): identify_effort,
     ("identify", "jobs"): identify_jobs,
+    ("identify", "scheduler"): identify_scheduler,
     ("identify", "time_limit"): identify_time_limit,
     ("identify", "budget"): identify_budget,
     ("identify", "out"): identify_out,

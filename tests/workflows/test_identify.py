@@ -717,3 +717,38 @@ def test_a_warm_start_replaces_the_direct_fit_only_when_better_by_more_than_the_
     fit, info = _final(search(1.0 / 1.021), score, notes := [])
     assert fit.settings == {"who": "warm", "initial": "the model fitted without fold 1"}
     assert info["chosen"] == "the model fitted without fold 1" and len(notes) == 1
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+        silence_logs=50,
+    ) as running:
+        yield running.scheduler_address
+
+
+def test_a_dask_cluster_gives_the_model_of_one_worker_bit_for_bit(cluster):
+    data = dead_zone_record(500)
+    one = identify(data, structures=["arx", "hammerstein"], effort=SMALL, jobs=1)
+    far = identify(data, structures=["arx", "hammerstein"], effort=SMALL, scheduler=cluster)
+    assert one.selected.candidate == far.selected.candidate
+    assert np.array_equal(one.model.free_parameters(), far.model.free_parameters())
+    assert [s.rmse for s in one.ranked] == [s.rmse for s in far.ranked]
+    assert _fits(one) == _fits(far)
+    assert far.search["jobs"] == 2 and far.search["scheduler"] == cluster
+
+
+def test_a_scheduler_and_jobs_together_are_refused(cluster):
+    with pytest.raises(errors.ParameterError, match="not both"):
+        identify(dead_zone_record(300), structures=["arx"], effort=SMALL, jobs=2,
+                 scheduler=cluster)  # fmt: skip
+
+
+def test_an_unreachable_scheduler_is_named(monkeypatch):
+    pytest.importorskip("distributed")
+    monkeypatch.setattr("blockid.workflows.parallel.CONNECT_TIMEOUT", 1.0)
+    with pytest.raises(errors.ParameterError, match="cannot reach the dask scheduler"):
+        identify(dead_zone_record(300), structures=["arx"], effort=SMALL,
+                 scheduler="tcp://127.0.0.1:9")  # fmt: skip

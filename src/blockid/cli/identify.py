@@ -103,6 +103,14 @@ def identify(
         int | None,
         typer.Option(metavar="N", help="Worker processes (default: every core)."),
     ] = None,
+    scheduler: Annotated[
+        str | None,
+        typer.Option(
+            metavar="ADDRESS",
+            help="Fit the candidates on a running dask cluster, e.g. tcp://host:8786 (the "
+            "record is sent to each worker once; the same model as --jobs). Not with --jobs.",
+        ),
+    ] = None,
     time_limit: Annotated[
         float | None,
         typer.Option(
@@ -146,6 +154,11 @@ def identify(
     refuse_to_overwrite(report, force)
     names = [s.strip() for s in structures.split(",") if s.strip()] if structures else None
     check_search(names, effort, jobs=jobs, time_limit=time_limit)
+    if scheduler is not None and jobs is not None:
+        raise ParameterError(
+            "give --jobs (worker processes here) or --scheduler (a dask cluster), not both",
+            parameter="scheduler",
+        )
     check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
     if validation:
         check_disjoint(estimation or ":", validation)
@@ -162,7 +175,9 @@ def identify(
 
     refuse_figures(plot, FIT_FIGURES, force)
     bar, update = _progress(quiet or json_out)
-    options = dict(structures=names, effort=effort, jobs=jobs, time_limit=time_limit)
+    options = dict(
+        structures=names, effort=effort, jobs=jobs, scheduler=scheduler, time_limit=time_limit
+    )
     if bar is not None:
         with bar:
             result = run_identify(est, val, progress=update, **options)
@@ -234,6 +249,7 @@ def _print(result: Any) -> None:
     search = result.search
     cut = " (cut by the time limit)" if search.get("cut_by_time_limit") else ""
     stdout.print(
-        f"search: effort {search.get('effort')}, {search.get('jobs')} job(s), "
+        f"search: effort {search.get('effort')}, {search.get('jobs')} job(s)"
+        f"{' on ' + search['scheduler'] if search.get('scheduler') else ''}, "
         f"{result.seconds:.1f} s{cut}"
     )

@@ -94,9 +94,9 @@ whole experiments.
 
 **Deterministic.** The search is a fixed amount of work: no stage depends on the
 clock, so the same data, options and version give the same model, bit for bit, on a
-busy or an idle machine and with any number of ``jobs``
-(:mod:`blockid.workflows.parallel`: results merged in a fixed order, every fit with a
-single BLAS thread). ``time_limit`` is a safety cap only: when it cuts a stage the
+busy or an idle machine, with any number of ``jobs`` and on a dask cluster
+(``scheduler``; :mod:`blockid.workflows.parallel`: results merged in a fixed order, every
+fit with a single BLAS thread). ``time_limit`` is a safety cap only: when it cuts a stage the
 result says so (``cut_by_time_limit``) and is no longer reproducible.
 
 Validation data, when given, are used only after the choice, to report.
@@ -515,7 +515,7 @@ class _Search:
         parts = tuple(s for f in self.plan.folds for s in f.test)
         t0 = time.perf_counter()
         self.stages.append({"stage": "refit", "candidates": 1, "fits": 1})
-        with _single_threaded(), fit_threads(self.runner.jobs):
+        with _single_threaded(), fit_threads(self.runner.local_threads):
             direct = _final_fit(self.data, _Start(cand, None, limit, self.n_init, score.rmse))
         out = [("the direct fit", direct)]
         eff = self.effort
@@ -929,6 +929,7 @@ def identify(
     structures: Sequence[str] | None = None,
     effort: str | Effort = "standard",
     jobs: int | None = None,
+    scheduler: Any = None,
     time_limit: float | None = None,
     rule: str = "geometric-mean",
     tie: float = TIE,
@@ -954,6 +955,11 @@ def identify(
         same effort on the same data gives the same model on any machine.
     jobs : int, optional
         Worker processes (default: every core this process may use).
+    scheduler : str or distributed.Client or cluster, optional
+        Fit the candidates on this dask cluster instead of local worker processes (an
+        address such as ``tcp://host:8786``, a client or a cluster): the record is sent
+        to each worker once, and the model is the one ``jobs=1`` gives, bit for bit. The
+        refit on all the data runs here. Not with ``jobs``.
     time_limit : float, optional
         Seconds after which no new fit starts (a safety cap; the result then says it was
         cut and may differ from an uncut run). None: no cap.
@@ -974,6 +980,11 @@ def identify(
     if not isinstance(data, Dataset):
         raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
     eff, asked = check_search(structures, effort, rule, jobs, time_limit)
+    if scheduler is not None and jobs is not None:
+        raise ParameterError(
+            "give jobs (worker processes here) or scheduler (a dask cluster), not both",
+            parameter="scheduler",
+        )
     chosen = asked or list(searched_structures())
     notes: list[str] = []
     if data.n_inputs != 1 or data.n_outputs != 1:
@@ -1012,7 +1023,7 @@ def identify(
     warm: list[dict[str, Any]] = []
     fit, selected = None, None
     short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
-    with TaskRunner(data, min(jobs, 64)) as runner:
+    with TaskRunner(data, min(jobs, 64), scheduler) as runner:
         search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
         _stages(search, chosen, recommended, notes, asked=bool(asked))
         ranked_all = search.ranked()
@@ -1082,7 +1093,8 @@ def identify(
     info = {
         "effort": eff.name,
         "effort_settings": eff.to_dict(),
-        "jobs": jobs,
+        "jobs": runner.jobs,
+        "scheduler": runner.address,
         "rule": rule,
         "folds": plan.to_dict(data),
         "initial_samples": search.n_init,

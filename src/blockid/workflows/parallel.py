@@ -22,6 +22,12 @@ merges them gives the same answer with one worker or two.
   OpenMP thread pools limited to one thread (the environment above in a worker,
   :mod:`threadpoolctl` here): the results do not depend on how the work is spread, and
   ``jobs`` workers use ``jobs`` cores.
+* **Or on a cluster.** Given a ``scheduler`` (a ``dask.distributed`` address, cluster or
+  client), the items go to the cluster's workers as tasks instead: the record is sent
+  to every worker once (``Client.scatter(..., broadcast=True)``), not with each task;
+  each task runs with one thread in every pool, like a local worker, so the results are
+  those of ``jobs = 1`` bit for bit. The workers must be able to import blockid (the
+  same version: the arithmetic is the same only with the same code).
 * **A cap, not a budget.** :meth:`TaskRunner.map` takes a ``deadline`` (a
   :func:`time.monotonic` value): items not started by then are cancelled and their
   results are None. The caller says so; nothing else depends on the clock.
@@ -38,7 +44,12 @@ import numpy as np
 
 from blockid.data.dataset import Dataset, Experiment
 
-__all__ = ["TaskRunner", "available_cores"]
+__all__ = ["MISSING_DASK", "TaskRunner", "available_cores"]
+
+#: Seconds to wait for a dask scheduler to answer before saying it cannot be reached.
+CONNECT_TIMEOUT = 10.0
+#: What to do when a scheduler is given and dask.distributed is not installed.
+MISSING_DASK = "a dask scheduler needs dask.distributed: pip install 'blockid[fleet]'"
 
 #: Set in each worker process by :func:`_start_worker`.
 _WORKER_DATA: Dataset | None = None
@@ -116,6 +127,23 @@ def _call(fn: Callable[[Dataset, Any], Any], item: Any) -> Any:
     return fn(_WORKER_DATA, item)
 
 
+#: Set once in a dask worker process by :func:`_cluster_call`: its thread pools limited.
+_CLUSTER_LIMITS: Any = None
+
+
+def _cluster_call(fn: Callable[[Dataset, Any], Any], data: Dataset, item: Any) -> Any:
+    """A task on a dask worker: ``fn(data, item)`` with one thread in every pool (set for
+    the life of the worker process, as a local worker's initialiser does: a limit lifted
+    when one task ends would change the arithmetic of a task running beside it)."""
+    global _CLUSTER_LIMITS
+    if _CLUSTER_LIMITS is None:
+        from blockid.fitting.threads import set_fit_threads
+
+        _CLUSTER_LIMITS = _single_threaded()
+        set_fit_threads(1)
+    return fn(data, item)
+
+
 class TaskRunner:
     """Runs ``fn(data, item)`` over items, here or in worker processes (module notes).
 
@@ -126,20 +154,74 @@ class TaskRunner:
     data : Dataset
         The record every call gets.
     jobs : int
-        Worker processes; 1 runs everything in this process.
+        Worker processes; 1 runs everything in this process. Ignored with a scheduler.
+    scheduler : str or distributed.Client or cluster, optional
+        Run the items on this dask cluster instead (module notes). A client given is
+        used and left open; one made here from an address or a cluster is closed.
+
+    Attributes
+    ----------
+    jobs : int
+        Items run side by side: the worker processes, or the cluster's worker threads.
+    local_threads : int
+        Threads a fit run here (not on a worker) may take: ``jobs`` without a
+        scheduler, else every core of this machine.
+    address : str or None
+        The dask scheduler's address (None: no cluster).
     """
 
-    def __init__(self, data: Dataset, jobs: int) -> None:
+    def __init__(self, data: Dataset, jobs: int, scheduler: Any = None) -> None:
         self.data = data
         self.jobs = max(1, int(jobs))
+        self.local_threads = self.jobs
+        self.scheduler = scheduler
+        self.address: str | None = None
         self._pool: Any = None
         self._memory: Any = None
+        self._client: Any = None
+        self._own_client = False
+        self._scattered: Any = None
         self._submitted: list[Any] = []
 
     def __enter__(self) -> TaskRunner:
-        if self.jobs > 1:
+        if self.scheduler is not None:
+            self._connect()
+        elif self.jobs > 1:
             self._start()
         return self
+
+    def _connect(self) -> None:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise ImportError(MISSING_DASK) from None
+        from blockid.errors import ParameterError
+
+        if isinstance(self.scheduler, Client):
+            self._client = self.scheduler
+        else:
+            try:
+                self._client = Client(self.scheduler, timeout=CONNECT_TIMEOUT)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise ParameterError(
+                    f"cannot reach the dask scheduler {self.scheduler!r}: {exc}; start one "
+                    "(dask scheduler; dask worker ADDRESS) or leave --scheduler out to use "
+                    "this machine's cores",
+                    parameter="scheduler",
+                ) from None
+            self._own_client = True
+        threads = sum(w["nthreads"] for w in self._client.scheduler_info()["workers"].values())
+        if threads < 1:
+            self.close()
+            raise ParameterError(
+                f"the dask cluster at {self.scheduler!r} has no workers; start at least one "
+                "(dask worker ADDRESS)",
+                parameter="scheduler",
+            )
+        self.jobs = threads
+        self.local_threads = available_cores()
+        self.address = str(self._client.scheduler.address)
+        self._scattered = self._client.scatter(self.data, broadcast=True, hash=False)
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
@@ -172,6 +254,16 @@ class TaskRunner:
         )
 
     def close(self) -> None:
+        if self._client is not None:
+            for future in self._submitted:
+                future.cancel()
+            self._submitted = []
+            if self._scattered is not None:
+                self._scattered.release()
+                self._scattered = None
+            if self._own_client:
+                self._client.close()
+            self._client = None
         if self._pool is not None:
             for future in self._submitted:  # not started yet (an interrupted map): dropped
                 future.cancel()
@@ -197,6 +289,8 @@ class TaskRunner:
         workers). Items not started by ``deadline`` (:func:`time.monotonic`) give None.
         """
         results: list[Any] = [None] * len(items)
+        if self._client is not None:
+            return self._map_cluster(fn, items, results, done, deadline)
         if self._pool is None:
             from blockid.fitting.threads import fit_threads
 
@@ -227,4 +321,48 @@ class TaskRunner:
                 for future in pending:
                     future.cancel()  # those already running finish; the rest do not start
                 deadline = None  # then wait for the running ones without a timeout
+        return results
+
+    def _map_cluster(
+        self,
+        fn: Callable[[Dataset, Any], Any],
+        items: Sequence[Any],
+        results: list[Any],
+        done: Callable[[int, Any], None] | None,
+        deadline: float | None,
+    ) -> list[Any]:
+        """:meth:`map` on the dask cluster. At the deadline every unfinished task is
+        cancelled (a dask worker cannot be told to finish the running ones only)."""
+        import uuid
+
+        from distributed import as_completed
+
+        batch = uuid.uuid4().hex[:12]
+        futures = {
+            self._client.submit(
+                _cluster_call, fn, self._scattered, item, key=f"blockid-{batch}-{i}", pure=False
+            ): i
+            for i, item in enumerate(items)
+        }
+        self._submitted = list(futures)
+        running = as_completed(futures)
+        while not running.is_empty():
+            if deadline is None:
+                ready = running.next_batch(block=True)
+            else:
+                ready = running.next_batch(block=False)
+                if not ready:
+                    if time.monotonic() > deadline:
+                        for future in futures:
+                            if not future.done():
+                                future.cancel()
+                        break
+                    time.sleep(0.02)
+                    continue
+            for future in ready:
+                i = futures[future]
+                results[i] = future.result()
+                if done is not None:
+                    done(i, results[i])
+        self._submitted = []
         return results
