@@ -1,6 +1,8 @@
 """Online learning (fitting/online.py): any chunking of a record ends where the offline
 one-pass fit with the matching scaling ends, bit for bit."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -282,6 +284,95 @@ def test_arx_divergence_rolls_back_every_output():
     with pytest.raises(EstimationError, match="output 'y2' diverged at sample 151"):
         online.partial_fit(u[100:], y[100:])
     np.testing.assert_array_equal(_vector(online), good)  # y1 rolled back too
+
+
+# ---------------------------------------------------------------------- not learning
+def test_arx_a_held_sample_is_a_regression_row_left_out():
+    """Issue 37: ``update(.., learn=False)`` takes the sample into the regressors of the
+    samples after it (their lags stay true) and learns nothing from it: the estimate
+    is the exact least-squares answer (with RLS's prior 1/P(0)) over the other rows;
+    the prediction it returns is the model's one-step prediction."""
+    u, y = _record(TITO, 400, noise=0.05)
+    held = {60, 61, 200}
+    online = online_estimator("arx", "rls", ARX_ORDERS, ["u1", "u2"], ["y1", "y2"])
+    for k in range(len(u)):
+        before = online.model()
+        prediction = online.update(u[k], y[k], learn=k not in held)
+        if k in held:
+            np.testing.assert_allclose(prediction, before.predict(u[: k + 1], y[: k + 1])[-1])
+    assert online.n_samples == len(u)
+    model, lag = online.model(), TITO.max_lag
+    keep = [t - lag for t in range(lag, len(u)) if t not in held]
+    for i in range(2):
+        Phi, target = TITO.regressors(u, y, i)
+        Phi, target = Phi[keep], target[keep]
+        mu = 1e8  # RLS's default P(0): a prior of weight 1/mu on theta(0) = 0
+        exact = np.linalg.solve(Phi.T @ Phi + np.eye(Phi.shape[1]) / mu, Phi.T @ target)
+        np.testing.assert_allclose(model.parameter_vector(i), exact, rtol=1e-6, atol=1e-9)
+
+
+LEARNERS = {
+    "arx-rls": ("arx", "rls", ARX_ORDERS, TITO),
+    "arx-aw-rls": ("arx", "aw-rls", ARX_ORDERS, TITO),
+    "arx-hierarchical-rls": ("arx", "hierarchical-rls", ARX_ORDERS, TITO),
+    "hammerstein-wiener": (
+        "hammerstein-wiener",
+        "key-term-rls",
+        ORDERS,
+        PLANTS["hammerstein-wiener"],
+    ),
+    "backlash": ("backlash", "aw-rls", {"na": 2, "nb": 1, "nk": 1}, BACKLASH),
+}
+
+
+@pytest.mark.parametrize("name", list(LEARNERS))
+def test_hold_revert_and_rewind_leave_the_estimate_and_move_the_memory(name):
+    """Every learner: a held sample leaves theta and P as they were and is counted;
+    revert takes back the last update exactly; rewind puts back a snapshot's estimate
+    while the memory stays current (the next predictions are those of that estimate
+    on the true lags)."""
+    structure, method, options, plant = LEARNERS[name]
+    names = [list(plant.inputs), list(plant.outputs)]
+    u, y = _record(plant, 300, noise=0.01)
+    online = online_estimator(structure, method, options, *names)
+    twin = online_estimator(structure, method, options, *names)  # learns every sample
+    for k in range(200):
+        online.update(u[k], y[k])
+        twin.update(u[k], y[k])
+    snapshot, estimate = online.snapshot(), _vector(online)
+    online.update(u[200], y[200], learn=False)
+    np.testing.assert_array_equal(_vector(online), estimate)
+    assert online.n_samples == 201
+    online.update(u[201], y[201])
+    online.revert()
+    np.testing.assert_array_equal(_vector(online), estimate)
+    for k in range(202, 250):
+        online.update(u[k], y[k])
+    assert not np.array_equal(_vector(online), estimate)
+    online.rewind(snapshot)
+    np.testing.assert_array_equal(_vector(online), estimate)
+    assert online.n_samples == 250
+    if structure == "arx":  # the prediction of the rewound estimate on the true lags
+        model = online.model()
+        np.testing.assert_allclose(
+            online.update(u[250], y[250]), model.predict(u[:251], y[:251])[-1], rtol=1e-12
+        )
+    json.dumps(snapshot)  # JSON-ready (a stream's checkpoint holds it)
+
+
+def test_revert_after_a_glitch_leaves_no_trace_in_the_key_term_limit():
+    """A reverted output glitch does not stay in max|y| (the divergence limit of the
+    internal estimates), which a checkpoint saves."""
+    plant = PLANTS["hammerstein"]
+    u, y = _record(plant, 200, noise=0.01)
+    online = online_estimator("hammerstein", "key-term-rls", {**ORDERS, "r1": 3}, "u", "y")
+    online.partial_fit(u[:150], y[:150])
+    state = online.state()
+    online.update(u[150], 1e8)
+    online.revert()
+    after = online.state()
+    for key in ("theta", "P", "_y_max", "_limits"):
+        assert after[key] == state[key], key
 
 
 # ---------------------------------------------------------------------- options

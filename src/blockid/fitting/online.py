@@ -61,6 +61,19 @@ the samples seen so far) or a zero backlash slope raises
 :class:`~blockid.errors.EstimationError` naming the sample (counted from the first
 sample fed, also in ``error.sample``); the backend is left as it was before the call,
 so a stream can report it and go on or stop.
+
+Not learning from a sample (for a caller that judges samples: the outlier guard of
+:mod:`blockid.workflows.stream`). ``update(u, y, learn=False)`` takes a sample into the
+learner's memory (the window its regressors reach back into, and the internal
+estimates) and returns its prediction, leaving ``theta`` and ``P`` as they were: the
+samples after it keep their true lags. :meth:`OnlineEstimator.revert` takes back the
+last update's change of the estimate, the sample staying in the memory (a sample judged
+by its prediction error, which exists only once the update ran); :meth:`~OnlineEstimator.snapshot`
+and :meth:`~OnlineEstimator.rewind` save and put back the estimate alone (``theta``,
+``P``, where a forgetting schedule stands), the memory staying current. For ARX the
+held sample does not touch the recursion at all; the papers' methods run the step and
+put ``theta`` and ``P`` back, so their internal estimates of that sample are the
+updated estimate's (their window still moves on).
 """
 
 from __future__ import annotations
@@ -306,15 +319,17 @@ class OnlineEstimator(ABC):
     Attributes
     ----------
     n_samples : int
-        Samples learned from so far.
+        Samples taken in so far: learned from, or held (``update(.., learn=False)``).
     """
 
     #: Attributes that hold the learner's state between samples (:meth:`state`).
     _state: tuple[str, ...] = ("n_samples",)
+    #: Those of them that are the estimate (:meth:`snapshot`); the rest is the memory.
+    _estimate: tuple[str, ...] = ("theta", "P")
 
     def __init__(self, names: tuple[tuple[str, ...], tuple[str, ...]]) -> None:
         self.names = _Names(*names)  # signal names of the model
-        self.n_samples = 0  # samples learned from so far
+        self.n_samples = 0  # samples taken in so far (learned from or held)
         self._nu, self._ny = len(self.names.inputs), len(self.names.outputs)
 
     def state(self) -> dict[str, Any]:
@@ -345,7 +360,7 @@ class OnlineEstimator(ABC):
         self.predictions_ = self._learn(u, y) if u.shape[0] else np.zeros_like(y)
         return self
 
-    def update(self, u: Any, y: Any) -> np.ndarray:
+    def update(self, u: Any, y: Any, learn: bool = True) -> np.ndarray:
         """Learn from one sample; returns the one-step prediction of ``y`` made with the
         estimate before the update, shape (ny,) (NaN before the first update: the
         first ``max_lag`` samples only fill the regressor).
@@ -354,8 +369,61 @@ class OnlineEstimator(ABC):
         (B5, A2, A8) in the data's units: for ARX the model's one-step prediction; for
         the block-oriented models it uses the internal estimates ``x_hat, w_hat`` the
         recursion carries.
+
+        ``learn=False`` takes the sample into the memory only: the estimate stays as it
+        was (module docstring), and the prediction is made all the same.
         """
-        return self._step(*self._sample(u, y))
+        if learn:
+            return self._step(*self._sample(u, y))
+        return self._hold(*self._sample(u, y))
+
+    @property
+    def max_lag(self) -> int:
+        """Samples of history the recursion reaches back to: a sample is in the
+        regressors of the ``max_lag`` samples after it (and of its own)."""
+        return int(self.L)
+
+    @property
+    def n_parameters(self) -> int:
+        """Coefficients of one recursion (of the largest, for ARX of several outputs)."""
+        return int(self.theta.size)
+
+    def revert(self) -> None:
+        """Take back the estimate change (``theta``, ``P``, the schedule's count) of
+        the last sample learned by :meth:`update`; the sample stays in the memory.
+
+        >>> online = online_estimator("arx", "rls", {"na": 1, "nb": 1}, ["u"], ["y"])
+        >>> for u, y in [(1.0, 0.0), (0.5, 2.0), (-1.0, 1.5)]:
+        ...     _ = online.update(u, y)
+        >>> before = online.estimate()
+        >>> _ = online.update(2.0, 1e8)  # a glitch
+        >>> online.revert()
+        >>> online.estimate() == before, online.n_samples
+        (True, 4)
+        """
+        self._revert()
+
+    def snapshot(self) -> dict[str, Any]:
+        """The estimate alone (``theta``, ``P``, where a forgetting schedule stands),
+        JSON-ready, for :meth:`rewind`."""
+        return {name: _encode(getattr(self, name)) for name in self._estimate}
+
+    def rewind(self, snapshot: dict[str, Any]) -> None:
+        """Put back an estimate of :meth:`snapshot`; the memory of the recent samples
+        stays current (the samples after a rewind keep their true lags)."""
+        for name in self._estimate:
+            _decode_into(self, name, snapshot[name])
+
+    def _hold(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """A sample taken into the memory, not learned from: the step, then the
+        estimate put back (backends that can hold without a step override this)."""
+        prediction = self._step(u, y)
+        self._revert()
+        return prediction
+
+    @abstractmethod
+    def _revert(self) -> None:
+        """Put back the estimate from before the last step (:meth:`revert`)."""
 
     def _sample(self, u: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
         """One sample as flat float arrays, checked (the lean test first, the full
@@ -415,12 +483,16 @@ class OnlineEstimator(ABC):
 
     def _diverged(self, method: str, index: int, reason: str) -> EstimationError:
         sample = self.n_samples + index
-        error = EstimationError(
+        summary = (
             f"{method} diverged at sample {sample} (counted from the first sample learned "
-            f"online): {reason}. The estimator is left as it was before this call; go on "
-            "with the next samples or stop. See docs/convergence.md"
+            f"online): {reason}"
+        )
+        error = EstimationError(
+            f"{summary}. The estimator is left as it was before this call; go on with the "
+            "next samples or stop. See docs/convergence.md"
         )
         error.sample = sample
+        error.summary = summary  # without the advice (a stream gives its own)
         return error
 
 
@@ -466,7 +538,8 @@ class _PaperOnline(OnlineEstimator):
         self._buf = np.zeros((len(self._rows), lag + 1))  # history | one free slot
         self._err1 = np.full(lag + 1, np.nan)  # a-priori error of the per-sample path
         self._y_max = 0.0  # largest |y| (scaled) seen: the x_hat divergence limit
-        self._bak = (np.empty(n), np.empty((n, n)))  # state before a step (roll-back)
+        self._bak = (theta0.copy(), self.P.copy())  # theta, P before a step (roll-back)
+        self._y_max_bak = 0.0  # max|y| before a step (revert)
         self._views = [self._buf[i] for i in range(len(self._rows))]  # rows of the window
 
     @abstractmethod
@@ -502,6 +575,9 @@ class _PaperOnline(OnlineEstimator):
         status, reason = self._run(theta, P, arrays, n0, count, err, y_max)
         if status != _kr.OK:
             raise self._diverged(self.algorithm.method, status - L, self.algorithm.reasons[reason])
+        np.copyto(self._bak[0], self.theta)
+        np.copyto(self._bak[1], self.P)
+        self._y_max_bak = self._y_max
         self.theta, self.P, self._y_max = theta, P, y_max
         for i, arr in enumerate(arrays):
             hist[i] = arr[m:]
@@ -528,10 +604,15 @@ class _PaperOnline(OnlineEstimator):
             np.copyto(self.theta, theta_bak)
             np.copyto(self.P, P_bak)
             raise self._diverged(self.algorithm.method, 0, self.algorithm.reasons[reason])
-        self._y_max = y_max
+        self._y_max_bak, self._y_max = self._y_max, y_max
         buf[:, :L] = buf[:, 1:]
         self.n_samples += 1
         return np.array([(ys - self._err1[L]) * self.sy])
+
+    def _revert(self) -> None:
+        np.copyto(self.theta, self._bak[0])
+        np.copyto(self.P, self._bak[1])
+        self._y_max = self._y_max_bak
 
     def model(self) -> Any:
         theta = self.algorithm.to_data_units(self.theta)
@@ -611,6 +692,8 @@ class _OnlineKeyTerm(_PaperOnline):
         self._no_hist = np.zeros((0, len(algorithm.names)))
         n = len(algorithm.names)
         self._saved = np.empty(n + n * n)  # theta and P before a step (roll-back)
+        self._saved[:n], self._saved[n:] = self.theta, self.P.ravel()
+        self._bak = (self._saved[:n], self._saved[n:].reshape(n, n))  # the same, as views
 
     def _step(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
         """The lean per-sample path: one compiled call (:func:`key_term_step`)."""
@@ -638,9 +721,13 @@ class _OnlineKeyTerm(_PaperOnline):
         if status != _kr.OK:
             self._limits[1] = 1e6 * (1.0 + y_max)
             raise self._diverged(self.algorithm.method, 0, self.algorithm.reasons[reason])
-        self._y_max = max(y_max, abs(ys))
+        self._y_max_bak, self._y_max = y_max, max(y_max, abs(ys))
         self.n_samples += 1
         return np.array([(ys - e) * self.sy])
+
+    def _revert(self) -> None:
+        super()._revert()
+        self._limits[1] = 1e6 * (1.0 + self._y_max)  # the limit follows max|y|
 
     def _vector(self, model: Any) -> np.ndarray:
         """``theta`` of a model in the data's units, in the order of (B4)."""
@@ -749,6 +836,7 @@ class _OnlineKeyTermChannels(OnlineEstimator):
         self._w, self._x = np.zeros((L, m)), np.zeros(L)
         self._y_max = 0.0
         self._ranges = np.array([[np.inf, -np.inf]] * (m + 1))  # inputs, then x_hat
+        self._previous = (self.theta, self.P, self._y_max, self._ranges.copy())  # revert
 
     def _learn(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
         alg, L, N = self.algorithm, self.L, u.shape[0]
@@ -772,6 +860,7 @@ class _OnlineKeyTermChannels(OnlineEstimator):
         )  # fmt: skip
         if status != _kr.OK:
             raise self._diverged(alg.method, status - L, alg.reasons[reason])
+        self._previous = (self.theta, self.P, self._y_max, self._ranges.copy())
         self.theta, self.P, self._y_max = theta, P, y_max
         self._phi, self._y, self._w, self._x = phi[N:], yy[N:], w[N:], x[N:]
         self._ranges[:-1, 0] = np.minimum(self._ranges[:-1, 0], u.min(axis=0))
@@ -781,6 +870,14 @@ class _OnlineKeyTermChannels(OnlineEstimator):
                                 max(self._ranges[-1, 1], float(x[L:].max()) * alg.sy)]  # fmt: skip
         self.n_samples += N
         return ((ys - err[L:]) * alg.sy)[:, None]
+
+    def _revert(self) -> None:
+        self.theta, self.P, self._y_max, ranges = self._previous
+        np.copyto(self._ranges, ranges)
+
+    def rewind(self, snapshot: dict[str, Any]) -> None:
+        self.theta, self.P = self.theta.copy(), self.P.copy()  # _previous keeps its own
+        super().rewind(snapshot)
 
     def model(self) -> Any:
         alg = self.algorithm
@@ -923,6 +1020,31 @@ class _OnlineARX(OnlineEstimator):
                     "updates": 0,  # updates so far (where the schedule stands)
                 }
             )
+        self._previous = self._estimates()  # per output before the last step (revert)
+
+    def _estimates(self) -> list[tuple[np.ndarray, np.ndarray, int]]:
+        """``(theta, P, updates)`` of every output, by reference (a step replaces the
+        arrays, never writes into them)."""
+        return [(o["theta"], o["P"], o["updates"]) for o in self.outputs]
+
+    def _revert(self) -> None:
+        for out, (theta, P, updates) in zip(self.outputs, self._previous, strict=True):
+            out["theta"], out["P"], out["updates"] = theta, P, updates
+
+    @property
+    def n_parameters(self) -> int:
+        return max(int(o["theta"].size) for o in self.outputs)
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"outputs": self.state()["outputs"]}
+
+    def rewind(self, snapshot: dict[str, Any]) -> None:
+        for out, saved in zip(self.outputs, snapshot["outputs"], strict=True):
+            for key in ("theta", "P"):  # fresh arrays: _previous keeps its own
+                out[key] = np.asarray(saved[key]["values"], dtype=float).reshape(
+                    saved[key]["shape"]
+                )
+            out["updates"] = int(saved["updates"])
 
     def state(self) -> dict[str, Any]:
         out = {name: _encode(getattr(self, name)) for name in ("n_samples", "_u", "_y")}
@@ -996,6 +1118,7 @@ class _OnlineARX(OnlineEstimator):
                 )
             pred[i] = target[0] - E[0]
             new.append((theta, P))
+        self._previous = self._estimates()
         for out, state in zip(self.outputs, new, strict=True):  # commit every output
             if state is not None:
                 out["theta"], out["P"] = state
@@ -1003,6 +1126,29 @@ class _OnlineARX(OnlineEstimator):
         n_y = (L + 1) * ny
         self._y = V[ny:n_y].reshape(L, ny)
         self._u = V[n_y + u.shape[0] :].reshape(L, u.shape[0])
+        self.n_samples += 1
+        return pred
+
+    def _hold(self, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The sample into the window, no kernel: the prediction ``phi^T theta`` of
+        every output (NaN while the window fills), the estimate untouched."""
+        L, ny = self.L, y.shape[0]
+        pred = np.full(ny, np.nan)
+        if self._u.shape[0] < L:  # still filling the regressor
+            self._u = np.vstack((self._u, u[None, :]))
+            self._y = np.vstack((self._y, y[None, :]))
+        else:
+            if "index" not in self.outputs[0]:
+                self._lean_regressors()
+            V = np.concatenate((self._y.ravel(), y, self._u.ravel(), u))
+            with np.errstate(over="ignore", invalid="ignore"):  # a glitch may overflow
+                for i, out in enumerate(self.outputs):
+                    if out["theta"].size:
+                        phi = out["sign"] * V[out["index"]] / out["divisor"]
+                        pred[i] = float(phi @ out["theta"])
+            n_y = (L + 1) * ny
+            self._y = V[ny:n_y].reshape(L, ny)
+            self._u = V[n_y + u.shape[0] :].reshape(L, u.shape[0])
         self.n_samples += 1
         return pred
 
@@ -1043,6 +1189,7 @@ class _OnlineARX(OnlineEstimator):
                 )
             pred[m - target.size :, i] = target - E
             new.append((theta, P, target.size))
+        self._previous = self._estimates()
         for out, state in zip(self.outputs, new, strict=True):  # commit every output
             if state is not None:
                 out["theta"], out["P"] = state[0], state[1]
@@ -1135,9 +1282,12 @@ class _OnlineBlockARX(_OnlineARX):
         self._widen(u)
         return self
 
-    def update(self, u: Any, y: Any) -> np.ndarray:
+    def update(self, u: Any, y: Any, learn: bool = True) -> np.ndarray:
         u, y = self._sample(u, y)
-        prediction = self._step(self.basis.expanded(u[None, :])[0], y)
+        expanded = self.basis.expanded(u[None, :])[0]
+        if not learn:  # a held sample does not widen the blocks' ranges
+            return self._hold(expanded, y)
+        prediction = self._step(expanded, y)
         self._widen(u[None, :])
         return prediction
 
