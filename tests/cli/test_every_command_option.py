@@ -1011,6 +1011,32 @@ def stream_stop_on_error(f, calls):
     assert "oops" in stopped[-2]["error_message"]
 
 
+def _with_glitch(f: Files) -> str:
+    """The test record with one output sample of 1e8 (data row 150)."""
+    rows = f.csv.read_text().splitlines()
+    cells = rows[151].split(",")
+    cells[rows[0].split(",").index("y")] = "1e8"
+    rows[151] = ",".join(cells)
+    return "\n".join(rows) + "\n"
+
+
+def stream_guard(f, calls):
+    text = _with_glitch(f)
+    guarded = _lines(_stream(f, text=text))
+    free = _lines(_stream(f, "--no-guard", text=text))
+    assert [kw["guard"] for _, kw in calls["StreamSession"]] == [10.0, None]
+    assert "not_learned" in guarded[150] and "not_learned" not in free[150]
+    assert guarded[-1]["guard"]["rejected"] == 1 and free[-1]["guard"]["threshold"] is None
+
+
+def stream_outlier_threshold(f, calls):
+    final = _lines(_stream(f, "--outlier-threshold", "50", text=_with_glitch(f)))[-1]
+    assert _streamed(calls)[1]["guard"] == 50.0
+    assert final["guard"]["threshold"] == 50.0 and final["guard"]["rejected"] == 1
+    r = _stream(f, "--outlier-threshold", "0.5", code=2)
+    assert "(option --outlier-threshold)" in r.stderr
+
+
 def stream_checkpoint(f, calls):
     out = f.path("online.json")
     r = _stream(f, "--checkpoint", "50", code=2)
@@ -1470,6 +1496,8 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("stream", "input_scale"): _stream_scale("input_scale"),
     ("stream", "output_scale"): _stream_scale("output_scale"),
     ("stream", "stop_on_error"): stream_stop_on_error,
+    ("stream", "guard"): stream_guard,
+    ("stream", "outlier_threshold"): stream_outlier_threshold,
     ("stream", "force"): stream_force,
     ("fleet", "inputs"): fleet_input,
     ("fleet", "outputs"): fleet_output,

@@ -206,15 +206,18 @@ def _with_bad_rows() -> str:
 
 
 def test_bad_rows_and_divergence_are_lines_and_the_stream_goes_on():
-    r = runner.invoke(app, ["stream", *ARX_ARGS], input=_with_bad_rows())
+    """Without the guard (which would reject row 30 before it diverges): a row that
+    cannot be read is skipped, a diverging one is taken in without learning from it."""
+    r = runner.invoke(app, ["stream", *ARX_ARGS, "--no-guard"], input=_with_bad_rows())
     assert r.exit_code == 0, r.output
     lines = _lines(r.stdout)
     errors = [line for line in lines if "error_message" in line]
     assert [(e["k"], e["line"]) for e in errors] == [(10, 12), (30, 32), (40, 42)]
     assert "'u' is 'x', not a number" in errors[0]["error_message"]
     assert "diverged" in errors[1]["error_message"]
+    assert "last good estimate" in errors[1]["error_message"]
     assert "1 fields" in errors[2]["error_message"]
-    assert lines[-1]["n_samples"] == 97
+    assert lines[-1]["n_samples"] == 98  # the two unreadable rows are not taken in
     # still near the plant (a skipped row leaves a wrong lag in the next regressors)
     np.testing.assert_allclose(_flat(lines[-1]["parameters"]), [-0.5, 0.0, 2.0], atol=0.1)
     assert "Traceback" not in r.output
@@ -253,8 +256,14 @@ def test_start_model_sets_theta0(tmp_path):
     path = save_model(start, tmp_path / "start.json")
     r = runner.invoke(app, ["stream", "-u", "u", "-y", "y", "--model", str(path)], input="u,y\n")
     assert r.exit_code == 0, r.output
+    nothing = {"rejected": 0, "held": 0, "diverged": 0, "relented": 0, "outliers": 0}
     assert _lines(r.stdout) == [
-        {"final": True, "parameters": start.to_dict()["parameters"], "n_samples": 0}
+        {
+            "final": True,
+            "parameters": start.to_dict()["parameters"],
+            "n_samples": 0,
+            "guard": {"threshold": 10.0, **nothing},
+        }
     ]
 
 
@@ -276,6 +285,101 @@ def test_usage_errors_are_one_line(args, stdin, message):
     assert r.exit_code == 2, r.output
     assert r.stderr.startswith("error: ") and message in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+# ----------------------------------------------------------------------------- a live plant
+# Issue 37: one glitch of a live plant stopped the stream for good (every later row an
+# error line, exit 0) or ruined the model; a constant input or one row wrote a model.
+PLANT_221 = ARX(
+    ["u"], ["y"], na=2, nb=2, nk=1, a={"y": {"y": [-1.5, 0.7]}}, b={"y": {"u": [1.0, 0.5]}}
+)
+ARGS_221 = ["-u", "u", "-y", "y", "--na", "2", "--nb", "2", "--nk", "1"]
+GLITCH_ROW = 70  # the row of the issue ("diverged at sample 71")
+
+
+def _plant_221(n: int = 400, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n, 1))
+    return u, PLANT_221.simulate(u) + 0.01 * rng.standard_normal((n, 1))
+
+
+def _learned_rows(lines: list[dict]) -> list[int]:
+    """Rows the estimator learned from: sample lines without "not_learned"."""
+    return [line["k"] for line in lines if "prediction" in line and "not_learned" not in line]
+
+
+@pytest.mark.parametrize(
+    ("signal", "value"), [("y", 1e8), ("u", 1e12), ("u", 1e300)], ids=["y1e8", "u1e12", "u1e300"]
+)
+def test_one_glitch_of_a_live_plant_leaves_the_estimate_of_the_clean_record(
+    tmp_path, signal, value
+):
+    """Learning resumes within 50 rows of the glitch and learns from every row after
+    it; the model written is within 5 % of the glitch-free run's, parameter by
+    parameter. (Before: y 1e8 ruined the model, b = [-5.6e5, 1.6e5]; an input glitch
+    made every later row an error line and the model stopped at row 70.)"""
+    u, y = _plant_221()
+    clean = runner.invoke(app, ["stream", *ARGS_221, "-o", str(tmp_path / "clean.json")],
+                          input=_csv(u, y))  # fmt: skip
+    assert clean.exit_code == 0, clean.output
+    (u if signal == "u" else y)[GLITCH_ROW, 0] = value
+    out = tmp_path / "glitch.json"
+    r = runner.invoke(app, ["stream", *ARGS_221, "-o", str(out)], input=_csv(u, y))
+    assert r.exit_code == 0, r.output
+    lines = _lines(r.stdout)
+    after = [k for k in _learned_rows(lines) if k > GLITCH_ROW]
+    assert after[0] <= GLITCH_ROW + 50
+    assert after == list(range(after[0], 400))  # learning goes on, every row
+    glitch, truth = (
+        _flat(load_model(p).to_dict()["parameters"]) for p in (out, tmp_path / "clean.json")
+    )
+    np.testing.assert_allclose(glitch, truth, rtol=0.05)
+    assert lines[-1]["guard"]["rejected"] >= 1
+
+
+def test_a_stream_that_never_recovers_exits_non_zero_and_writes_no_model(tmp_path):
+    """From row 200 on the input is 1e300: the guard rejects it, steps aside after a
+    while (a change that lasts), the recursion diverges at every row learned. The
+    estimate never recovers: exit status 2, no model file, one line saying why.
+    (Before: exit 0 and the model of row 200, though 200 rows were never learned.)"""
+    u, y = _plant_221()
+    u[200:, 0] = 1e300
+    out = tmp_path / "m.json"
+    r = runner.invoke(app, ["stream", *ARGS_221, "-o", str(out)], input=_csv(u, y))
+    assert r.exit_code == 2, r.output
+    assert not out.exists()
+    error = [line for line in r.stderr.splitlines() if line.startswith("error:")]
+    assert len(error) == 1 and "diverged at row" in error[0] and "did not recover" in error[0]
+    assert f"no model written to {out}" in error[0]
+    assert "problem" in _lines(r.stdout)[-1]
+
+
+@pytest.mark.parametrize(
+    ("rows", "message"),
+    [
+        (slice(None), "input 'u' is constant over the stream (1 at every sample"),
+        (slice(0, 1), "looks back 2 samples, so it needs more than 2 samples"),
+    ],
+    ids=["constant-input", "one-row"],
+)
+def test_a_never_excited_stream_exits_non_zero_and_keeps_the_users_file(tmp_path, rows, message):
+    """A constant input, or one row, as ``fit`` refuses them (its message): exit status
+    2 with one line, with or without -o, and a file given with --force is left as it
+    was. (Before: exit 0, a model of zeros or of a rank-deficient regression written.)"""
+    u, y = _plant_221()
+    if rows == slice(None):
+        u[:] = 1.0
+        y = PLANT_221.simulate(u)
+    text = _csv(u[rows], y[rows])
+    out = tmp_path / "m.json"
+    out.write_text("the user's file")
+    r = runner.invoke(app, ["stream", *ARGS_221, "-o", str(out), "--force"], input=text)
+    assert r.exit_code == 2, r.output
+    assert out.read_text() == "the user's file"
+    assert r.stderr.count("error: ") == 1 and message in r.stderr
+    assert f"no model written to {out}" in r.stderr
+    bare = runner.invoke(app, ["stream", *ARGS_221], input=text)
+    assert bare.exit_code == 2 and message in bare.stderr
 
 
 # ----------------------------------------------------------------------------- library
@@ -313,22 +417,38 @@ def test_read_samples_reports_bad_rows():
     ]
 
 
-def test_failure_keeps_the_last_good_state():
-    """A diverging row is skipped as if it had never come: the stream with it equals the
-    stream without it, prediction for prediction."""
-    opts = ARX_OPTS
-    lines = _arx_csv(60).splitlines()
-    clean = list(stream_identification(lines[:31] + lines[32:], "arx", ["u"], ["y"], options=opts))
-    lines[31] = "1e300,0.5"
-    dirty = list(stream_identification(lines, "arx", ["u"], ["y"], options=opts))
-    assert [e.k for e in dirty if isinstance(e, Failure)] == [30]
+def test_a_diverging_row_puts_back_the_last_good_estimate_and_learning_goes_on():
+    """Without the guard, a diverging row (here an input of 1e300 in its own regressor)
+    is a failure line; the estimate confirmed good before it comes back, the row and
+    the one whose regressor reaches back to it are taken in without learning, and
+    learning goes on: the stream ends where a learner fed so by hand ends, bit for bit.
+    (Before, the row was dropped: the rows after it had the wrong lags.)"""
+    from blockid.fitting.online import online_estimator
 
-    def predictions(events):
-        return [e.prediction for e in events if isinstance(e, Step)]
+    lines = _arx_csv(120).splitlines()
+    lines[71] = "1e300,0.5"  # row k=70
+    events = list(stream_identification(lines, "arx", ["u"], ["y"], options=ARX_OPTS, guard=None))
+    failures = [e for e in events if isinstance(e, Failure)]
+    assert [e.k for e in failures] == [70]
+    assert "diverged" in failures[0].message and "is restored" in failures[0].message
+    good = int(failures[0].message.split("(of row ")[1].split(")")[0])
+    held = [e for e in events if isinstance(e, Step) and e.not_learned]
+    assert [e.k for e in held] == [71] and "reach back to row 70" in held[0].not_learned
+    final = events[-1]
+    assert final.n_samples == 120 and final.problem is None
+    assert final.guard == {**final.guard, "diverged": 1, "held": 1}
 
-    np.testing.assert_array_equal(predictions(dirty), predictions(clean))
-    assert dirty[-1].parameters == clean[-1].parameters
-    assert dirty[-1].n_samples == clean[-1].n_samples == 59
+    rows = [tuple(map(float, line.split(","))) for line in lines[1:]]
+    by_hand = online_estimator("arx", "rls", ARX_OPTS, ["u"], ["y"])
+    snapshot = by_hand.snapshot()  # the start's, unless a later one is confirmed
+    for k, (u, y) in enumerate(rows):
+        if k == 70:
+            by_hand.rewind(snapshot)
+        by_hand.update(u, y, learn=k not in (70, 71))
+        if k == good:  # the estimate after row ``good``
+            snapshot = by_hand.snapshot()
+    assert final.parameters == by_hand.parameters()
+    np.testing.assert_allclose(_flat(final.parameters), [-0.5, 0.0, 2.0], atol=1e-6)
 
 
 # ----------------------------------------------------------------------------- checkpoints
@@ -377,6 +497,27 @@ def test_a_checkpoint_resumes_exactly_where_the_stream_stopped(tmp_path, args):
     r = runner.invoke(app, ["stream", "-u", "u", "-y", "y", "--model", str(mid), "--nb", "1"],
                       input=head)  # fmt: skip
     assert r.exit_code == 2 and "resume it with the same options" in r.stderr
+
+
+def test_a_checkpoint_inside_a_glitch_resumes_with_the_guard_where_it_stood():
+    """Issue 37: the guard's state (its scale, ranges, the rows still held, the last good
+    estimate) is in the checkpoint: stopped one row after a glitch, resumed, the stream
+    ends as the uninterrupted one, held row and guard counts included."""
+    from blockid.workflows.stream import StreamSession
+
+    u, y = _plant_221()
+    y[GLITCH_ROW, 0] = 1e8
+    lines = _csv(u, y).splitlines()
+    session = StreamSession
+    whole = list(session(lines, "arx", ["u"], ["y"], options=dict(na=2, nb=2, nk=1)))
+    part = session(lines[: GLITCH_ROW + 3], "arx", ["u"], ["y"], options=dict(na=2, nb=2, nk=1))
+    assert [e.k for e in part if isinstance(e, Step) and e.not_learned] == [70, 71]
+    learner = json.loads(json.dumps(part.saved()[1]["learner"]))  # through the file
+    resumed = list(session([lines[0], *lines[GLITCH_ROW + 3 :]], "arx", ["u"], ["y"],
+                           resume=learner))  # fmt: skip
+    assert resumed[0].k == 72 and "reach back to row 70" in resumed[0].not_learned
+    assert resumed[-1].parameters == whole[-1].parameters
+    assert resumed[-1].guard == whole[-1].guard == {**whole[-1].guard, "rejected": 1, "held": 2}
 
 
 def test_sigterm_writes_the_model_and_the_learner_state(tmp_path):

@@ -25,6 +25,7 @@ from blockid.cli._options import (
     with_fit_options,
 )
 from blockid.errors import BlockidError
+from blockid.workflows.stream_guard import THRESHOLD
 
 __all__ = ["stream"]
 
@@ -34,6 +35,7 @@ _FLAGS = {
     "input_scale": "--input-scale",
     "output_scale": "--output-scale",
     "initial": "--model",
+    "guard": "--outlier-threshold",
 }
 
 StreamMethod = Annotated[
@@ -108,6 +110,25 @@ StopOnError = Annotated[
         "of reporting it and going on from the last good state.",
     ),
 ]
+Guard = Annotated[
+    bool,
+    typer.Option(
+        "--guard/--no-guard",
+        help="Do not learn from a sample whose prediction error is many times the running "
+        "error scale, or with a value far beyond its signal's range, nor from the samples "
+        "whose regressors reach back to it (a glitch of a live plant). --no-guard learns "
+        "from every sample.",
+    ),
+]
+OutlierThreshold = Annotated[
+    float,
+    typer.Option(
+        "--outlier-threshold",
+        metavar="T",
+        help="The guard's threshold: a multiple of the running error scale, and of a "
+        "signal's range width beyond its range.",
+    ),
+]
 
 
 @with_fit_options
@@ -125,6 +146,8 @@ def stream(
     input_scale: Scale = None,
     output_scale: Scale = None,
     stop_on_error: StopOnError = False,
+    guard: Guard = True,
+    outlier_threshold: OutlierThreshold = THRESHOLD,
     force: Force = False,
     **options: Any,
 ) -> None:
@@ -135,10 +158,14 @@ def stream(
     JSON line per sample, {"k": K, "prediction": {..}, "error": {..}} (the one-step
     prediction made before the update; null before the first update), the estimates
     {"k": K, "parameters": {..}} every N samples with --every N, and at the end of input
-    {"final": true, "parameters": {..}, "n_samples": N}, with the parameters named as
-    in model files. A sample that cannot be read or at which the estimator diverges is
-    a line {"k": K, "line": L, "error_message": ".."}; the estimator goes on from its
-    last good state (or stops, with --stop-on-error). K counts the data rows from 0.
+    {"final": true, "parameters": {..}, "n_samples": N, "guard": {..}}, with the
+    parameters named as in model files. A sample the guard kept the estimator from
+    learning from has "not_learned": "why" in its line, and the final "guard" counts
+    them. A sample that cannot be read or at which the estimator diverges is a line
+    {"k": K, "line": L, "error_message": ".."}; the estimator goes on from its last good
+    estimate (or stops, with --stop-on-error). K counts the data rows from 0. An
+    estimate that diverged and did not recover, or that saw a constant signal or too
+    few rows, is not written: exit status 2, and "problem" in the final line says why.
 
     The final estimates equal 'blockid fit' of the same record with the same options
     and --passes 1, --no-normalize for the papers' methods and --no-center (online
@@ -190,7 +217,7 @@ def stream(
         sys.stdin, structure, inputs, outputs, method=method,
         options={**settings, **{k: v for k, v in scales.items() if v is not None}},
         initial=initial, fmt=fmt, every=every, stop_on_error=stop_on_error,
-        checkpoint=checkpoint, resume=resume,
+        checkpoint=checkpoint, resume=resume, guard=outlier_threshold if guard else None,
     )  # fmt: skip
     events = iter(session)
     to_line, write, flush = JsonLines(outputs), sys.stdout.write, sys.stdout.flush
@@ -234,19 +261,44 @@ def stream(
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+    note = _guard_note(event.guard)
+    if note is not None:
+        stderr.print(note, markup=False)
     if event.stopped:
         raise typer.Exit(code=1)
+    problem = event.problem
     if out is None:
+        if problem is not None:
+            raise EstimationError(problem)
         return
-    if event.n_samples == 0:
-        raise EstimationError(
-            f"no model written to {out}: no sample was learned (every row was refused; "
-            "the lines on stdout say why)"
-        )
-    if event.model is None:
-        raise EstimationError(f"no model written to {out}: {event.note}")
+    if problem is None and event.n_samples == 0:
+        problem = "no sample was learned (every row was refused; the lines on stdout say why)"
+    if problem is None and event.model is None:
+        problem = event.note
+    if problem is not None:
+        raise EstimationError(f"no model written to {out}: {problem}")
     save(*session.saved())
     stderr.print(f"model written to {out}", markup=False)
+
+
+def _guard_note(summary: dict[str, Any] | None) -> str | None:
+    """One line on standard error when the guard kept samples from the estimator."""
+    if not summary:
+        return None
+    parts = [
+        f"{summary[key]} {what}"
+        for key, what in (
+            ("rejected", "rejected (an outlier, or a value out of range)"),
+            ("held", "held (their regressors reach back to a rejected or diverged row)"),
+            ("diverged", "diverged (the last good estimate restored)"),
+            ("outliers", "outliers learned from (--no-guard)"),
+            ("relented", "time(s) stepped aside for a change that lasted"),
+        )
+        if summary.get(key)
+    ]
+    if not parts:
+        return None
+    return f"guard: {', '.join(parts)}; see the lines with not_learned or error_message"
 
 
 class _Stopped(Exception):

@@ -16,13 +16,31 @@ offline fit of the same record with the same options (``passes=1``; the paper me
 with ``normalize=False``, or with ``scales=(input_scale, output_scale)`` when those
 are given) — as long as no sample was skipped.
 
+The guard (a robust RLS, :mod:`blockid.workflows.stream_guard`). A sample whose
+prediction error is more than ``guard`` (default 10) times the running scale of the
+errors, or with a value that far beyond its signal's range, is not learned from, nor
+are the samples whose regressors reach back to it; each is a :class:`Step` with
+``not_learned`` saying why, and :class:`Final` counts them (``guard``). ``guard=None``
+switches the rejection off. Below the threshold a sample is learned as without a
+guard, so the equivalence above holds for a clean record.
+
 Failures (a choice). A row that cannot be read (a missing column, text where a number
-belongs, NaN) and a sample at which the recursion diverges are reported as a
-:class:`Failure` and skipped: the learner keeps the state it had before that sample
-(:class:`~blockid.errors.EstimationError` leaves it so) and the stream goes on, or
-ends there with ``stop_on_error``. ``k`` counts the data rows of the stream from 0,
-skipped ones included, so that it names the row of the user's record; the learner's
-own count (``n_samples``) counts the samples learned.
+belongs, NaN) is reported as a :class:`Failure` and skipped: the learner never sees
+it. A sample at which the recursion diverges is a :class:`Failure` too, but the
+stream recovers: the last good estimate is put back
+(:meth:`~blockid.workflows.stream_guard.StreamGuard.diverged`), the sample is taken
+into the learner's memory without learning from it, and so are the samples whose
+regressors reach back to it; learning goes on after them. With ``stop_on_error`` the
+stream ends at the first failure instead. ``k`` counts the data rows of the stream
+from 0, skipped ones included, so that it names the row of the user's record; the
+learner's own count (``n_samples``) counts the samples taken in (learned from or not).
+
+What a stream cannot vouch for. :class:`Final` carries ``problem`` when its estimate
+is not to be trusted: the recursion diverged and did not recover, a signal never
+varied (as ``fit`` refuses a constant input), or fewer rows came than the model's
+lags and coefficients need (as ``fit`` refuses them, with its message); ``blockid
+stream`` then writes no model and exits with status 2. A stream started from a model
+(``initial``) is judged on divergence only: that model is its prior.
 
 The model read back at the end has no estimation ranges (``fit`` records them by
 simulating the whole record, which a stream does not keep).
@@ -36,9 +54,13 @@ import math
 from collections.abc import Iterable, Iterator, Sequence
 from typing import Any, NamedTuple
 
+import numpy as np
+
+from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.fitting.online import online_estimator
 from blockid.fitting.registry import get_structure
+from blockid.workflows.stream_guard import THRESHOLD, StreamGuard
 
 __all__ = [
     "FORMATS",
@@ -70,12 +92,14 @@ class Row(NamedTuple):
 
 
 class Step(NamedTuple):
-    """Sample ``k`` learned: the one-step prediction made before the update (NaN before
-    the first update) and its error ``y - prediction``, one value per output."""
+    """Sample ``k`` taken in: the one-step prediction made before the update (NaN before
+    the first update) and its error ``y - prediction``, one value per output;
+    ``not_learned`` says why the learner did not learn from it (the guard), or is None."""
 
     k: int
     prediction: tuple[float, ...]
     error: tuple[float, ...]
+    not_learned: str | None = None
 
 
 class Estimates(NamedTuple):
@@ -100,8 +124,10 @@ class Failure(NamedTuple):
 
 class Final(NamedTuple):
     """The end of the stream: the final estimate (as :class:`Estimates`), the samples
-    learned, the model (None when it cannot be read back) and whether the stream
-    stopped at a failure."""
+    taken in, the model (None when it cannot be read back), whether the stream
+    stopped at a failure, what the guard did
+    (:meth:`~blockid.workflows.stream_guard.StreamGuard.summary`) and why the estimate
+    is not to be trusted (``problem``, module docstring), or None."""
 
     n_samples: int
     parameters: dict[str, Any] | None
@@ -109,6 +135,8 @@ class Final(NamedTuple):
     stopped: bool = False
     estimate: dict[str, float] | None = None
     note: str | None = None
+    guard: dict[str, Any] | None = None
+    problem: str | None = None
 
 
 # ---------------------------------------------------------------------- reading
@@ -259,6 +287,7 @@ def stream_identification(
     fmt: str = "csv",
     every: int = 0,
     stop_on_error: bool = False,
+    guard: float | None = THRESHOLD,
 ) -> Iterator[Step | Estimates | Failure | Final]:
     """Learn ``structure`` online from the samples of a text stream (module docstring).
 
@@ -283,6 +312,8 @@ def stream_identification(
     stop_on_error : bool
         End the stream at the first :class:`Failure` (the :class:`Final` then has
         ``stopped=True``) instead of skipping the sample.
+    guard : float or None
+        The outlier guard's threshold (module docstring); None switches rejection off.
 
     The options are checked before the first line is read: a wrong one raises
     :class:`~blockid.errors.ParameterError` at the first ``next()``.
@@ -300,7 +331,7 @@ def stream_identification(
     """
     yield from StreamSession(
         lines, structure, inputs, outputs, method=method, options=options, initial=initial,
-        fmt=fmt, every=every, stop_on_error=stop_on_error,
+        fmt=fmt, every=every, stop_on_error=stop_on_error, guard=guard,
     )  # fmt: skip
 
 
@@ -336,10 +367,13 @@ class StreamSession:
         stop_on_error: bool = False,
         checkpoint: int = 0,
         resume: dict[str, Any] | None = None,
+        guard: float | None = THRESHOLD,
     ) -> None:
         self.lines = lines
         self.fmt, self.every, self.stop_on_error = fmt, every, stop_on_error
         self.checkpoint = checkpoint
+        self.threshold = guard  # of the guard, built with the learner
+        self.guard: StreamGuard | None = None
         self.spec = (structure, inputs, outputs, method, options, initial, resume)
         self.online: Any = None
         self.rows = 0  # data rows read so far (resumed: on from the saved count)
@@ -360,9 +394,13 @@ class StreamSession:
         if initial is not None and resume is None:
             opts["initial"] = initial
         self.online = online_estimator(structure, self.method, opts, inputs, outputs)
+        self.initial = initial is not None and resume is None  # judged on divergence only
         if resume is not None:
             self.online.restore(resume["state"])
             self.rows = int(resume["rows"])
+        self.guard = StreamGuard(self.online, self.threshold)
+        if resume is not None and "guard" in resume:
+            self.guard.restore(resume["guard"])
 
     def saved(self) -> tuple[Any, dict[str, Any]]:
         """The model of the current estimate (None when it cannot be read back yet) and
@@ -385,7 +423,9 @@ class StreamSession:
                 "outputs": self.outputs,
                 "rows": self.rows,
                 "state": self.online.state(),
+                "guard": self.guard.state(),
             },
+            "guard": self.guard.summary(),
         }
         if note is not None:
             record["note"] = note
@@ -393,7 +433,7 @@ class StreamSession:
 
     def __iter__(self) -> Iterator[Step | Estimates | Failure | Checkpoint | Final]:
         """The events of :func:`stream_identification`, and a :class:`Checkpoint` after
-        every ``checkpoint``-th sample learned (0: never)."""
+        every ``checkpoint``-th sample taken in (0: never)."""
         every, checkpoint, stop_on_error = self.every, self.checkpoint, self.stop_on_error
         if every < 0:
             raise ParameterError(f"every must be >= 0, got {every}", parameter="every")
@@ -402,33 +442,96 @@ class StreamSession:
                 f"checkpoint must be >= 0, got {checkpoint}", parameter="checkpoint"
             )
         self._start()
-        online = self.online
-        update = online.update
+        online, guard = self.online, self.guard
+        update, before, after = online.update, guard.before, guard.after
         stopped = False
         for row in read_samples(self.lines, self.inputs, self.outputs, self.fmt):
             k = self.rows
             self.rows += 1
-            if row.problem is None:
-                try:
+            if row.problem is not None:
+                yield Failure(k, row.line, row.problem)
+                if stop_on_error:
+                    stopped = True
+                    break
+                continue
+            values = row.u + row.y
+            # a value that is not finite: the learner refuses it (DataError, below)
+            why = before(k, values) if all(map(math.isfinite, values)) else None
+            taken = online.n_samples
+            failure = None
+            try:
+                if why is None:
                     pred = update(row.u, row.y).tolist()
-                except (EstimationError, DataError) as exc:
-                    message = " ".join(str(exc).split())
+                    error = [a - b for a, b in zip(row.y, pred, strict=True)]
+                    why = after(k, values, error)
                 else:
-                    yield Step(k, pred, [a - b for a, b in zip(row.y, pred, strict=True)])
-                    if every and online.n_samples % every == 0:
-                        parameters, _, estimate, note = _read_back(online)
-                        yield Estimates(k, parameters, estimate, note)
-                    if checkpoint and online.n_samples % checkpoint == 0:
-                        yield Checkpoint(k, *self.saved())
-                    continue
+                    pred = update(row.u, row.y, learn=False).tolist()
+                    error = [a - b for a, b in zip(row.y, pred, strict=True)]
+            except EstimationError as exc:
+                failure = self._recover(k, row, exc, why)
+            except DataError as exc:
+                failure = " ".join(str(exc).split())
             else:
-                message = row.problem
-            yield Failure(k, row.line, message)
-            if stop_on_error:
-                stopped = True
-                break
+                yield Step(k, pred, error, why)
+            if failure is not None:
+                yield Failure(k, row.line, failure)
+                if stop_on_error:
+                    stopped = True
+                    break
+            if online.n_samples == taken:
+                continue
+            if every and online.n_samples % every == 0:
+                parameters, _, estimate, note = _read_back(online)
+                yield Estimates(k, parameters, estimate, note)
+            if checkpoint and online.n_samples % checkpoint == 0:
+                yield Checkpoint(k, *self.saved())
         parameters, model, estimate, note = _read_back(online)
-        yield Final(online.n_samples, parameters, model, stopped, estimate, note)
+        yield Final(
+            online.n_samples, parameters, model, stopped, estimate, note, guard.summary(),
+            self._problem(),
+        )  # fmt: skip
+
+    def _recover(self, k: int, row: Row, exc: EstimationError, why: str | None) -> str:
+        """The message of row ``k`` whose update raised. A learned row diverged: the
+        last good estimate back, the row taken in without learning (skipped when the
+        learner cannot take it in). A held row the learner cannot take in: skipped."""
+        summary = getattr(exc, "summary", None) or " ".join(str(exc).split())
+        if self.stop_on_error:  # the stream ends here: the learner as it was
+            return " ".join(str(exc).split())
+        if why is not None:
+            return f"{summary}. This row was not to be learned from ({why}); it is skipped"
+        message = self.guard.diverged(k, summary)
+        try:
+            self.online.update(row.u, row.y, learn=False)
+        except EstimationError:
+            message += " (this row itself could not be taken in: it is skipped)"
+        return message
+
+    def _problem(self) -> str | None:
+        """Why the final estimate is not to be trusted (module docstring), or None."""
+        online, guard = self.online, self.guard
+        unrecovered = guard.unrecovered()
+        if unrecovered is not None or self.initial:
+            return unrecovered
+        if online.n_samples == 0:
+            return "no sample was learned (every row was refused; the lines on stdout say why)"
+        lag, n, rows = online.max_lag, online.n_parameters, online.n_samples
+        if rows <= lag or rows - lag < n:  # fit's check, with its message
+            shape = (rows, len(self.inputs)), (rows, len(self.outputs))
+            data = Dataset.from_arrays(
+                *(np.zeros(s) for s in shape), self.inputs, self.outputs, name="the stream"
+            )
+            orders = ", ".join(f"{k}={self.options[k]}" for k in _ORDERS if k in self.options)
+            what = f"{self.structure} with {orders}" if orders else self.structure
+            try:
+                data.check_orders(lag, n, what=what)
+            except BlockidError as exc:
+                return str(exc).replace("use a longer range", "stream more rows")
+        return guard.constant()
+
+
+#: Options that set a model's orders (named in the message of too few rows).
+_ORDERS = ("na", "nb", "nk", "r1", "r2")
 
 
 def _jsonable(value: Any) -> Any:
@@ -475,17 +578,21 @@ class JsonLines:
     """The JSON line (without newline) of an event, as ``blockid stream`` writes them.
 
     ``{"k": 3, "prediction": {"y": 0.1}, "error": {"y": -0.02}}`` per sample (``null``
-    before the first update); ``{"k": .., "parameters": {..}}`` every ``every``
-    samples; ``{"k": .., "line": .., "error_message": ".."}`` for a skipped row; and
-    ``{"final": true, "parameters": {..}, "n_samples": ..}`` at the end
-    (``"stopped": true`` when it stopped at a failure). The per-sample line is written
-    without :func:`json.dumps` (the same text, a few microseconds less).
+    before the first update), with ``"not_learned": ".."`` (why) when the guard kept
+    the learner from learning from it; ``{"k": .., "parameters": {..}}`` every
+    ``every`` samples; ``{"k": .., "line": .., "error_message": ".."}`` for a skipped
+    or diverging row; and ``{"final": true, "parameters": {..}, "n_samples": ..,
+    "guard": {..}}`` at the end (``"stopped": true`` when it stopped at a failure,
+    ``"problem": ".."`` when the estimate is not to be trusted). The per-sample line is
+    written without :func:`json.dumps` (the same text, a few microseconds less).
 
     >>> line = JsonLines(["y"])
     >>> line(Step(0, [float("nan")], [float("nan")]))
     '{"k": 0, "prediction": {"y": null}, "error": {"y": null}}'
     >>> line(Step(1, [0.5], [0.25]))
     '{"k": 1, "prediction": {"y": 0.5}, "error": {"y": 0.25}}'
+    >>> line(Step(2, [0.5], [9.5], "outlier"))
+    '{"k": 2, "prediction": {"y": 0.5}, "error": {"y": 9.5}, "not_learned": "outlier"}'
     """
 
     def __init__(self, outputs: Sequence[str]) -> None:
@@ -494,14 +601,16 @@ class JsonLines:
     def __call__(self, event: Step | Estimates | Failure | Final) -> str:
         if type(event) is Step:  # the per-sample path
             keys = self.keys
-            if len(keys) == 1:
+            if len(keys) == 1 and event.not_learned is None:
                 q, p, e = keys[0], event.prediction[0], event.error[0]
                 p = repr(p) if p - p == 0.0 else "null"  # _value inlined: finite or null
                 e = repr(e) if e - e == 0.0 else "null"
                 return f'{{"k": {event.k}, "prediction": {{{q}: {p}}}, "error": {{{q}: {e}}}}}'
             p = ", ".join(f"{q}: {_value(v)}" for q, v in zip(keys, event.prediction, strict=True))
             e = ", ".join(f"{q}: {_value(v)}" for q, v in zip(keys, event.error, strict=True))
-            return f'{{"k": {event.k}, "prediction": {{{p}}}, "error": {{{e}}}}}'
+            why = event.not_learned
+            why = "" if why is None else f', "not_learned": {_dumps(why)}'
+            return f'{{"k": {event.k}, "prediction": {{{p}}}, "error": {{{e}}}{why}}}'
         if isinstance(event, Estimates):
             return _dumps(_with_note({"k": event.k, "parameters": event.parameters}, event))
         if isinstance(event, Failure):
@@ -509,6 +618,9 @@ class JsonLines:
         doc = {"final": True, "parameters": event.parameters, "n_samples": event.n_samples}
         if event.stopped:
             doc["stopped"] = True
+        doc["guard"] = event.guard
+        if event.problem is not None:
+            doc["problem"] = event.problem
         return _dumps(_with_note(doc, event))
 
 
