@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from blockid.data import Dataset
+from blockid.errors import OrderError, ParameterError
 from blockid.fitting import fit_model
 from blockid.fitting.state_space import (
     fit_polynomial_state_space,
@@ -370,3 +371,31 @@ def test_a_record_too_short_for_two_folds_falls_back_to_the_canonical_correlatio
     assert order_by_validation(data, 10) == (None, [])
     fit = fit_polynomial_state_space(data, degree=2, max_nfev=3)
     assert fit.settings["order_from"].startswith("canonical correlations")
+
+
+def test_a_model_over_more_monomials_simulates_as_before():
+    fit = fit_polynomial_state_space(_uniform(_cubic_plant(), 800)[0], nx=2, degree=2,
+                                     max_nfev=20)  # fmt: skip
+    model = fit.model
+    grown = model.with_monomials(monomial_exponents(2, 1, 3, "full", constant=True))
+    assert grown.n_monomials > model.n_monomials
+    u = np.random.default_rng(3).uniform(-1, 1, 300)
+    np.testing.assert_array_equal(grown.simulate(u), model.simulate(u))
+    with pytest.raises(OrderError, match="keeps every monomial"):
+        model.with_monomials(monomial_exponents(2, 1, 3, "states"))
+
+
+def test_degree_by_degree_climbs_to_the_plant_and_records_each_rung():
+    """Noise-free cubic plant: the fit of degree 2 first, then 3 from it, reaches the
+    plant as the one-rung fit does (the poles of the linearisation to 1e-5), and says what
+    each rung did."""
+    plant = _cubic_plant()
+    data, _ = _uniform(plant, 3000)
+    fit = fit_polynomial_state_space(data, nx=2, degree=3, monomials="states",
+                                     start_degree=2, max_nfev=300)  # fmt: skip
+    assert [r["degree"] for r in fit.settings["rungs"]] == [2, 3]
+    assert fit.settings["start_degree"] == 2 and fit.model.degree == 3
+    assert fit.settings["refinement"]["final_normalised_mse"] < 1e-10
+    np.testing.assert_allclose(_linearised_poles(fit.model), [0.5, 0.7], atol=1e-5)
+    with pytest.raises(ParameterError, match="start_degree <= degree"):
+        fit_polynomial_state_space(data, nx=2, degree=2, start_degree=3)

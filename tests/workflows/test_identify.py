@@ -723,7 +723,10 @@ def test_a_warm_start_replaces_the_direct_fit_only_when_better_by_more_than_the_
 def cluster():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=":0",
         silence_logs=50,
     ) as running:
         yield running.scheduler_address

@@ -136,6 +136,14 @@ def test_growth_raises_one_size_at_a_time_and_stops_at_the_limit():
     assert grown(Candidate("wiener", {"r2": 9, "output_block": "dead-zone"})) == []
 
 
+def test_a_state_space_degree_grows_from_the_degree_below():
+    c = Candidate("polynomial-state-space", {"nx": 2, "degree": 2, "monomials": "full"})
+    (up,) = grown(c)
+    assert up.options == {**c.options, "degree": 3, "start_degree": 2}
+    (further,) = grown(up)  # the climb starts where the first rung was
+    assert further.options == {**c.options, "degree": 4, "start_degree": 2}
+
+
 def test_candidates_are_told_apart_by_every_option_and_kept_once():
     a = Candidate("arx", {"na": 1, "nb": 1})
     b = Candidate("arx", {"nb": 1, "na": 1})

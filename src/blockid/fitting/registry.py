@@ -467,6 +467,14 @@ OPTIONS: dict[str, Option] = _options(
         high=5,
     ),
     Option(
+        "start_degree",
+        "count",
+        "Fit the monomials degree by degree from this one up to --degree, each degree "
+        "started from the fit below it (default: --degree at once).",
+        low=1,
+        high=5,
+    ),
+    Option(
         "monomials",
         "choice",
         "Monomials of the states and inputs (full), of the states only, or of the inputs only.",
@@ -804,7 +812,7 @@ STRUCTURES: dict[str, Structure] = {
                 Method(
                     "simulation-error",
                     "blockid.fitting.state_space:fit_polynomial_state_space",
-                    _STATE_SPACE + ("degree", "monomials", "margin") + _REFINEMENT,
+                    _STATE_SPACE + ("degree", "monomials", "margin", "start_degree") + _REFINEMENT,
                     "linear state-space start, then every parameter refined on the free-run "
                     "error with the monomials",
                 ),

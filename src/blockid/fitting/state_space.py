@@ -726,6 +726,7 @@ def fit_polynomial_state_space(
     weighting: str = WEIGHTING,
     feedthrough: bool = False,
     margin: float = 0.25,
+    start_degree: int | None = None,
     max_nfev: int = 500,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
@@ -747,12 +748,25 @@ def fit_polynomial_state_space(
     margin : float
         Widening of the monomials' clipping range beyond the linear start's states and the
         input, as a fraction of each range's width on each side.
+    start_degree : int, optional
+        Fit degree by degree: the monomials up to ``start_degree`` refined from the
+        linear start, then each degree up to ``degree`` refined from the model of the
+        degree below (its coefficients kept, the new monomials' starting at zero): a
+        continuation that reaches a better optimum than all monomials at once where the
+        start is far from it (``docs/models.md``). Default: ``degree`` (one rung).
     max_nfev, ftol, xtol, gtol
-        Of each refinement (the linear start's and the nonlinear one's). The nonlinear
+        Of each refinement (the linear start's and each degree's). The nonlinear
         refinement crawls along curved valleys for a few hundred evaluations before it
         converges (the Silverbox: 342), hence a larger default than the linear fit's.
     """
     degree, margin = checked("degree", degree), checked("margin", margin)  # one declaration
+    first = degree if start_degree is None else max(2, checked("start_degree", start_degree))
+    if first > degree:
+        raise ParameterError(
+            f"start_degree={start_degree} is above degree={degree}: the fit climbs from "
+            "start_degree up to degree; give start_degree <= degree",
+            parameter="start_degree",
+        )
     t0 = time.perf_counter()
     order_scores: list[dict[str, Any]] | None = None
     if nx is None:
@@ -775,7 +789,7 @@ def fit_polynomial_state_space(
     n = start.nx
     if degree == 1:
         return linear
-    expo = monomial_exponents(n, len(data.inputs), degree, monomials, constant=True)
+    expo = monomial_exponents(n, len(data.inputs), first, monomials, constant=True)
     states, inputs = [], []
     for e in data.experiments:
         x0 = start.initial_state(e.u, e.y[: 4 * n])
@@ -792,10 +806,17 @@ def fit_polynomial_state_space(
         output_offset=start.output_offset, output_scale=start.output_scale,
         sampling_time=start.sampling_time,
     )  # fmt: skip
-    model, info = refine_state_space(
-        template, data, feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol,
-        gtol=gtol,
-    )  # fmt: skip
+    rungs = []
+    model = template
+    for d in range(first, degree + 1):
+        if d > first:
+            expo = monomial_exponents(n, len(data.inputs), d, monomials, constant=True)
+            model = model.with_monomials(expo)
+        model, info = refine_state_space(
+            model, data, feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol,
+            gtol=gtol,
+        )  # fmt: skip
+        rungs.append({"degree": d, **_solver_settings(info, max_nfev)})
     model = with_observed_range(model, data)
     method = "subspace+polynomial-state-space"
     metrics = _check(model, data, method)
@@ -807,6 +828,8 @@ def fit_polynomial_state_space(
         "monomials": monomials,
         "n_monomials": int(expo.shape[0]),
         "margin": margin,
+        "start_degree": first,
+        **({"rungs": rungs} if len(rungs) > 1 else {}),
         "refinement": info,
         "linear_simulation_metrics": linear.estimation_metrics,
     }

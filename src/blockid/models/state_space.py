@@ -446,6 +446,32 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         mats = [p.reshape(s) for p, s in zip(parts, shapes, strict=True)]
         return self.replace(A=mats[0], B=mats[1], C=mats[2], D=mats[3], E=mats[4], F=mats[5])
 
+    def with_monomials(self, exponents: Any) -> PolynomialStateSpace:
+        """The same model over the monomials ``exponents`` (rows as in ``exponents``):
+        a monomial it has keeps its coefficients, a new one starts at zero, so the model
+        simulates as before. The start of a fit one degree up (a warm start).
+
+        >>> m = PolynomialStateSpace(["u"], ["y"], [[0.5]], [[1.0]], [[1.0]], [[0.0]],
+        ...                          E=[[0.1]], F=[[0.0]], exponents=[[2, 0]])
+        >>> g = m.with_monomials(monomial_exponents(1, 1, 3, "full"))
+        >>> g.exponents.tolist()
+        [[2, 0], [1, 1], [0, 2], [3, 0], [2, 1], [1, 2], [0, 3]]
+        >>> g.E.tolist()
+        [[0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]]
+        """
+        expo = np.asarray(exponents, dtype=np.int64).reshape(-1, self.exponents.shape[1])
+        have = {tuple(row): i for i, row in enumerate(self.exponents.tolist())}
+        lost = [row for row in have if row not in {tuple(r) for r in expo.tolist()}]
+        if lost:
+            raise OrderError(f"with_monomials keeps every monomial the model has; {lost} missing")
+        E = np.zeros((self.nx, expo.shape[0]))
+        F = np.zeros((self.C.shape[0], expo.shape[0]))
+        for j, row in enumerate(expo.tolist()):
+            i = have.get(tuple(row))
+            if i is not None:
+                E[:, j], F[:, j] = self.E[:, i], self.F[:, i]
+        return self.replace(exponents=expo, E=E, F=F)
+
     def replace(self, **changes: Any) -> PolynomialStateSpace:
         """A copy with some constructor arguments changed."""
         kwargs = dict(

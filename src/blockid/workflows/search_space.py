@@ -347,13 +347,17 @@ def grown(candidate: Candidate) -> list[Candidate]:
     """The candidate with one nonlinearity made richer, one option at a time: a degree
     (``r``, ``r1``, ``r2``) or a block's :attr:`~blockid.blocks.base.Block.size_option`
     raised by 2, up to :data:`MAX_SIZE`; a state-space model's monomial ``degree`` by 1,
-    up to :data:`MAX_STATE_DEGREE`."""
+    up to :data:`MAX_STATE_DEGREE`, fitted degree by degree from the candidate's own
+    (``start_degree``: the higher degree refined from the model of the lower one on the
+    same training data, not from the linear start again)."""
     out = []
     for key, value in candidate.options.items():
         if key in ("r", "r1", "r2") and isinstance(value, int) and value + 2 <= MAX_SIZE["degree"]:
             out.append(candidate.with_options(**{key: value + 2}))
         elif key == "degree" and isinstance(value, int) and value + 1 <= MAX_STATE_DEGREE:
-            out.append(candidate.with_options(degree=value + 1))
+            # one degree up, climbed from the model of this degree (a warm start)
+            start = candidate.options.get("start_degree", value)
+            out.append(candidate.with_options(degree=value + 1, start_degree=start))
         elif isinstance(value, str) and key.endswith("_block"):
             bigger = _grown_spec(value)
             if bigger is not None:
