@@ -256,7 +256,9 @@ def test_start_model_sets_theta0(tmp_path):
     path = save_model(start, tmp_path / "start.json")
     r = runner.invoke(app, ["stream", "-u", "u", "-y", "y", "--model", str(path)], input="u,y\n")
     assert r.exit_code == 0, r.output
-    nothing = {"rejected": 0, "held": 0, "diverged": 0, "relented": 0, "outliers": 0}
+    nothing = dict.fromkeys(
+        ["rejected", "held", "diverged", "relented", "restarted", "outliers"], 0
+    )
     assert _lines(r.stdout) == [
         {
             "final": True,

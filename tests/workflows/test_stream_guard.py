@@ -129,6 +129,33 @@ def test_a_plant_at_rest_does_not_count_towards_the_warm_up():
     assert _not_learned(events) == [] and events[-1].problem is None
 
 
+@pytest.mark.parametrize("row", [8, 15])
+def test_a_glitch_learned_during_the_warm_up_starts_it_again(row):
+    """An output glitch of 50 (five times the output's range, so within the range test's
+    reach) before the error scale exists is learned and spoils the estimate; at the
+    end of the warm-up its error stands out, the start's estimate comes back, and the
+    stream ends within 0.1 % of the clean record's estimate."""
+    u, y = _record(SISO, 400)
+    clean = _vector(_stream("arx-rls", u, y)[-1].parameters)
+    y[row, 0] = 50.0
+    final = _stream("arx-rls", u, y)[-1]
+    assert final.guard["restarted"] == 1 and final.problem is None
+    np.testing.assert_allclose(_vector(final.parameters), clean, rtol=1e-3)
+
+
+def test_a_plant_that_idles_then_moves_is_learned_after_the_guard_steps_aside():
+    """100 rows of measurement noise only, then the plant moves: the motion looks like
+    glitches to a scale taken from the noise; after its warm-up length of rows not
+    learned from, the guard steps aside and the estimate is the plant's."""
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((600, 1))
+    u[:100] = 0.0
+    y = SISO.simulate(u) + 0.01 * rng.standard_normal((600, 1))
+    events = _stream("arx-rls", u, y)
+    assert events[-1].guard["relented"] == 1 and _not_learned(events) == list(range(101, 121))
+    np.testing.assert_allclose(_vector(events[-1].parameters), [-1.5, 0.7, 1.0, 0.5], rtol=0.01)
+
+
 def test_a_change_that_lasts_is_learned_after_the_guard_steps_aside():
     """The plant's gain jumps 30-fold at row 400: the guard rejects the first rows of
     the new plant, steps aside after its warm-up length of rows not learned from, and

@@ -293,6 +293,7 @@ def _guard_note(summary: dict[str, Any] | None) -> str | None:
             ("diverged", "diverged (the last good estimate restored)"),
             ("outliers", "outliers learned from (--no-guard)"),
             ("relented", "time(s) stepped aside for a change that lasted"),
+            ("restarted", "warm-up(s) started again after a glitch learned in it"),
         )
         if summary.get(key)
     ]

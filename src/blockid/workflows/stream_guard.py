@@ -25,18 +25,24 @@ The rule, with ``T`` the threshold (:data:`THRESHOLD`, 10) and ``W`` the warm-up
   :meth:`~blockid.fitting.online.OnlineEstimator.revert` takes the update back.
 * **Out of range.** A sample with a value (input or output) beyond the range of that
   signal so far by more than ``T`` times the range's width is not learned from. This
-  catches an input glitch at its own row; the prediction error would see it only at
-  the rows whose regressors hold it.
+  catches an input glitch at its own row (the prediction error sees it only at the
+  rows whose regressors hold it). It starts with the outlier test, and not before
+  ``2 max_lag`` samples learned: the outputs of a plant with a dead time are noise
+  until its inputs reach them.
 * **Held.** A rejected value sits in the regressors of the ``max_lag`` samples after
   it (``na`` for an output, ``nk + nb - 1`` for an input): those are not learned from
   either.
+* **A glitch in the warm-up.** At its end, an error past the recursion's transient
+  (its first ``n + max_lag`` errors) beyond ``T s`` means a glitch was learned: the
+  last good estimate comes back and the warm-up starts again (``restarted``).
 * **A change that lasts is the plant, not a glitch.** After ``W`` rows in a row not
-  learned from, the guard steps aside and warms up again (on the plant as it is now).
+  learned from, the guard steps aside: the last good estimate (below) comes back and
+  the guard warms up again on the plant as it is now.
 
-The guard is active once the warm-up is complete (before it, every sample is learned,
-as without a guard). Below the threshold a sample is learned exactly as without a
-guard, so a clean record ends with the estimate of the one-pass offline fit, bit for
-bit (the equivalence contract of :mod:`blockid.workflows.stream`).
+Before the warm-up is complete every sample is learned, as without a guard. Below the
+threshold a sample is learned exactly as without a guard, so a clean record ends with
+the estimate of the one-pass offline fit, bit for bit (the equivalence contract of
+:mod:`blockid.workflows.stream`).
 
 Why reject, not down-weight (Huber). A Huber weight shrinks a large residual's pull,
 but the sample still updates ``P`` with its regressor: a regressor holding 1e12
@@ -137,6 +143,10 @@ class StreamGuard:
         self.hold = 0  # rows still to hold
         self.held_reason = ""  # why they are held
         self.run = 0  # rows in a row not learned from
+        self.learned = 0  # samples learned from
+        # the range test waits, beyond the warm-up, for the outputs to show the inputs'
+        # effect: twice the regressors' reach (a dead time nk of the plant)
+        self.range_start = 2 * self.lag
         self.good = learner.snapshot()  # the last confirmed estimate
         self.good_row: int | None = None  # its row (None: the start)
         self.candidate: dict[str, Any] | None = self.good  # the next one, being confirmed
@@ -144,23 +154,29 @@ class StreamGuard:
         self.since = 0  # samples learned and predicted well since the candidate
         self.diverged_at: int | None = None  # row of the last divergence not recovered
         self.outlier_at: int | None = None  # row of the last outlier learned, not recovered
-        self.counts = {"rejected": 0, "held": 0, "diverged": 0, "relented": 0, "outliers": 0}
+        self.counts = dict.fromkeys(
+            ("rejected", "held", "diverged", "relented", "restarted", "outliers"), 0
+        )
 
     # ------------------------------------------------------------------ per row
     def before(self, k: int, values: tuple[float, ...]) -> str | None:
         """Why row ``k`` (its inputs then outputs) is not to be learned from, or None."""
         if self.run >= self.window and self.threshold is not None:
-            # a change that lasts is the plant: step aside, warm up again on it
+            # a change that lasts is the plant: step aside, warm up again on it, from
+            # the last good estimate (the estimate since may have learned a glitch of
+            # the warm-up: it predicted none of these rows)
             self.counts["relented"] += 1
             self.hold, self.run = 0, 0
             self.warm, self.warming = False, []
+            self.learner.rewind(self.good)
+            self.candidate, self.candidate_row, self.since = self.good, self.good_row, 0
             return None
         if self.hold:
             self.hold -= 1
             self.run += 1
             self.counts["held"] += 1
             return self.held_reason
-        if self.warm and self.threshold is not None:
+        if self.warm and self.learned >= self.range_start and self.threshold is not None:
             lower, upper = self.lower, self.upper
             for j, v in enumerate(values):
                 if v > upper[j] or v < lower[j]:
@@ -192,8 +208,9 @@ class StreamGuard:
                     if a < math.inf:  # NaN: no prediction
                         scale[i] *= _UP if a > scale[i] else _DOWN
         else:
-            self._warm_up(errors)
+            self._warm_up(k, errors)
         self.run = 0
+        self.learned += 1
         low, high = self.low, self.high
         for j, v in enumerate(values):
             if v > high[j] or v < low[j]:
@@ -228,8 +245,9 @@ class StreamGuard:
     # ------------------------------------------------------------------ the end
     def summary(self) -> dict[str, Any]:
         """What the guard did: its threshold (None: off), the rows rejected, held,
-        recovered from (``diverged``), the times it stepped aside (``relented``) and,
-        with rejection off, the outliers learned from all the same."""
+        recovered from (``diverged``), the times it stepped aside (``relented``) or
+        started its warm-up again (``restarted``) and, with rejection off, the outliers
+        learned from all the same."""
         return {"threshold": self.threshold, **self.counts}
 
     def unrecovered(self) -> str | None:
@@ -317,15 +335,32 @@ class StreamGuard:
             f"its running scale {s:.3g} (threshold {self.limit:g})"
         )
 
-    def _warm_up(self, errors: list[float]) -> None:
+    def _warm_up(self, k: int, errors: list[float]) -> None:
+        """Collect the errors of row ``k``; at ``W`` of them, the scale, unless a late one
+        was an outlier: then a glitch of the warm-up was learned, and the warm-up starts
+        again from the last good estimate (the rows that hold the glitch held)."""
         magnitudes = [abs(e) for e in errors]
         if all(0.0 < a < math.inf for a in magnitudes):  # a plant at rest does not count
-            self.warming.append(magnitudes)
-        if len(self.warming) >= self.window:
-            self.scale = [
-                _START * _median([m[i] for m in self.warming]) for i in range(len(errors))
-            ]
-            self.warm, self.warming = True, []
+            self.warming.append([k, *magnitudes])
+        if len(self.warming) < self.window:
+            return
+        ny = len(errors)
+        scale = [_START * _median([m[1 + i] for m in self.warming]) for i in range(ny)]
+        # past the recursion's transient (its first n + max_lag errors are large anyway)
+        late = self.warming[self.learner.n_parameters + self.lag :]
+        glitch = [m[0] for m in late if any(m[1 + i] > self.limit * scale[i] for i in range(ny))]
+        self.warming = []
+        if glitch and self.threshold is not None:
+            self.counts["restarted"] += 1
+            self.learner.rewind(self.good)
+            self.candidate, self.candidate_row, self.since = self.good, self.good_row, 0
+            self.hold = max(0, glitch[-1] + self.lag - k)
+            self.held_reason = (
+                f"held: its regressors reach back to row {glitch[-1]}, an outlier learned "
+                "during the warm-up (the warm-up starts again)"
+            )
+            return
+        self.scale, self.warm = scale, True
 
     def _widen(self, j: int, v: float) -> None:
         """Signal ``j``'s range to include ``v``, and the bounds beyond it."""
@@ -340,6 +375,6 @@ class StreamGuard:
 #: Attributes of :meth:`StreamGuard.state`.
 _STATE = (
     "low", "high", "lower", "upper", "scale", "warming", "warm", "hold", "held_reason",
-    "run", "good", "good_row", "candidate", "candidate_row", "since", "diverged_at",
+    "run", "learned", "good", "good_row", "candidate", "candidate_row", "since", "diverged_at",
     "outlier_at", "counts",
 )  # fmt: skip
