@@ -125,6 +125,21 @@ def squared_state_record(n=1500, seed=0, noise=0.01):
     return Dataset.from_arrays(u, y + noise * rng.standard_normal(n), ["u"], ["y"])
 
 
+def cubic_state_record(n=1500, seed=0, noise=0.01):
+    """A second-order plant whose first state is fed back through ``-0.15 x1^3``
+    (an odd nonlinearity: no monomial of degree 2 holds it), uniform input, white output
+    noise: a polynomial state-space model needs degree 3."""
+    from blockid.data import Dataset
+
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1, 1, n)
+    x, y = np.zeros(2), np.zeros(n)
+    for k in range(n):
+        y[k] = x[0] + 0.4 * x[1]
+        x = np.array([1.2 * x[0] - 0.35 * x[1] + u[k] - 0.15 * x[0] ** 3, x[0]])
+    return Dataset.from_arrays(u, y + noise * rng.standard_normal(n), ["u"], ["y"])
+
+
 # Records and models shared by tests found by mutation testing (docs/testing.md)
 #: A two-input two-output Hammerstein-Wiener plant on a third-order state-space core:
 #: input cubics with unit linear coefficient and no constant, output cubics likewise

@@ -21,6 +21,7 @@ from blockid.models import ARX, ChainModel, Hammerstein
 from blockid.workflows.identify import EFFORTS, Effort, identify
 
 from reference import (
+    cubic_state_record,
     mimo_delays_record,
     mimo_hw_record,
     mimo_lure_record,
@@ -392,6 +393,30 @@ def test_a_state_nonlinearity_gets_a_polynomial_state_space_model():
     tied = {s.candidate.options["nx"] for s in ranked if s.rmse <= ranked[0].rmse * 1.02}
     assert ranked[0].candidate.options["nx"] in tried
     assert max(tied) in tried or len(tried) == 2
+
+
+def test_a_degree_is_raised_by_a_climb_from_the_degree_below_within_its_own_budget():
+    """A cubic state nonlinearity, degree 2 planned (and 3 of the inputs only, which
+    cannot hold it): the nonlinearity stage raises the best polynomial model's degree
+    by a climb (``start_degree``), over the state-space budget but within the climb's,
+    with the climbed degree's iterations limited; it is chosen, far better than degree 2."""
+    data = cubic_state_record()
+    effort = Effort("climb", 3, 2, 3, 2, 1, 1, 15, 10_000, 1, 40, 1,
+                    ((2, "full"), (3, "inputs")), 40, 1, climb_parameters=60,
+                    climb_nfev=25)  # fmt: skip
+    result = identify(data, structures=["polynomial-state-space"], effort=effort, jobs=1)
+    chosen = result.selected.candidate.options
+    assert chosen["degree"] == 3 and chosen["start_degree"] == 2
+    assert chosen["rung_nfev"] == min(25, chosen["max_nfev"])  # never more than its base
+    assert chosen["monomials"] == "full"
+    second = min(s.rmse for s in result.ranked if s.candidate.options.get("degree") == 2)
+    assert result.selected.rmse < 0.5 * second
+    assert [r["degree"] for r in result.fit.settings["rungs"]] == [2, 3]
+    assert result.fit.settings["rungs"][1]["max_nfev"] == chosen["rung_nfev"]
+    # over the climb's budget it is not tried
+    tight = Effort(**{**effort.to_dict(), "climb_parameters": 40})
+    result = identify(data, structures=["polynomial-state-space"], effort=tight, jobs=1)
+    assert all("start_degree" not in s.candidate.options for s in result.ranked)
 
 
 def test_a_static_block_on_a_state_gets_a_loop_block_which_no_chain_holds():

@@ -475,6 +475,13 @@ OPTIONS: dict[str, Option] = _options(
         high=5,
     ),
     Option(
+        "rung_nfev",
+        "count",
+        "With --start-degree: limit on simulations of each degree above the first "
+        "(default: --max-nfev).",
+        low=1,
+    ),
+    Option(
         "monomials",
         "choice",
         "Monomials of the states and inputs (full), of the states only, or of the inputs only.",
@@ -812,7 +819,9 @@ STRUCTURES: dict[str, Structure] = {
                 Method(
                     "simulation-error",
                     "blockid.fitting.state_space:fit_polynomial_state_space",
-                    _STATE_SPACE + ("degree", "monomials", "margin", "start_degree") + _REFINEMENT,
+                    _STATE_SPACE
+                    + ("degree", "monomials", "margin", "start_degree", "rung_nfev")
+                    + _REFINEMENT,
                     "linear state-space start, then every parameter refined on the free-run "
                     "error with the monomials",
                 ),

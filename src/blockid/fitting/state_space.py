@@ -727,6 +727,7 @@ def fit_polynomial_state_space(
     feedthrough: bool = False,
     margin: float = 0.25,
     start_degree: int | None = None,
+    rung_nfev: int | None = None,
     max_nfev: int = 500,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
@@ -754,6 +755,9 @@ def fit_polynomial_state_space(
         degree below (its coefficients kept, the new monomials' starting at zero): a
         continuation that reaches a better optimum than all monomials at once where the
         start is far from it (``docs/models.md``). Default: ``degree`` (one rung).
+    rung_nfev : int, optional
+        Limit on the simulations of each degree above ``start_degree`` (default
+        ``max_nfev``): a rung of many more parameters that starts near its optimum.
     max_nfev, ftol, xtol, gtol
         Of each refinement (the linear start's and each degree's). The nonlinear
         refinement crawls along curved valleys for a few hundred evaluations before it
@@ -761,6 +765,7 @@ def fit_polynomial_state_space(
     """
     degree, margin = checked("degree", degree), checked("margin", margin)  # one declaration
     first = degree if start_degree is None else max(2, checked("start_degree", start_degree))
+    rung_nfev = max_nfev if rung_nfev is None else checked("rung_nfev", rung_nfev)
     if first > degree:
         raise ParameterError(
             f"start_degree={start_degree} is above degree={degree}: the fit climbs from "
@@ -809,20 +814,21 @@ def fit_polynomial_state_space(
     rungs = []
     model = template
     for d in range(first, degree + 1):
+        limit = max_nfev if d == first else rung_nfev
         if d > first:
             expo = monomial_exponents(n, len(data.inputs), d, monomials, constant=True)
             model = model.with_monomials(expo)
         model, info = refine_state_space(
-            model, data, feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol,
+            model, data, feedthrough=feedthrough, max_nfev=limit, ftol=ftol, xtol=xtol,
             gtol=gtol,
         )  # fmt: skip
-        rungs.append({"degree": d, **_solver_settings(info, max_nfev)})
+        rungs.append({"degree": d, **_solver_settings(info, limit)})
     model = with_observed_range(model, data)
     method = "subspace+polynomial-state-space"
     metrics = _check(model, data, method)
     settings = {
         **{k: v for k, v in linear.settings.items() if k != "refinement"},
-        **_solver_settings(info, max_nfev),
+        **_solver_settings(info, limit),
         "linear_refinement": linear.settings.get("refinement"),
         "degree": degree,
         "monomials": monomials,

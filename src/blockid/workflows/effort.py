@@ -67,6 +67,11 @@ class Effort:
     #: LONG_RECORD samples and on a longer one
     warm_starts: int = 4
     warm_starts_long: int = 3
+    #: largest number of parameters of a polynomial state-space candidate whose degree
+    #: the nonlinearity stage raises by a climb from the degree below (``start_degree``),
+    #: and the iterations of the climbed degree when it is over ``state_parameters``
+    climb_parameters: int = 900
+    climb_nfev: int = 40
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -81,7 +86,7 @@ EFFORTS: dict[str, Effort] = {
             families=3, screen_nfev=15, screen_samples=10_000, finalists=2, final_nfev=60,
             grow_steps=1, state_plans=((2, "full"), (3, "states")), state_parameters=300,
             state_keep=2, final_samples=20_000, warm_starts=2,
-            warm_starts_long=1,
+            warm_starts_long=1, climb_parameters=300, climb_nfev=20,
             block_state_plans=(
                 ("polynomial:degree=3", None), (None, "polynomial:degree=3"),
                 ("polynomial:degree=3", "polynomial:degree=3"),
@@ -100,7 +105,7 @@ EFFORTS: dict[str, Effort] = {
             final_nfev=300, grow_steps=4,
             state_plans=((2, "full"), (3, "states"), (3, "full"), (4, "states")),
             state_parameters=1200, state_keep=3, final_samples=None, loop_single=True,
-            warm_starts=5,
+            warm_starts=5, climb_parameters=1800, climb_nfev=60,
         ),
     )
 }  # fmt: skip

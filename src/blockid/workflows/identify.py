@@ -1203,7 +1203,11 @@ def _stages(
     current = ranked[0]
     signals = (search.data.n_inputs, search.data.n_outputs)
     for _ in range(eff.grow_steps):
-        trials = [c for c in grown(current.candidate) if _affordable(c, signals, eff)]
+        trials = [
+            _climbing(c, signals, eff)
+            for c in grown(current.candidate)
+            if _affordable(c, signals, eff)
+        ]
         if not trials:
             break
         scored = [s for s in search.run("nonlinearity", trials, False) if s.ok]
@@ -1292,7 +1296,21 @@ def _affordable(candidate: Candidate, signals: tuple[int, int], effort: Effort) 
     if o["degree"] > max(d for d, _ in effort.state_plans):
         return False
     n = n_state_space_parameters(o["nx"], *signals, o["degree"], o.get("monomials", "full"))
-    return n <= effort.state_parameters
+    return n <= (effort.climb_parameters if "start_degree" in o else effort.state_parameters)
+
+
+def _climbing(candidate: Candidate, signals: tuple[int, int], effort: Effort) -> Candidate:
+    """A climb (``start_degree``) over the effort's ``state_parameters`` with its top
+    degree limited to ``climb_nfev`` iterations: it starts from the model of the degree
+    below, near its optimum (WH 2009, 6 states: 1.64 mV at degree 2, 0.604 after 40
+    iterations at degree 3, 840 parameters)."""
+    o = candidate.options
+    if "start_degree" not in o:
+        return candidate
+    n = n_state_space_parameters(o["nx"], *signals, o["degree"], o.get("monomials", "full"))
+    if n <= effort.state_parameters:
+        return candidate
+    return candidate.with_options(rung_nfev=min(effort.climb_nfev, o.get("max_nfev", 10**9)))
 
 
 def _block_structures(

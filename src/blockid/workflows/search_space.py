@@ -43,7 +43,7 @@ __all__ = [
 ]
 
 #: Options that set how long a fit iterates, not which model it is.
-ITERATION_SETTINGS = ("max_nfev", "tail_fraction", "patience")
+ITERATION_SETTINGS = ("max_nfev", "tail_fraction", "patience", "rung_nfev")
 
 #: The linear structure of the order search (least squares: fast over a grid).
 LINEAR = "arx"
