@@ -115,3 +115,16 @@ def test_an_integrating_chain_keeps_its_integrator():
     warm = refine_from(start.model, data, "output-error", **options)
     assert [b.kind for b in warm.model.blocks][-1] == "integrator"
     assert warm.estimation_metrics["fit_percent"]["y"] > 99
+
+
+def test_a_model_fitted_degree_by_degree_is_refined_with_its_top_degree_s_limit():
+    """identify's warm starts of a climbed polynomial model refine all of its (many)
+    parameters: with the climbed degree's limit (``rung_nfev``), not the lower one's."""
+    from reference import cubic_state_record
+
+    data = cubic_state_record(600)
+    options = dict(nx=2, degree=3, start_degree=2, max_nfev=30, rung_nfev=4)
+    start = fit_model(data, "polynomial-state-space", **options).model
+    fit = refine_from(start, data, "polynomial-state-space", **options)
+    assert fit.settings["max_nfev"] == 4
+    assert fit.settings["refinement"]["function_evaluations"] <= 4 + 1

@@ -55,6 +55,7 @@ SHARED: dict[str, tuple[tuple[str, ...], str | None]] = {
     "time_column": (("--time-column",), "NAME"),
     "experiment_column": (("--experiment-column",), "NAME"),
     "report": (("--report",), "FILE"),
+    "scheduler": (("--scheduler",), "ADDRESS"),
 }
 
 #: (parameter name, help) of every option :func:`shared` made: the test's evidence that

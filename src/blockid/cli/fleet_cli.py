@@ -52,9 +52,9 @@ Workers = Annotated[
 ]
 Scheduler = Annotated[
     str | None,
-    typer.Option(
-        metavar="ADDRESS",
-        help="Use a running dask cluster, e.g. tcp://host:8786 (data on shared storage).",
+    shared(
+        "scheduler",
+        "Use a running dask cluster, e.g. tcp://host:8786 (data on shared storage).",
     ),
 ]
 

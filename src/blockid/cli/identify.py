@@ -105,9 +105,9 @@ def identify(
     ] = None,
     scheduler: Annotated[
         str | None,
-        typer.Option(
-            metavar="ADDRESS",
-            help="Fit the candidates on a running dask cluster, e.g. tcp://host:8786 (the "
+        shared(
+            "scheduler",
+            "Fit the candidates on a running dask cluster, e.g. tcp://host:8786 (the "
             "record is sent to each worker once; the same model as --jobs). Not with --jobs.",
         ),
     ] = None,

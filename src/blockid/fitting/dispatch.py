@@ -125,7 +125,8 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
     keeps the means of the data it was fitted on as its operating point). ``options``
     are the fit's options (as given to :func:`fit_model`); the refinement's own
     (``max_nfev``, ``tail_fraction``, ``patience``, tolerances, ``feedthrough``) apply
-    and the rest, which shaped the start, are ignored. The ranges of the internal
+    and the rest, which shaped the start, are ignored; a polynomial state space fitted
+    degree by degree is refined with its top degree's limit (``rung_nfev``). The ranges of the internal
     signals are recorded on ``data``. ``identify`` refines each fold's model on all the
     estimation data this way when the direct fit falls short of the folds.
     """
@@ -138,6 +139,8 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
             parameter="structure",
         )
     tolerances = {k: options[k] for k in ("max_nfev", "ftol", "xtol", "gtol") if k in options}
+    if options.get("rung_nfev") is not None:  # a climbed fit: its top degree's limit
+        tolerances["max_nfev"] = options["rung_nfev"]
     if not decl.block_oriented:  # the state-space structures
         from blockid.fitting.block_state_space import with_block_ranges
         from blockid.fitting.state_space import (
@@ -160,7 +163,7 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
             model=fitted,
             method=how,
             settings={
-                **_solver_settings(info, int(options.get("max_nfev", 100))),
+                **_solver_settings(info, int(tolerances.get("max_nfev", 100))),
                 "refinement": info,
             },
             estimation_metrics=_check(fitted, data, how),
