@@ -126,9 +126,10 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
     are the fit's options (as given to :func:`fit_model`); the refinement's own
     (``max_nfev``, ``tail_fraction``, ``patience``, tolerances, ``feedthrough``) apply
     and the rest, which shaped the start, are ignored; a polynomial state space fitted
-    degree by degree is refined with its top degree's limit (``rung_nfev``). The ranges of the internal
-    signals are recorded on ``data``. ``identify`` refines each fold's model on all the
-    estimation data this way when the direct fit falls short of the folds.
+    degree by degree is refined with its top degree's limit (``rung_nfev``). The ranges
+    of the internal signals are recorded on ``data``. ``identify`` refines each fold's
+    model on all the estimation data this way when the direct fit falls short of the
+    folds.
     """
     from blockid.fitting.simulation_error import refine
 
