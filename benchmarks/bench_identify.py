@@ -6,12 +6,15 @@ Usage: ``python benchmarks/bench_identify.py [--samples 2000,20000] [--effort E]
 For each record length, a Hammerstein-Wiener plant (two-segment polynomial, second-order
 linear block, cubic output polynomial) with white output noise at 40 dB is written as a
 CSV, and ``blockid identify DATA --input u --output y --effort E --jobs J --json`` runs on
-it in a fresh process, as a user would, with ``--jobs 1`` and ``--jobs 2``: the wall
+it in a fresh process, as a user would, with ``--jobs 1``, ``--jobs 2`` and
+``--scheduler`` on a two-worker dask ``LocalCluster`` (one thread per worker, started
+by this script before the run and not counted): the wall
 time, the search time ``identify`` reports, the candidates and rejections, the peak
 resident memory of the process and of its workers (``ru_maxrss`` of the children: the
 largest one, and their sum bounds what they held together) and the chosen structure.
-The speed-up is the ratio of the two search times, measured in the same run; the two
-runs must choose the same model (the JSON documents are compared). The reference is a
+The speed-ups are the ratios of the one-job search time to the two-job and the
+cluster's, measured in the same run; the runs must choose the same model (the JSON
+documents are compared). The reference is a
 single default fit of the true structure (``blockid fit --structure
 hammerstein-wiener``) on the same file: what one candidate of the search costs.
 """
@@ -83,7 +86,12 @@ def main() -> None:
     args = ap.parse_args()
     blockid = shutil.which("blockid", path=str(Path(sys.executable).parent)) or "blockid"
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
+    from distributed import LocalCluster
+
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                           dashboard_address=":0", silence_logs=50)  # fmt: skip
+    address = cluster.scheduler_address
+    with cluster, tempfile.TemporaryDirectory() as tmp:
         for n in (int(s) for s in args.samples.split(",")):
             csv = Path(tmp) / f"hw{n}.csv"
             write_record(csv, n)
@@ -92,50 +100,57 @@ def main() -> None:
             fit += ["--nk", "1", "--quiet", "-o", str(Path(tmp) / "fit.json"), "--force"]
             _, fit_gb, fit_s, _ = measured(fit)
             runs = {}
-            for jobs in (1, 2):
+            for where in (["--jobs", "1"], ["--jobs", "2"], ["--scheduler", address]):
                 load = os.getloadavg()[0]
                 search = [blockid, "identify", str(csv), "--input", "u", "--output", "y"]
-                search += ["--effort", args.effort, "--jobs", str(jobs), "--json", "--quiet"]
+                search += ["--effort", args.effort, *where, "--json", "--quiet"]
                 code, gb, seconds, stdout = measured(search)
                 doc = json.loads(stdout) if code == 0 else {}
-                runs[jobs] = (doc, gb, seconds, load)
-            (one, gb1, _, load1), (two, gb2, _, load2) = runs[1], runs[2]
-            s1, s2 = one.get("search", {}).get("seconds"), two.get("search", {}).get("seconds")
-            same = json.dumps(one.get("selected"), sort_keys=True) == json.dumps(
-                two.get("selected"), sort_keys=True
+                runs[where[0] + where[1][:1]] = (doc, gb, seconds, load)
+            (one, gb1, _, load1), (two, gb2, _, load2), (far, _, _, load3) = runs.values()
+            s1, s2, s3 = (d.get("search", {}).get("seconds") for d in (one, two, far))
+            same = all(
+                json.dumps(one.get("selected"), sort_keys=True)
+                == json.dumps(d.get("selected"), sort_keys=True)
+                for d in (two, far)
             )
             info = one.get("search", {})
             row = (
-                n, fit_s, fit_gb, s1, s2, (s1 / s2) if s1 and s2 else None, info.get("candidates"),
+                n, fit_s, fit_gb, s1, s2, (s1 / s2) if s1 and s2 else None, s3,
+                (s1 / s3) if s1 and s3 else None, info.get("candidates"),
                 len(info.get("rejected") or []), gb1, gb2,
-                one.get("selected", {}).get("structure", "failed"), same, max(load1, load2),
+                one.get("selected", {}).get("structure", "failed"), same,
+                max(load1, load2, load3),
             )  # fmt: skip
             rows.append(row)
             print(row, flush=True)
     lines = [
-        "## Structure search: `blockid identify`, one worker and two",
+        "## Structure search: `blockid identify`, one worker, two, and a dask cluster",
         "",
         "`python benchmarks/bench_identify.py` — `blockid identify --effort "
         f"{args.effort}` on a simulated Hammerstein-Wiener record (40 dB output noise) of "
-        "each length, in a fresh process, with `--jobs 1` and `--jobs 2`: the search time "
-        "`identify` reports, the speed-up (ratio of the two, same run), candidates scored "
+        "each length, in a fresh process, with `--jobs 1`, `--jobs 2` and `--scheduler` on "
+        "a two-worker dask `LocalCluster` on the same machine (one thread per worker; "
+        "started before the run, not counted): the search time `identify` reports, the "
+        "speed-ups over one job (same run), candidates scored "
         "and rejected, peak resident memory (the largest process of the tree: the search "
-        "or one worker), the structure chosen and whether both runs chose the same model "
-        "(their `selected` documents equal). Reference: one default fit of the true "
+        "or one worker), the structure chosen and whether all three runs chose the same "
+        "model (their `selected` documents equal). Reference: one default fit of the true "
         f"structure on the same file. Machine: {machine()}.",
         "",
         "| samples | one H-W fit s | search s, 1 job | search s, 2 jobs | speed-up | "
-        "candidates | rejected | peak GB, 1 job | peak GB, 2 jobs | chosen | same model "
-        "| load average |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---:|",
+        "search s, cluster of 2 | cluster speed-up | candidates | rejected | peak GB, 1 job "
+        "| peak GB, 2 jobs | chosen | same model | load average |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---:|",
     ]
-    for n, fs, _fg, s1, s2, up, c, r, g1, g2, chosen, same, load in rows:
+    for n, fs, _fg, s1, s2, up, s3, up3, c, r, g1, g2, chosen, same, load in rows:
 
         def f(v, spec):
             return "-" if v is None else format(v, spec)
 
         lines.append(
-            f"| {n:,} | {fs:.1f} | {f(s1, '.0f')} | {f(s2, '.0f')} | {f(up, '.2f')} | {c} | "
+            f"| {n:,} | {fs:.1f} | {f(s1, '.0f')} | {f(s2, '.0f')} | {f(up, '.2f')} | "
+            f"{f(s3, '.0f')} | {f(up3, '.2f')} | {c} | "
             f"{r} | {g1:.2f} | {g2:.2f} | {chosen} | {'yes' if same else '**no**'} | "
             f"{load:.1f} |"
         )
