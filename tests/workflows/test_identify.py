@@ -554,6 +554,14 @@ def test_a_model_beyond_linear_is_chosen_only_when_the_folds_agree():
     steady = _scored("hammerstein", [0.30, 0.05, 0.20], input_block="polynomial:degree=3")
     order, info = _earned([steady, arx])
     assert order == [steady, arx] and not info["linear_chosen"]
+    # within one standard error but beyond LINEAR_MARGIN (0.75) of them: kept
+    base = _scored("arx", [0.2, 0.2, 0.2, 0.2])
+    near = _scored("hammerstein", 0.2 * np.exp([-0.6, -0.1, 0.3, -0.2]),
+                   input_block="polynomial:degree=3")  # fmt: skip
+    order, info = _earned([near, base])
+    t = info["mean_log_ratio"] / info["standard_error"]
+    assert -1.0 < t < -0.75 and info["margin"] == 0.75
+    assert order == [near, base] and not info["linear_chosen"]
     # an integrator is beyond linear too; a linear best, or no linear model, stands
     drifting = _scored("output-error", [0.1, 0.5, 0.2], integrator=1)
     assert _earned([drifting, arx])[0] == [arx, drifting]
