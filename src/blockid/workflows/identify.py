@@ -75,8 +75,9 @@ zero by more than ``LINEAR_MARGIN`` (0.75) times its standard error (after the
 one-standard-error rule of cross-validation, Breiman et al. 1984, Hastie et al. 2009
 sec. 7.10, paired over the folds the two share; the margin chosen on the shared
 benchmark sets with each set left out in turn, ``docs/identify.md``). Otherwise the
-linear model is chosen, with a note giving the numbers. (EMPS, with a fixed stability margin: an integrating Hammerstein model scored
-18.2 mm against the ARX's 21.3, but its folds' errors were 12, 28 and 16 mm against 49,
+linear model is chosen, with a note giving the numbers. (EMPS, with a fixed stability
+margin: an integrating Hammerstein model scored 18.2 mm against the ARX's 21.3, but
+its folds' errors were 12, 28 and 16 mm against 49,
 7 and 27: mean log ratio -0.16, standard error 0.82; it tested 47.7 mm against the
 ARX's 8.8.)
 
