@@ -57,17 +57,40 @@ PNLSS = {
     "bouc_wen": (3, 3, "full"),
 }
 
-#: The targets the issues set, by set and test record: (what, bound in the set's unit).
+#: The targets the issues set, by set and test record: (effort, what, bound in the set's
+#: unit, largest search seconds or None). Issue 35: the default effort's.
 TARGETS = {
-    ("wh2009", "test"): ("identify <= 3 mV with a search <= 150 s (issue 20)", 3.0),
-    ("silverbox", "arrow full"): ("identify <= 0.45 mV (issue 20)", 0.45),
-    ("bouc_wen", "multisine"): ("identify < 100 um (issue 20)", 100.0),
+    ("wh2009", "test"): [
+        ("standard", "<= 0.8 mV with a search <= 300 s (issue 35)", 0.8, 300.0),
+        ("quick", "<= 1.5 mV with a search <= 100 s (issue 35)", 1.5, 100.0),
+    ],
+    ("silverbox", "arrow full"): [
+        ("standard", "<= 0.30 mV (issue 35)", 0.30, None),
+        ("quick", "<= 0.60 mV (issue 35)", 0.60, None),
+    ],
+    ("bouc_wen", "multisine"): [("standard", "<= 20 um (issue 35)", 20.0, None)],
 }
 PNLSS_TARGETS = {
     ("silverbox", "arrow full"): 0.40,
     ("wh2009", "test"): 1.0,
     ("bouc_wen", "multisine"): 60.0,
 }
+
+
+#: What this run was: edited by the session that runs it.
+RUN_NOTE = (
+    "This run (2026-11-28, session 13): all 22 sets at commit `5db13e3` (a polynomial "
+    "state space's degree raised by a climb from the degree below, within its own "
+    "parameter budget) in a fresh worktree, beside a run of the code before "
+    "(`d38a5cf`, the before-and-after table below) and other work on the same 2 cores: "
+    "the loads at the start of each set are given; the search times are those of a busy "
+    "machine and are not comparable with earlier runs. The rule that keeps a model "
+    "beyond linear was changed after this run (0.75 standard errors instead of 1, "
+    "[identify](identify.md#when-a-model-beyond-linear-is-kept-the-margin-study)): of the "
+    "22 sets, it changes the pick on the DaISy wing flutter only (a Hammerstein model "
+    "at -0.89 standard errors, which tests 0.2936 against the output-error model's "
+    "0.2944 shown here). The direct PNLSS fits and the fold-rule study were not re-run."
+)
 
 
 # ----------------------------------------------------------------------------- scoring
@@ -343,7 +366,8 @@ def _summary(records: dict[str, dict[str, Any]]) -> tuple[list[str], list[tuple]
 
 def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, Any]],
                study: dict[str, Any] | None,
-               quick: dict[str, dict[str, Any]] | None = None) -> str:  # fmt: skip
+               quick: dict[str, dict[str, Any]] | None = None,
+               before: dict[str, dict[str, Any]] | None = None) -> str:  # fmt: skip
     ok = {k: r for k, r in records.items() if r.get("status") == "ok"}
     loads = [r["load_before"] for r in ok.values()]
     commits = ", ".join(f"`{c}`" for c in sorted({r.get("commit", "?") for r in ok.values()}))
@@ -374,18 +398,7 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
         "The search is deterministic: the same data, effort and version give the same "
         "model on any machine; the times depend on the machine.",
         "",
-        "This run (2026-11-27, session 11): all 22 sets at commit `b749b30` (the refit's "
-        "warm starts from the folds' models, only when the direct refit falls more than 10 % "
-        "short of the folds) in a fresh worktree (its kernels compiled during the first set, "
-        "WH 2009): the standard effort, then the quick effort on the long records, one after "
-        "the other. The direct PNLSS fits and the rule study were not re-run: they are "
-        "those of session 10 (commit `969180a`); neither uses the refit this session "
-        "changed, and every search's candidate scores are the same. Against session 10 "
-        "the chosen model and test RMSE changed on one set, EMPS (13.3 -> 3.4 mm); the "
-        "other 21 are the same to the digits shown. The machine was idle but for the run "
-        "itself (its two workers keep the load near 2). On this shared 2-core machine the "
-        "same work varies by up to a third from one hour to the next: WH 2009's standard "
-        "search took 504 s here, 510 s, 689 s, 723 s and 1019 s in earlier runs.",
+        RUN_NOTE,
         "",
         "## Single-output sets",
         "",
@@ -403,6 +416,7 @@ def write_docs(records: dict[str, dict[str, Any]], pnlss: dict[str, dict[str, An
         lines += table
         shortfalls += more
         lines += _block_section(mimo)
+    lines += _before_section(before or {}, records)
     lines += _quick_section(quick or {}, records)
     if pnlss:
         lines += _pnlss_section(pnlss)
@@ -438,24 +452,59 @@ def _targets(records: dict[str, dict[str, Any]], quick: dict[str, dict[str, Any]
     lines = ["", "### The issues' targets", "",
              "| set, test record | target | effort | measured | met? |",
              "|---|---|---|---|---|"]  # fmt: skip
-    for (name, rec), (what, bound) in TARGETS.items():
-        runs = [r for r in (records.get(name, {}), quick.get(name, {})) if r.get("tests")]
-        if not runs:
-            lines.append(f"| {name}, {rec} | {what} | - | not run | - |")
-        for r in runs:
-            t = next((t for t in r["tests"] if t["name"] == rec), None)
-            if t is None:
+    for (name, rec), goals in TARGETS.items():
+        for effort, what, bound, seconds in goals:
+            runs = [r for r in (records.get(name, {}), quick.get(name, {}))
+                    if r.get("tests") and r.get("effort") == effort]  # fmt: skip
+            if not runs:
+                lines.append(f"| {name}, {rec} | {what} | {effort} | not run | - |")
+            for r in runs:
+                t = next((t for t in r["tests"] if t["name"] == rec), None)
+                if t is None:
+                    continue
+                value = t["rmse"][0]
+                met = value <= bound
+                extra = ""
+                if seconds is not None:
+                    met = met and r["search_seconds"] <= seconds
+                    load = r["load_before"].split()[0]
+                    extra = f", search {r['search_seconds']:.0f} s (load {load})"
+                lines.append(f"| {r['title']}, {rec} | {what} | {effort} | "
+                             f"{_f(value)} {r['unit']}{extra} | "
+                             f"{'yes' if met else '**no**'} |")  # fmt: skip
+    return lines
+
+
+def _before_section(
+    before: dict[str, dict[str, Any]], records: dict[str, dict[str, Any]]
+) -> list[str]:
+    """Every set's test errors before and after this run's change (``--before``)."""
+    ok = {k: r for k, r in before.items() if r.get("status") == "ok"}
+    if not ok:
+        return []
+    commit = ", ".join(sorted({f"`{r.get('commit', '?')}`" for r in ok.values()}))
+    lines = ["", "## Before and after", "",
+             f"The same sets, split and effort with the code before this run ({commit}), "
+             "free-run test RMSE per test record (and output); **ratio** is after over "
+             "before (geometric mean over the outputs); a ratio above 1.05 is in bold.", "",
+             "| data set | test record | before | after | ratio | chosen before | chosen after "
+             "| search s before / after |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for name, r in records.items():
+        b = ok.get(name)
+        if r.get("status") != "ok" or b is None:
+            continue
+        old = {t["name"]: t["rmse"] for t in b["tests"]}
+        for t in r["tests"]:
+            o = old.get(t["name"])
+            if o is None:
                 continue
-            value = t["rmse"][0]
-            met = value <= bound
-            extra = ""
-            if name == "wh2009":
-                met = met and r["search_seconds"] <= 150
-                load = r["load_before"].split()[0]
-                extra = f", search {r['search_seconds']:.0f} s (load {load})"
-            lines.append(f"| {r['title']}, {rec} | {what} | {r.get('effort', '?')} | "
-                         f"{_f(value)} {r['unit']}{extra} | "
-                         f"{'yes' if met else '**no**'} |")  # fmt: skip
+            ratio = float(np.exp(np.mean(np.log(np.array(t["rmse"]) / np.array(o)))))
+            shown = f"**{ratio:.3f}**" if ratio > 1.05 else f"{ratio:.3f}"
+            chosen = ("same" if b["selected"]["label"] == r["selected"]["label"]
+                      else f"`{r['selected']['label']}`")  # fmt: skip
+            lines.append(f"| {r['title']} | {t['name']} | {_f(o)} | {_f(t['rmse'])} {r['unit']} "
+                         f"| {shown} | `{b['selected']['label']}` | {chosen} | "
+                         f"{b['search_seconds']:.0f} / {r['search_seconds']:.0f} |")  # fmt: skip
     return lines
 
 
@@ -888,6 +937,12 @@ def main(argv: list[str] | None = None) -> int:
         metavar="FOLDER",
         help="results of an --effort quick run of some sets, shown beside the main",
     )
+    p.add_argument(
+        "--before",
+        type=Path,
+        metavar="FOLDER",
+        help="results of the same run with the code before the change: a before/after table",
+    )
     args = p.parse_args(argv)
     results = args.results
     every = {**ALL, **MIMO}
@@ -935,7 +990,11 @@ def main(argv: list[str] | None = None) -> int:
         if args.quick is not None:
             quick = {name: json.loads((args.quick / f"{name}.json").read_text())
                      for name in every if (args.quick / f"{name}.json").exists()}  # fmt: skip
-        DOC.write_text(write_docs(records, pnlss, study, quick))
+        before = {}
+        if args.before is not None:
+            before = {name: json.loads((args.before / f"{name}.json").read_text())
+                      for name in every if (args.before / f"{name}.json").exists()}  # fmt: skip
+        DOC.write_text(write_docs(records, pnlss, study, quick, before))
         print(f"wrote {DOC}")
     return 0
 
