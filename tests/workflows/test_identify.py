@@ -444,8 +444,8 @@ def test_the_nonlinearity_stage_keeps_a_state_space_degree_within_the_effort():
     """The folds lie inside the estimation range, so they cannot show how a higher
     monomial degree extrapolates beyond it: growth stops at the effort's largest planned
     degree (and within its parameter budget)."""
-    from blockid.workflows.identify import _affordable
     from blockid.workflows.search_space import Candidate
+    from blockid.workflows.stages import _affordable
 
     standard = EFFORTS["standard"]  # plans degrees 2 and 3, 300 parameters
     pnlss = Candidate("polynomial-state-space", {"nx": 2, "degree": 3, "monomials": "full"})
@@ -788,3 +788,28 @@ def test_an_unreachable_scheduler_is_named(monkeypatch):
     with pytest.raises(errors.ParameterError, match="cannot reach the dask scheduler"):
         identify(dead_zone_record(300), structures=["arx"], effort=SMALL,
                  scheduler="tcp://127.0.0.1:9")  # fmt: skip
+
+
+def test_a_stage_is_one_class_in_the_list_of_stages(monkeypatch):
+    """A new stage is a class with a name and a run(search, context) put in STAGES: it
+    sees what the stages before it left (the delays, the ARX orders) and its candidates
+    are scored, ranked and recorded like every other."""
+    from blockid.workflows import stages
+    from blockid.workflows.search_space import Candidate
+
+    seen = {}
+
+    class Wider(stages.Stage):
+        name = "wider arx"
+
+        def run(self, search, context):
+            seen.update(delays=list(context.delays), orders=list(context.orders))
+            na, nb, nk = context.orders[0]
+            wider = Candidate("arx", {"na": na + 5, "nb": nb, "nk": nk, "center": True})
+            search.run(self.name, [wider], False)
+
+    monkeypatch.setattr(stages, "STAGES", (*stages.STAGES[:2], Wider()))
+    result = identify(dead_zone_record(400), structures=["arx"], effort=SMALL, jobs=1)
+    assert seen["delays"] and seen["orders"]
+    assert any(s.stage == "wider arx" for s in result.ranked + result.rejected)
+    assert [s["stage"] for s in result.search["stages"]][-2:] == ["wider arx", "refit"]

@@ -122,21 +122,8 @@ from blockid.evaluation.trust import Trust, assess
 from blockid.fitting.registry import STRUCTURES, searched_structures
 from blockid.workflows.effort import EFFORTS, LONG_RECORD, RULES, Effort, check_search
 from blockid.workflows.parallel import TaskRunner, available_cores
-from blockid.workflows.search_space import (
-    LINEAR,
-    Candidate,
-    block_state_candidates,
-    delay_candidates,
-    grown,
-    integrating_candidates,
-    n_state_space_parameters,
-    order_grid,
-    output_error_orders,
-    polynomial_state_candidates,
-    state_candidates,
-    structure_candidates,
-    unique,
-)
+from blockid.workflows.search_space import LINEAR, Candidate, unique
+from blockid.workflows.stages import INTEGRATING_POLE, run_stages
 
 __all__ = [
     "EFFORTS",
@@ -153,8 +140,6 @@ __all__ = [
 
 Progress = Callable[[str, int, int, str], None]
 
-#: A least-squares ARX pole this close to +1 suggests that the plant integrates.
-INTEGRATING_POLE = 1e-2
 #: A refit on all estimation data that stopped at its evaluation limit and simulates its
 #: own data more than this factor worse than its candidate's cross-validated score (on
 #: data its fold fits never saw) has not converged: it is fitted again with
@@ -611,35 +596,6 @@ def _delay(score: Score) -> int:
     return int(nk) if isinstance(nk, int) else int(np.min(nk)) if isinstance(nk, tuple) else 0
 
 
-def _iterations(nfev: int) -> dict[str, Any]:
-    return {"max_nfev": nfev, "tail_fraction": 0.0}
-
-
-def _integrations(data: Dataset, orders: Sequence[tuple[int, int, int]]) -> int:
-    """Integrators the estimation data suggest (0, 1 or 2): the most poles within
-    :data:`INTEGRATING_POLE` of +1 of a least-squares ARX of the kept orders."""
-    from blockid.fitting.dispatch import fit_model
-
-    count = 0
-    for na, nb, nk in orders:
-        try:
-            with np.errstate(all="ignore"):
-                model = fit_model(data, LINEAR, na=na, nb=nb, nk=nk, allow_unstable=True).model
-        except BlockidError:
-            continue
-        poles = np.asarray(model.poles(), dtype=complex)
-        count = max(count, int(np.sum(np.abs(poles - 1.0) < INTEGRATING_POLE)))
-    return min(count, 2)
-
-
-def _orders_of(score: Score) -> tuple[int, Any, Any]:
-    """``(na, nb, nk)``; ``nb``, ``nk`` per-pair matrices (nested tuples) where they are."""
-    o = score.candidate.orders()
-    nb, nk = o["nb"], o["nk"]
-    nb = nb if isinstance(nb, tuple) else int(nb)
-    return int(o["na"]), nb, nk if isinstance(nk, tuple) else int(nk)
-
-
 def _refit(
     candidate: Candidate, data: Dataset, cv_rmse: float, n_init: int, notes: list[str]
 ) -> tuple[Any, float | None]:
@@ -1036,7 +992,7 @@ def identify(
     short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
     with TaskRunner(data, min(jobs, 64), scheduler) as runner:
         search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
-        _stages(search, chosen, recommended, notes, asked=bool(asked))
+        run_stages(search, chosen, recommended, notes, asked=bool(asked))
         ranked_all = search.ranked()
         eligible = [s for s in ranked_all if s.candidate.structure in chosen]
         if not eligible:
@@ -1142,270 +1098,3 @@ def _nothing_fitted(search: _Search, chosen: Sequence[str]) -> str:
         + (f" ({why})" if why else "")
         + "; try other structures, or more data"
     )
-
-
-def _stages(
-    search: _Search,
-    chosen: Sequence[str],
-    recommended: tuple[int, int, int] | None,
-    notes: list[str],
-    asked: bool = False,
-) -> None:
-    """Run the stages (module docstring); every score lands in ``search``. ``asked``:
-    the structures were named by the caller (searched even where the default search
-    leaves them out)."""
-    eff = search.effort
-    # 1. delay: one for every channel, and with several, each pair's own
-    probe = min(4, eff.max_order)
-    first = delay_candidates(eff.max_delay, probe)
-    per_pair = _per_pair_delays(search, notes)
-    if per_pair is not None:
-        first.append(Candidate(LINEAR, {"na": probe, "nb": probe, "nk": per_pair, "center": True}))
-    delays_scored = search.run("delay", first, False, capped=False)
-    by_delay = search.ranked(delays_scored)
-    delays: list[Any] = []
-    for s in by_delay:
-        nk = s.candidate.options["nk"]
-        if nk not in delays:
-            delays.append(nk)
-        if len(delays) >= 2:
-            break
-    if recommended is not None and recommended[2] not in delays:
-        delays.append(recommended[2])
-    delays = delays or [1]
-    # 2. linear orders (ARX grid), then output-error orders around the best
-    grid = order_grid(recommended, delays, eff.max_order)
-    search.run("linear orders", grid, False)
-    arx = search.ranked([s for s in search.order if s.candidate.structure == LINEAR])
-    if not arx:
-        raise EstimationError(
-            "no linear model of any order in the grid simulates stably on the held-back "
-            "folds; check the data (input and output columns, sampling) or give more data"
-        )
-    pairs = _per_pair_orders(search, arx[0], notes)
-    if pairs is not None:  # the best ARX with each pair's unneeded coefficients dropped
-        search.run("per-pair orders", [pairs], False)
-        arx = search.ranked([s for s in search.order if s.candidate.structure == LINEAR])
-    orders: list[tuple[int, int, Any]] = []
-    for s in arx:
-        if _orders_of(s) not in orders:
-            orders.append(_orders_of(s))
-        if len(orders) >= eff.linear_keep:
-            break
-    block = [s for s in chosen if STRUCTURES[s].block_oriented]
-    states = [s for s in chosen if STRUCTURES[s].orders == "state"]
-    screen = _iterations(eff.screen_nfev)
-    if block:
-        orders = _block_structures(search, block, orders, recommended, screen, notes)
-    if states:
-        _state_space(search, states, screen, asked)
-    iterative = block + states
-    if not iterative:
-        return
-    # finalists: the best candidates that iterate again, with more iterations
-    pool = [s for s in search.order if s.candidate.structure in iterative]
-    best = search.ranked(pool)[: eff.finalists]
-    final = _iterations(eff.final_nfev)
-    search.run("finalists", [_with_iterations(s.candidate, final) for s in best], False)
-    # the richer nonlinearity of the best of them
-    pool = [s for s in search.order if s.candidate.structure in iterative]
-    ranked = search.ranked(pool)
-    if not ranked:
-        return
-    current = ranked[0]
-    signals = (search.data.n_inputs, search.data.n_outputs)
-    for _ in range(eff.grow_steps):
-        trials = [
-            _climbing(c, signals, eff)
-            for c in grown(current.candidate)
-            if _affordable(c, signals, eff)
-        ]
-        if not trials:
-            break
-        scored = [s for s in search.run("nonlinearity", trials, False) if s.ok]
-        better = [s for s in scored if s.rmse < current.rmse * (1.0 - search.tie)]
-        if not better:
-            break
-        current = min(better, key=lambda s: (s.rmse, s.candidate.label))
-
-
-def _pair_data(search: _Search) -> Dataset:
-    """The data the per-pair scans run their least squares on: a long record's first
-    samples (as the screening fits)."""
-    data = search.data
-    if search.long:
-        whole = tuple(Segment(i, 0, e.n_samples) for i, e in enumerate(data.experiments))
-        data = materialise(data, whole, search.effort.screen_samples)
-    return data
-
-
-def _per_pair_orders(search: _Search, best: Score, notes: list[str]) -> Candidate | None:
-    """With several inputs or outputs, the best ARX candidate with each pair's own
-    ``nb`` (:func:`~blockid.fitting.delays.channel_orders`, at most its ``nb``) when the
-    pairs differ, else None."""
-    if search.data.n_inputs * search.data.n_outputs == 1:
-        return None
-    na, nb, nk = _orders_of(best)
-    if isinstance(nb, tuple):
-        return None
-    from blockid.fitting.delays import channel_orders
-
-    try:
-        found = channel_orders(_pair_data(search), nk, na, nb)
-    except BlockidError as exc:
-        notes.append(f"per-pair orders not tested: {exc}")
-        return None
-    option = found.as_option()
-    if isinstance(option, int) and option == nb:
-        return None
-    notes.append(
-        f"per-pair orders by the least-squares description length, nb = {found.nb.tolist()} "
-        f"(at most the best ARX's {nb}; rows: {', '.join(found.outputs)}; columns: "
-        f"{', '.join(found.inputs)}), scored beside it"
-    )
-    return best.candidate.with_options(nb=option)
-
-
-def _per_pair_delays(search: _Search, notes: list[str]) -> tuple[tuple[int, ...], ...] | None:
-    """With several inputs or outputs, each pair's delay by the least-squares scan
-    (:func:`~blockid.fitting.delays.channel_delays`) when the pairs differ, else None."""
-    data = search.data
-    if data.n_inputs * data.n_outputs == 1:
-        return None
-    from blockid.fitting.delays import channel_delays
-
-    try:
-        found = channel_delays(_pair_data(search), search.effort.max_delay)
-    except BlockidError as exc:
-        notes.append(f"per-pair delays not scanned: {exc}")
-        return None
-    option = found.as_option()
-    if isinstance(option, int):
-        return None
-    notes.append(
-        f"per-pair delays from the least-squares scan, nk = {found.nk.tolist()} (rows: "
-        f"{', '.join(found.outputs)}; columns: {', '.join(found.inputs)}), scored beside "
-        "one common delay"
-    )
-    return option
-
-
-def _with_iterations(candidate: Candidate, iterations: dict[str, Any]) -> Candidate:
-    accepted = STRUCTURES[candidate.structure].accepted(None)
-    return candidate.with_options(**{k: v for k, v in iterations.items() if k in accepted})
-
-
-def _affordable(candidate: Candidate, signals: tuple[int, int], effort: Effort) -> bool:
-    """A polynomial state-space candidate within the effort's parameter budget and its
-    largest planned degree (every other candidate is). Cross-validation on the
-    estimation record cannot see how a higher degree extrapolates beyond its range
-    (Silverbox: degree 5 scored 0.39 mV against degree 3's 0.57 on the folds, and its
-    free run on the test record that leaves the range was 2.0 mV), so the nonlinearity
-    stage does not raise a degree past what the effort plans."""
-    o = candidate.options
-    if "degree" not in o:
-        return True
-    if o["degree"] > max(d for d, _ in effort.state_plans):
-        return False
-    n = n_state_space_parameters(o["nx"], *signals, o["degree"], o.get("monomials", "full"))
-    return n <= (effort.climb_parameters if "start_degree" in o else effort.state_parameters)
-
-
-def _climbing(candidate: Candidate, signals: tuple[int, int], effort: Effort) -> Candidate:
-    """A climb (``start_degree``) over the effort's ``state_parameters`` with its top
-    degree limited to ``climb_nfev`` iterations: it starts from the model of the degree
-    below, near its optimum (WH 2009, 6 states: 1.64 mV at degree 2, 0.604 after 40
-    iterations at degree 3, 840 parameters)."""
-    o = candidate.options
-    if "start_degree" not in o:
-        return candidate
-    n = n_state_space_parameters(o["nx"], *signals, o["degree"], o.get("monomials", "full"))
-    if n <= effort.state_parameters:
-        return candidate
-    return candidate.with_options(rung_nfev=min(effort.climb_nfev, o.get("max_nfev", 10**9)))
-
-
-def _block_structures(
-    search: _Search,
-    block: list[str],
-    orders: list[tuple[int, int, int]],
-    recommended: tuple[int, int, int] | None,
-    screen: dict[str, Any],
-    notes: list[str],
-) -> list[tuple[int, int, int]]:
-    """The output-error orders and the block structures' screening; returns the order
-    sets the structures were screened at."""
-    eff = search.effort
-    oe = output_error_orders(orders[0], eff.max_order, screen)
-    best_oe = search.ranked(search.run("output-error orders", oe, True))
-    if best_oe and _orders_of(best_oe[0]) not in orders:
-        orders = [*orders[: max(eff.linear_keep - 1, 1)], _orders_of(best_oe[0])]
-    # the false-nearest-neighbours orders are those of a nonlinear model: the linear
-    # part of a block structure may need fewer lags than the best linear approximation
-    if recommended is not None:
-        na, nb, nk = recommended
-        fnn = (max(na, 1), max(nb, 1), nk)
-        if fnn not in orders:
-            orders.append(fnn)
-    integrations = _integrations(search.data, orders)
-    candidates = integrating_candidates(block, orders, search.data, screen, integrations)
-    if candidates:
-        notes.append(
-            f"the estimation data suggest a plant that integrates (least-squares ARX poles "
-            f"within {INTEGRATING_POLE:g} of 1): {len(candidates)} candidates with up to "
-            f"{integrations} integrator(s) tried first"
-        )
-    candidates += structure_candidates(block, orders, search.data, screen, eff.families)
-    search.run("structures", candidates, True)
-    return orders
-
-
-def _state_space(
-    search: _Search, states: list[str], screen: dict[str, Any], asked: bool = False
-) -> None:
-    """Linear state-space models at every state dimension up to the effort's largest
-    order, then polynomial ones at ``state_keep`` of those dimensions: the best (the
-    smallest among near-ties), then the largest dimension tied with it whose polynomial
-    candidates fit the parameter budget, then the next best. A linear model's free-run
-    error cannot tell the dynamic order apart when the nonlinear distortion dominates
-    it (Wiener-Hammerstein 2009: every dimension from 4 to 8 within 0.3 %), and the
-    polynomial terms need the states the dynamics have: both ends of the tie are tried.
-    """
-    eff = search.effort
-    nxs = list(range(1, eff.max_order + 1))  # linear fits are cheap: every dimension
-    # the linear state space gives the dimensions even when only models built on it
-    # were asked for (its scores are kept, it is chosen only if asked for)
-    search.run("state space", state_candidates([*states, "state-space"], nxs, screen), True)
-    linear = search.ranked([s for s in search.order if s.stage == "state space"])
-    if not linear:
-        return
-    signals = (search.data.n_inputs, search.data.n_outputs)
-
-    def candidates(dims: list[int]) -> list[Candidate]:
-        return polynomial_state_candidates(
-            states, dims, eff.state_plans, signals, screen, eff.state_parameters
-        )
-
-    ranked = list(dict.fromkeys(s.candidate.options["nx"] for s in linear))
-    chosen = ranked[:1]
-    tied = [
-        s.candidate.options["nx"] for s in linear if s.rmse <= linear[0].rmse * (1 + search.tie)
-    ]
-    for nx in sorted(set(tied), reverse=True):
-        if len(chosen) < eff.state_keep and nx not in chosen and candidates([nx]):
-            chosen.append(nx)
-            break
-    chosen += [nx for nx in ranked if nx not in chosen][: max(0, eff.state_keep - len(chosen))]
-    found = candidates(chosen)
-    if found:
-        search.run("nonlinear state space", found, True)
-    several = search.data.n_inputs > 1 or search.data.n_outputs > 1
-    if asked or several or eff.loop_single:
-        # static blocks per channel: on one input and one output the chain structures
-        # (Hammerstein, Wiener, ...) hold these models with polynomial linear blocks, so
-        # the default search leaves them out there and tries the loop blocks only, which
-        # no chain holds (a static block on a combination of the states)
-        plans = eff.block_state_plans if asked or several else ()
-        blocks = block_state_candidates(states, chosen, plans, screen, eff.loop_plans)
-        if blocks:
-            search.run("block state space", blocks, True)
