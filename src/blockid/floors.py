@@ -18,6 +18,7 @@ FLOORS: dict[str, int] = {
     "floors": 0,
     "_kernels": 0,
     "data": 1,
+    "design": 1,  # excitation signals: NumPy only, beside the data they become
     "blocks": 2,
     "plants": 3,
     "models": 3,
