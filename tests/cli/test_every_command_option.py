@@ -33,6 +33,7 @@ from rich.console import Console
 from typer.testing import CliRunner
 
 import blockid.data
+import blockid.design
 import blockid.evaluation
 import blockid.fitting
 import blockid.fitting.network
@@ -168,6 +169,8 @@ def calls(monkeypatch) -> Calls:
         monkeypatch.setattr(module, name, recorder)
 
     spy(blockid.data, "read_data")
+    for name in ("multisine", "prbs", "random_binary"):
+        spy(blockid.design, name)
     spy(blockid.fitting, "fit_model")
     spy(blockid.fitting.network, "fit_network")
     spy(blockid.workflows, "compare_structures")
@@ -1240,6 +1243,119 @@ def report_json(f, calls):
     assert [m["structure"] for m in doc["models"]] == ["arx"]
 
 
+# ----------------------------------------------------------------------------- design
+def _design(f: Files, *args: Any, code: int = 0, kind: str = "multisine") -> Any:
+    base = ("--samples", "64") if kind != "prbs" else ("--order", "4")
+    return _run("design", kind, *base, *args, code=code)
+
+
+def _designed(f: Files, calls: Calls, *args: Any, kind: str = "multisine") -> Any:
+    """The --json document of ``design`` and the keyword arguments of its library call."""
+    doc = _json(_design(f, *args, "--json", kind=kind))
+    function = {"prbs": "prbs", "random-binary": "random_binary"}.get(kind, "multisine")
+    return doc, calls.one(function)[1]
+
+
+def design_out(f, calls):
+    out = f.path("u.csv")
+    r = _design(f, "--realisations", "2", "-o", out)
+    assert f"written to {out}" in r.stdout
+    data = blockid.data.read_data(
+        out, ["u"], ["period"], time_column="t", experiment_column="realisation"
+    )
+    assert data.n_experiments == 2 and data.n_samples == 128
+
+
+def design_fs(f, calls):
+    doc, kwargs = _designed(f, calls, "--fs", "200")
+    assert kwargs["sampling_time"] == 0.005 and doc["sampling_frequency"] == 200
+
+
+def design_ts(f, calls):
+    doc, kwargs = _designed(f, calls, "--ts", "0.25")
+    assert kwargs["sampling_time"] == 0.25 and doc["resolution_hz"] == 1 / 16
+
+
+def design_samples(f, calls):
+    doc, kwargs = _designed(f, calls, kind="random-binary")  # the base gives --samples 64
+    assert kwargs["samples"] == 64 and doc["samples_per_period"] == 64
+
+
+def design_f_min(f, calls):
+    doc, kwargs = _designed(f, calls, "--f-min", "0.25")
+    assert kwargs["f_min"] == 0.25 and doc["lines"][0] == 16
+
+
+def design_f_max(f, calls):
+    doc, kwargs = _designed(f, calls, "--f-max", "0.125")
+    assert kwargs["f_max"] == 0.125 and doc["lines"] == list(range(1, 9))
+
+
+def design_group(f, calls):
+    doc, kwargs = _designed(f, calls, "--group", "4", kind="odd-multisine")
+    assert kwargs["group"] == 4 and len(doc["left_out_lines"]) == 16 // 4
+
+
+def design_rms(f, calls):
+    doc, kwargs = _designed(f, calls, "--rms", "3")
+    assert kwargs["rms"] == 3 and abs(doc["signals"][0]["rms"] - 3) < 1e-12
+
+
+def design_crest_iterations(f, calls):
+    doc, kwargs = _designed(f, calls, "--crest-iterations", "20")
+    row = doc["signals"][0]
+    assert kwargs["crest_iterations"] == 20 and row["crest_factor"] < row["crest_factor_start"]
+
+
+def design_order(f, calls):
+    doc, kwargs = _designed(f, calls, kind="prbs")  # the base gives --order 4
+    assert kwargs["order"] == 4 and doc["samples_per_period"] == 15
+
+
+def design_clock(f, calls):
+    doc, kwargs = _designed(f, calls, "--clock", "3", kind="prbs")
+    assert kwargs["clock"] == 3 and doc["samples_per_period"] == 45
+
+
+def design_levels(f, calls):
+    doc, kwargs = _designed(f, calls, "--levels=0,2", kind="prbs")
+    assert kwargs["levels"] == "0,2" and doc["settings"]["levels"] == [0, 2]
+    assert doc["signals"][0]["peak"] == 2
+
+
+def design_periods(f, calls):
+    doc, kwargs = _designed(f, calls, "--periods", "3")
+    assert kwargs["periods"] == 3 and doc["samples_per_realisation"] == 3 * 64
+
+
+def design_realisations(f, calls):
+    doc, kwargs = _designed(f, calls, "--realisations", "2")
+    assert kwargs["realisations"] == 2 and [s["realisation"] for s in doc["signals"]] == [1, 2]
+
+
+def design_seed(f, calls):
+    doc, kwargs = _designed(f, calls, "--seed", "5")
+    first = _json(_design(f, "--json"))
+    assert kwargs["seed"] == 5 and doc["signals"] != first["signals"]
+
+
+def design_name(f, calls):
+    out = f.path("u.csv")
+    _design(f, "--name", "valve", "-o", out)
+    assert list(pd.read_csv(out).columns) == ["t", "realisation", "period", "valve"]
+
+
+def design_force(f, calls):
+    _force(lambda *a, code=0: _design(f, *a, code=code), f.path("u.csv"))
+    assert len(pd.read_csv(f.path("u.csv"))) == 64
+
+
+def design_json(f, calls):
+    with pytest.raises(json.JSONDecodeError):
+        json.loads(_design(f).stdout)
+    assert _json(_design(f, "--json"))["kind"] == "multisine"
+
+
 # ----------------------------------------------------------------------------- workflows
 def demo_output_dir(f, calls):
     where = f.path("demo")
@@ -1403,6 +1519,7 @@ QUIET = {
         "writing the report",
     ),
     "fleet": _quiet(lambda f, *a: _fleet(f, "--force", *a), "fitting records"),
+    "design": _quiet(_design, "designing the random-phase multisine"),
     "demo": _quiet(_workflow("demo"), "paper B's experiment"),
     "reproduce windtunnel": _quiet(_workflow("reproduce", "windtunnel"), "paper A's experiment"),
     "reproduce electrohydraulic": _quiet(
@@ -1542,6 +1659,24 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("example-data", "out"): example_out,
     ("example-data", "seed"): example_seed,
     ("example-data", "force"): example_force,
+    ("design", "out"): design_out,
+    ("design", "fs"): design_fs,
+    ("design", "ts"): design_ts,
+    ("design", "samples"): design_samples,
+    ("design", "f_min"): design_f_min,
+    ("design", "f_max"): design_f_max,
+    ("design", "group"): design_group,
+    ("design", "rms"): design_rms,
+    ("design", "crest_iterations"): design_crest_iterations,
+    ("design", "order"): design_order,
+    ("design", "clock"): design_clock,
+    ("design", "levels"): design_levels,
+    ("design", "periods"): design_periods,
+    ("design", "realisations"): design_realisations,
+    ("design", "seed"): design_seed,
+    ("design", "name"): design_name,
+    ("design", "force"): design_force,
+    ("design", "json_out"): design_json,
     **{(command, "quiet"): check for command, check in QUIET.items()},
 }
 

@@ -84,6 +84,11 @@ ARGUMENT_ERRORS = [
     (["example-data", "nope", "-o", "x.csv"], "unknown example"),
     (["example-data", "electrohydraulic", "-o", "x.xlsx"], "unknown table type"),
     (["orders", "data.csv", "-u", "u", "-y", "y", "--noise", "abc"], "--noise"),
+    (["design", "multisine", "--samples", "100", "--f-max", "0.7"], "Nyquist frequency 0.5 Hz"),
+    (["design", "odd-multisine", "--samples", "8", "--f-min", "0.25", "--f-max", "0.3"], "odd"),
+    (["design", "prbs", "--order", "30"], "order must be 2..24"),
+    (["design", "prbs", "--order", "5", "-o", "taken.json"], "taken.json exists"),
+    (["design", "prbs", "--order", "5", "-o", "x.xlsx"], "unknown table type"),
 ]
 
 

@@ -22,6 +22,7 @@ import typer
 from typer.core import TyperGroup
 
 from blockid.cli import (
+    design,
     examples,
     export,
     fit,
@@ -145,6 +146,7 @@ SHORT_HELP = {
     "simulate": "Free-run simulation of a model on data.",
     "predict": "One-step-ahead prediction of a model on data.",
     "orders": "Choose na, nb, nk by false nearest neighbours.",
+    "design": "Design an excitation: multisine, odd multisine, PRBS.",
     "identify": "Search structures and orders; keep the best model.",
     "export": "Export a model as a Python module or transfer functions.",
     "stream": "Learn a model sample by sample from standard input.",
@@ -160,6 +162,7 @@ for _name, _command in (
     ("simulate", running.simulate),
     ("predict", running.predict),
     ("orders", orders.orders),
+    ("design", design.design),
     ("identify", identify.identify),
     ("export", export.export),
     ("stream", streaming.stream),
