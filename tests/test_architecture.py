@@ -68,7 +68,7 @@ def test_every_module_declares_all():
 
 
 @pytest.mark.parametrize(
-    "package", ["blockid", "blockid.data", "blockid.fitting", "blockid.workflows"]
+    "package", ["blockid", "blockid.data", "blockid.design", "blockid.fitting", "blockid.workflows"]
 )
 def test_every_lazily_exported_name_resolves(package):
     """Each lazily exported name imports from the module its table names (a module

@@ -23,6 +23,10 @@ _WHERE = {
     "Dataset": "blockid.data",
     "Experiment": "blockid.data",
     "read_data": "blockid.data",
+    # experiment design
+    "multisine": "blockid.design",
+    "prbs": "blockid.design",
+    "random_binary": "blockid.design",
     # blocks
     "Backlash": "blockid.blocks",
     "DeadZone": "blockid.blocks",

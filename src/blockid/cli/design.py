@@ -270,7 +270,9 @@ def _print(x: Any) -> None:
     if start is not None:
         table.add_column("crest factor, random phases", justify="right")
     for r in range(x.realisations):
-        row = [str(r + 1), f"{x.rms[r]:.4g}", f"{x.signals[r].mean():.3g}", f"{x.peak[r]:.4g}"]
+        mean = x.signals[r].mean()
+        mean = 0.0 if abs(mean) <= 1e-12 * x.rms[r] else mean  # a multisine's rounding
+        row = [str(r + 1), f"{x.rms[r]:.4g}", f"{mean:.3g}", f"{x.peak[r]:.4g}"]
         row.append(f"{x.crest_factor[r]:.3f}")
         if start is not None:
             row.append(f"{start[r]:.3f}")
