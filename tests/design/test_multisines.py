@@ -85,8 +85,8 @@ def test_crest_factor_optimisation_lowers_the_crest_factor_and_keeps_the_spectru
     start = multisine(N, **common)
     optimised = multisine(N, crest_iterations=100, **common)
     np.testing.assert_array_equal(optimised.crest_factor_start, start.crest_factor)
-    assert np.all(start.crest_factor > 2.5)  # random phases: ~3 for 200 lines
-    assert np.all(optimised.crest_factor <= 1.8)  # the figure docs/design.md states
+    assert np.all(start.crest_factor > 3.3)  # random phases: 3.34 to 3.74 here
+    assert np.all(optimised.crest_factor <= 1.6)  # the figure docs/design.md states (1.53)
     np.testing.assert_allclose(
         _line_magnitudes(optimised), _line_magnitudes(start), rtol=1e-9, atol=1e-9
     )
