@@ -35,10 +35,12 @@ from typer.testing import CliRunner
 import blockid.data
 import blockid.design
 import blockid.evaluation
+import blockid.evaluation.residuals
 import blockid.fitting
 import blockid.fitting.network
 import blockid.fitting.orders
 import blockid.plotting.figures
+import blockid.plotting.residuals
 import blockid.plotting.runs
 import blockid.reporting
 import blockid.workflows
@@ -175,6 +177,9 @@ def calls(monkeypatch) -> Calls:
     spy(blockid.fitting.network, "fit_network")
     spy(blockid.workflows, "compare_structures")
     spy(blockid.evaluation, "evaluate")
+    spy(blockid.evaluation.residuals, "residual_analysis")
+    spy(blockid.plotting.residuals, "residual_figure",
+        lambda a, where, **k: Path(where) / "residuals.png")  # fmt: skip
     spy(blockid.fitting.orders, "false_nearest_neighbours")
     spy(blockid.workflows.examples, "example_record")
     spy(blockid.plotting.figures, "fit_figures", lambda *a, **k: [])
@@ -551,6 +556,78 @@ def network_json(f, calls):
 
 
 # ----------------------------------------------------------------------------- simulate, predict
+def _residuals_command() -> dict[str, Callable[..., None]]:
+    """The checks of ``residuals``."""
+
+    def run(f: Files, *args: Any, code: int = 0) -> Any:
+        return _run("residuals", f.model, f.csv, *args, code=code)
+
+    def analysed(calls: Calls) -> tuple[Any, str, dict[str, Any]]:
+        (_model, data, mode), kwargs = calls.one("residual_analysis")
+        return data, mode, kwargs
+
+    def range_(f, calls):
+        doc = _json(run(f, "--range", "40:200", "--json"))
+        assert analysed(calls)[0].n_samples == 160 and doc["range"] == "40:200"
+
+    def mode(f, calls):
+        doc = _json(run(f, "--mode", "simulation", "--json"))
+        assert analysed(calls)[1] == "simulation" and doc["mode"] == "simulation"
+        r = run(f, "--mode", "sim", code=2)
+        assert "--mode 'sim'" in r.stderr and "one-step or simulation" in r.stderr
+
+    def lags(f, calls):
+        doc = _json(run(f, "--lags", "7", "--json"))
+        assert analysed(calls)[2]["max_lag"] == 7 and doc["lags"] == list(range(8))
+
+    def confidence(f, calls):
+        doc = _json(run(f, "--confidence", "0.9", "--json"))
+        assert analysed(calls)[2]["confidence"] == 0.9 and doc["confidence"] == 0.9
+        r = run(f, "--confidence", "95", code=2)
+        assert "confidence must lie between 0 and 1" in r.stderr
+
+    def plot(f, calls):
+        where = f.path("figs")
+        r = run(f, "--plot", where)
+        (_analysis, folder), kwargs = calls.one("residual_figure")
+        assert folder == where and kwargs == {"data_label": str(f.csv), "overwrite": False}
+        assert f"figure written to {where / 'residuals.png'}" in r.stdout
+
+    def ts(f, calls):
+        run(f, "--ts", "0.25", "--json")
+        assert analysed(calls)[0].sampling_time == 0.25
+
+    def time_column(f, calls):
+        run(f, "--time-column", TIME, "--json")
+        assert analysed(calls)[0].sampling_time == DT
+
+    def experiment_column(f, calls):
+        run(f, "--experiment-column", "e", "--json")
+        assert [e.name for e in analysed(calls)[0].experiments] == ["a", "b"]
+
+    def force(f, calls):
+        where = f.path("figs")
+        where.mkdir()
+        (where / "residuals.png").write_text("old")
+        r = run(f, "--plot", where, code=2)
+        assert "exist(s); pass --force" in r.stderr
+        assert (where / "residuals.png").read_text() == "old"
+        run(f, "--plot", where, "--force")
+        assert calls.one("residual_figure")[1]["overwrite"] is True
+
+    def json_out(f, calls):
+        assert "whiteness of y" in run(f).stdout
+        doc = _json(run(f, "--json"))
+        assert doc["model"] == str(f.model) and set(doc["whiteness"]) == {"y"}
+        assert set(doc["independence"]) == {"u->y"}
+
+    return {
+        "rng": range_, "mode": mode, "lags": lags, "confidence": confidence, "plot": plot,
+        "ts": ts, "time_column": time_column, "experiment_column": experiment_column,
+        "force": force, "json_out": json_out,
+    }  # fmt: skip
+
+
 def _model_command(command: str) -> dict[str, Callable[..., None]]:
     """The checks of ``simulate`` or ``predict`` (the same options)."""
     mode = {"simulate": "simulation", "predict": "one-step"}[command]
@@ -1566,6 +1643,7 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("fit-network", "json_out"): network_json,
     **{("simulate", k): v for k, v in _model_command("simulate").items()},
     **{("predict", k): v for k, v in _model_command("predict").items()},
+    **{("residuals", k): v for k, v in _residuals_command().items()},
     ("orders", "inputs"): orders_input,
     ("orders", "outputs"): orders_output,
     ("orders", "estimation"): orders_estimation,

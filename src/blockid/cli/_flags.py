@@ -56,6 +56,7 @@ SHARED: dict[str, tuple[tuple[str, ...], str | None]] = {
     "experiment_column": (("--experiment-column",), "NAME"),
     "report": (("--report",), "FILE"),
     "scheduler": (("--scheduler",), "ADDRESS"),
+    "range": (("--range",), "START:STOP"),
 }
 
 #: (parameter name, help) of every option :func:`shared` made: the test's evidence that

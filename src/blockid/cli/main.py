@@ -30,6 +30,7 @@ from blockid.cli import (
     identify,
     orders,
     report,
+    residuals,
     running,
     streaming,
 )
@@ -145,6 +146,7 @@ SHORT_HELP = {
     "fit-network": "Identify a network of subsystems connected by signal names.",
     "simulate": "Free-run simulation of a model on data.",
     "predict": "One-step-ahead prediction of a model on data.",
+    "residuals": "Test a model's residual: white, and independent of the input?",
     "orders": "Choose na, nb, nk by false nearest neighbours.",
     "design": "Design an excitation: multisine, odd multisine, PRBS.",
     "identify": "Search structures and orders; keep the best model.",
@@ -161,6 +163,7 @@ for _name, _command in (
     ("fit-network", fit.fit_network),
     ("simulate", running.simulate),
     ("predict", running.predict),
+    ("residuals", residuals.residuals),
     ("orders", orders.orders),
     ("design", design.design),
     ("identify", identify.identify),

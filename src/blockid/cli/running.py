@@ -33,9 +33,7 @@ __all__ = ["predict", "simulate"]
 ModelPath = Annotated[
     Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
 ]
-Range = Annotated[
-    str | None, typer.Option("--range", metavar="START:STOP", help="Samples to use (default: all).")
-]
+Range = Annotated[str | None, shared("range", "Samples to use (default: all).")]
 OutTable = Annotated[
     Path | None,
     shared("out", "Write data and model output (.csv/.parquet)."),

@@ -1,0 +1,119 @@
+"""``blockid residuals``: is a model's residual white, and independent of the input?"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from blockid.cli._common import cli_errors, print_json, refuse_figures, stdout
+from blockid.cli._data import check_arguments, load_data
+from blockid.cli._flags import (
+    DataPaths,
+    ExperimentColumn,
+    Force,
+    Json,
+    SamplingTime,
+    TimeColumn,
+    shared,
+)
+
+__all__ = ["residuals"]
+
+
+@cli_errors
+def residuals(
+    model_path: Annotated[
+        Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
+    ],
+    data_paths: DataPaths,
+    rng: Annotated[str | None, shared("range", "Samples to use (default: all).")] = None,
+    mode: Annotated[
+        str,
+        typer.Option(
+            metavar="one-step|simulation",
+            help="The residual of the one-step prediction (default) or of the free run.",
+        ),
+    ] = "one-step",
+    lags: Annotated[int, typer.Option(metavar="M", min=1, help="Largest lag tested.")] = 25,
+    confidence: Annotated[
+        float,
+        typer.Option(metavar="LEVEL", help="Of the bounds and the tests (between 0 and 1)."),
+    ] = 0.99,
+    plot: Annotated[
+        Path | None,
+        shared("plot", "Write the figure (autocorrelation, cross-correlation, bounds) here."),
+    ] = None,
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    experiment_column: ExperimentColumn = None,
+    force: Force = False,
+    json_out: Json = False,
+) -> None:
+    """Test the residual of MODEL on DATA: its autocorrelation (whiteness, Ljung-Box)
+    and its cross-correlation with each input (independence), with confidence bounds.
+    Use data the model was not fitted on."""
+    from blockid.errors import ParameterError
+
+    if mode not in ("one-step", "simulation"):
+        raise ParameterError(f"--mode {mode!r}: choose one-step or simulation", parameter="mode")
+    check_arguments(data_paths, ranges={"--range": rng}, model=model_path)
+    from blockid.evaluation.residuals import residual_analysis
+    from blockid.models import load_model
+    from blockid.plotting.residuals import RESIDUAL_FIGURE
+
+    refuse_figures(plot, [RESIDUAL_FIGURE], force)
+    model = load_model(model_path)
+    data = load_data(
+        data_paths, list(model.inputs), list(model.outputs),
+        ts if ts is not None else model.sampling_time, time_column, experiment_column,
+        rng, "--range",
+    )  # fmt: skip
+    analysis = residual_analysis(model, data, mode, max_lag=lags, confidence=confidence)
+    where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+    figure = None
+    if plot is not None:
+        from blockid.plotting.residuals import residual_figure
+
+        figure = residual_figure(analysis, plot, data_label=where, overwrite=force)
+    if json_out:
+        print_json({"model": str(model_path), "data": [str(p) for p in data_paths],
+                    "range": rng, **analysis.to_dict()})  # fmt: skip
+        return
+    from rich.table import Table
+
+    what = "free-run simulation" if mode == "simulation" else "one-step prediction"
+    title = (f"residual of the {what} on {where}: {analysis.n_samples} samples, lags up "
+             f"to {lags}, {confidence:.0%} bounds")  # fmt: skip
+    table = Table(title=title, title_justify="left")
+    for col in ("test", "statistic", "p-value", "lags outside", "verdict"):
+        table.add_column(col)
+    for y, t in analysis.whiteness.items():
+        verdict = "white" if t["white"] else "NOT white"
+        table.add_row(f"whiteness of {y}", f"{t['statistic']:.4g}", f"{t['p_value']:.3g}",
+                      f"{t['outside']} of {lags}", verdict)  # fmt: skip
+    for (u, y), t in analysis.independence.items():
+        table.add_row(
+            f"{u} -> residual of {y} (lags >= 0)", f"{t['statistic']:.4g}",
+            f"{t['p_value']:.3g}", f"{t['outside']} of {lags + 1}",
+            "independent" if t["independent"] else "NOT independent",
+        )  # fmt: skip
+    stdout.print(table)
+    feedback = [f"{u} -> {y}" for (u, y), t in analysis.independence.items()
+                if t["outside_negative"]]  # fmt: skip
+    if feedback:
+        stdout.print(
+            "note: the residual correlates with later inputs (negative lags) for "
+            f"{', '.join(feedback)}: feedback from the output to the input in the data "
+            "(a closed loop), not a fault of the model; the independence test assumes "
+            "open-loop data, so its verdict is not to be trusted here"
+        )
+    if analysis.noise_model is False and not all(t["white"] for t in analysis.whiteness.values()):
+        stdout.print(
+            "note: this model was fitted by simulation error, without a noise model: it is "
+            "not made to leave a white one-step residual (the plant's noise is coloured), "
+            "so whiteness is not expected of it; independence is the test that matters"
+        )
+    if figure is not None:
+        stdout.print(f"figure written to {figure}")

@@ -1,0 +1,103 @@
+"""Residual analysis against known truth: a model of the right orders leaves a white,
+independent residual; a model missing a pole or a delay does not; feedback in the data
+shows at negative lags; the correlations are those of a direct formula."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from blockid.data import Dataset
+from blockid.errors import DataError, ParameterError
+from blockid.evaluation.residuals import _lagged_sums, residual_analysis
+from blockid.fitting import fit_model
+
+A = (-1.5, 0.7)  # y(t) = 1.5 y(t-1) - 0.7 y(t-2) + u(t-1) + 0.5 u(t-2) + e(t)
+B = (1.0, 0.5)
+
+
+def _arx_record(n=3000, seed=0, noise=0.3, feedback=0.0):
+    """An ARX(2, 2, 1) plant with white equation noise; with ``feedback``, the input
+    carries ``-feedback * y(t-1)`` (a closed loop)."""
+    rng = np.random.default_rng(seed)
+    r = rng.standard_normal(n)
+    e = noise * rng.standard_normal(n)
+    u, y = np.zeros(n), np.zeros(n)
+    for t in range(n):
+        u[t] = r[t] - (feedback * y[t - 1] if t else 0.0)
+        y[t] = e[t]
+        if t >= 1:
+            y[t] += -A[0] * y[t - 1] + B[0] * u[t - 1]
+        if t >= 2:
+            y[t] += -A[1] * y[t - 2] + B[1] * u[t - 2]
+    return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+
+def test_the_right_model_leaves_a_white_residual_independent_of_the_input():
+    train, fresh = _arx_record(seed=0), _arx_record(seed=1)
+    model = fit_model(train, "arx", na=2, nb=2, nk=1).model
+    out = residual_analysis(model, fresh)
+    assert out.whiteness["y"]["white"] and out.independence[("u", "y")]["independent"]
+    assert out.whiteness["y"]["p_value"] > 0.01 and out.autocorrelation["y"][0] == 1.0
+    assert out.n_samples == 3000 - model.max_lag
+    assert out.auto_bound == pytest.approx(2.5758 / np.sqrt(out.n_samples), rel=1e-4)
+
+
+def test_a_missing_pole_colours_the_residual_and_a_missing_delay_shows_in_the_input():
+    train, fresh = _arx_record(seed=0), _arx_record(seed=1)
+    short = fit_model(train, "arx", na=1, nb=2, nk=1).model
+    out = residual_analysis(short, fresh)
+    assert not out.whiteness["y"]["white"] and out.whiteness["y"]["outside"] >= 3
+    late = fit_model(train, "arx", na=2, nb=1, nk=2).model  # misses u(t-1)
+    out = residual_analysis(late, fresh)
+    pair = out.independence[("u", "y")]
+    assert not pair["independent"] and pair["outside"] >= 1
+    one = out.cross_correlation[("u", "y")][out.cross_lags == 1][0]
+    assert abs(one) > 5 * out.cross_bound[("u", "y")]  # the lag the model lacks
+
+
+def test_feedback_in_the_data_shows_at_negative_lags():
+    loop = dict(noise=1.0, feedback=0.1)
+    train, fresh = _arx_record(seed=0, **loop), _arx_record(seed=1, **loop)
+    model = fit_model(train, "arx", na=2, nb=2, nk=1).model
+    out = residual_analysis(model, fresh)
+    pair = out.independence[("u", "y")]
+    assert pair["outside_negative"] >= 1  # u(t+1) holds -0.1 y(t), hence e(t)
+    lags = out.cross_lags
+    r = out.cross_correlation[("u", "y")]
+    assert abs(r[lags == -1][0]) > abs(r[lags >= 0]).max()  # the loop's lag stands out
+
+
+def test_the_correlations_are_the_direct_sums_over_each_experiment():
+    rng = np.random.default_rng(3)
+    a = [rng.standard_normal(40), rng.standard_normal(25)]
+    b = [rng.standard_normal(40), rng.standard_normal(25)]
+    got = _lagged_sums(a, b, 5)
+    for i, tau in enumerate(range(-5, 6)):
+        want = sum(
+            sum(x[t] * z[t + tau] for t in range(len(x)) if 0 <= t + tau < len(z))
+            for x, z in zip(a, b, strict=True)
+        )
+        assert got[i] == pytest.approx(want, abs=1e-12)
+
+
+def test_bad_arguments_and_too_short_data_are_named():
+    data = _arx_record(n=200)
+    model = fit_model(data, "arx", na=2, nb=2, nk=1).model
+    with pytest.raises(ParameterError, match="max_lag"):
+        residual_analysis(model, data, max_lag=0)
+    with pytest.raises(ParameterError, match="confidence"):
+        residual_analysis(model, data, confidence=99)
+    with pytest.raises(DataError, match="too few"):
+        residual_analysis(model, data, max_lag=100)
+
+
+def test_a_model_without_a_noise_model_is_told_apart():
+    """An output-error fit has no noise model (its one-step residual is not made
+    white): the analysis says so, and the ARX's does not."""
+    train, fresh = _arx_record(seed=0), _arx_record(seed=1)
+    arx = fit_model(train, "arx", na=2, nb=2, nk=1).model
+    oe = fit_model(train, "output-error", na=2, nb=2, nk=1).model
+    assert residual_analysis(arx, fresh).noise_model is True
+    assert residual_analysis(oe, fresh).noise_model is False
+    assert residual_analysis(oe, fresh, "simulation").noise_model is None
