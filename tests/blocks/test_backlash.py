@@ -296,3 +296,13 @@ def test_backlash_with_vector_reports_a_missing_value_as_not_finite():
     # the vector is read as floats first: None becomes NaN, refused as not finite
     with pytest.raises(ParameterError, match=r"^m_left must be finite, got nan$"):
         Backlash.template().with_vector([None, 0.0, 1.0, 0.0])
+
+
+def test_backlash_degeneracy_no_play_too_much_play_and_a_flat_branch():
+    (none,) = Backlash(1.0, 0.0, 1.2, 1e-5).degeneracy(-2.0, 3.0)
+    assert "c_right = 1e-05) only 1e-05 apart" in none and "no play" in none
+    (wide,) = Backlash(1.0, 3.0, 1.0, 3.0).degeneracy(-2.0, 3.0)
+    assert "c_left + c_right = 6, 1.2 times the width" in wide and "hardly moves" in wide
+    (flat,) = Backlash(1e-5, 0.1, 1.0, 0.1).degeneracy(-2.0, 3.0)
+    assert "m_left = 1e-05" in flat and "holds its output" in flat
+    assert Backlash(0.9, 0.8, 0.9, 0.85).degeneracy(-4.0, 4.0) == []  # paper A's

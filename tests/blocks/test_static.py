@@ -247,3 +247,34 @@ def test_piecewise_linear_and_saturation_name_the_bad_argument():
 
 def test_saturation_template_is_the_unit_saturation():
     assert Saturation.template().parameters == {"lower": -1.0, "upper": 1.0, "slope": 1.0}
+
+
+# ------------------------------------------------------ degenerate blocks (issue 37)
+def test_dead_zone_degeneracy_names_coinciding_and_far_edges_and_a_flat_side():
+    # the issue's loop blocks: edges 9e-6 apart, a lower edge at -292 313 with slope 6e-7
+    (kink,) = DeadZone(-4.5e-6, 4.5e-6).degeneracy(-2.0, 3.0)
+    assert "only 9e-06 apart, 1.8e-06 of the range" in kink and "[-2, 3]" in kink
+    assert "a kink with two slopes" in kink and "use data that show a dead band" in kink
+    (far,) = DeadZone(-292313.0, 0.3, 6e-7, 1.0).degeneracy(-2.0, 3.0)
+    assert "lower = -292313 (slope_left = 6e-07 below it), 5.85e+04 widths outside" in far
+    assert "no data reach it" in far and "use data that reach it" in far
+    (flat,) = DeadZone(-0.5, 0.5, 1e-5, 1.0).degeneracy(-2.0, 3.0)
+    assert "slope_left = 1e-05" in flat and "one-sided dead zone" in flat
+    # a flat side the data never reach is not a note; a sound dead zone has none
+    assert DeadZone(-2.5, 0.5, 1e-5, 1.0).degeneracy(-2.0, 3.0) == []
+    assert DeadZone(-0.5, 0.5, 0.5, 2.0).degeneracy(-2.0, 3.0) == []
+    assert DeadZone(-1e-6, 1e-6).degeneracy(0.0, 0.0) == []  # no range to judge on
+
+
+def test_saturation_and_piecewise_linear_degeneracy():
+    (relay,) = Saturation(-1.0, -1.0 + 1e-4, slope=1.0).degeneracy(-2.0, 2.0)
+    assert "its knees" in relay and "a relay" in relay
+    (never,) = Saturation(-1.0, 1e6).degeneracy(-2.0, 3.0)
+    assert "upper knee upper / slope = 1e+06" in never and "widths outside" in never
+    assert Saturation(-1.0, 1.0).degeneracy(-2.0, 3.0) == []
+    (jump,) = PiecewiseLinear([-2.0, 0.0, 1e-6, 2.0], [0.0, 0.0, 1.0, 1.0]).degeneracy(-2, 2)
+    assert "breakpoints_1 = 0 and breakpoints_2 = 1e-06 only 1e-06 apart" in jump
+    (beyond,) = PiecewiseLinear([-2.0, 0.0, 50.0], [0.0, 1.0, 1.0]).degeneracy(-2.0, 2.0)
+    assert "breakpoints_2 = 50, 12 widths outside" in beyond
+    # flat segments are a shape (a saturation), not a degeneracy
+    assert PiecewiseLinear([-2.0, -1.0, 1.0, 2.0], [-1.0, -1.0, 1.0, 1.0]).degeneracy(-2, 2) == []

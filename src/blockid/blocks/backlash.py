@@ -30,7 +30,7 @@ import numpy as np
 from blockid._kernels import writable
 from blockid._kernels.backlash import backlash_run
 from blockid._kernels.simulation import backlash_sensitivity
-from blockid.blocks.base import DynamicBlock
+from blockid.blocks.base import EDGE_DISTANCE, DynamicBlock, _coinciding, _vanishing
 from blockid.errors import DataError, ParameterError
 
 __all__ = ["Backlash"]
@@ -126,6 +126,35 @@ class Backlash(DynamicBlock):
         k = int(np.argmin([abs(c - around.c_left) for c in grid]))
         fine = np.linspace(grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)], 9)
         return [Backlash(1.0, c, 1.0, c) for c in fine]
+
+    def degeneracy(self, low: float, high: float) -> list[str]:
+        """No play left (a static map with two slopes), a play wider than the input's
+        range (an output that hardly moves), a branch whose slope vanishes beside the
+        other: see :meth:`Block.degeneracy`."""
+        play = self.c_left + self.c_right
+        what = (
+            f"the two sides of its play (c_left = {self.c_left:.3g}, c_right = {self.c_right:.3g})"
+        )
+        notes = _coinciding(
+            what, play, low, high,
+            "it has no play and is a static map with two slopes; fit a Hammerstein model "
+            "with a piecewise-linear input block, or use data whose input reverses over a "
+            "wider span",
+        )  # fmt: skip
+        width = high - low
+        if np.isfinite(width) and width > 0 and play > EDGE_DISTANCE * width:
+            notes.append(
+                f"has a play c_left + c_right = {play:.3g}, {play / width:.3g} times the width "
+                f"of the range its input covered in estimation [{low:.4g}, {high:.4g}]: its "
+                "output hardly moves after the input's first reversal, so its slopes are not "
+                "identified; fit a block of another form, or use data whose input travels "
+                "further"
+            )
+        return notes + _vanishing(
+            [("m_left", self.m_left), ("m_right", self.m_right)],
+            "so the block holds its output on that branch; check that the plant does, or "
+            "fit a block of another form",
+        )
 
     def rest_state(self, u0: float) -> float:
         """The middle of the dead band at the first input, so that no start-up jump is

@@ -40,6 +40,9 @@ from blockid.errors import BlockidError, EstimationError, ModelFileError, Parame
 
 __all__ = [
     "BLOCK_TYPES",
+    "EDGE_DISTANCE",
+    "EDGE_GAP",
+    "SLOPE_RATIO",
     "Block",
     "DynamicBlock",
     "LinearFamily",
@@ -55,6 +58,77 @@ BLOCK_TYPES: dict[str, type[Block]] = {}
 
 #: Relative step of the numerical derivatives.
 _STEP = 1e-6
+
+#: Two edges of a block (a dead zone's, a saturation's knees, neighbouring breakpoints,
+#: the two sides of a backlash's play) closer than this fraction of the range its
+#: argument covered in estimation coincide: the data cannot tell them apart, and the
+#: block has collapsed into another form (:meth:`Block.degeneracy`).
+EDGE_GAP = 1e-3
+#: An edge more than this many widths of its argument's range beyond that range is far
+#: outside it: no data reach it, so neither it nor the part of the block beyond it is
+#: identified (a dead zone's lower edge at -292 313 with slope 6e-7 on an argument
+#: within +-3).
+EDGE_DISTANCE = 1.0
+#: A slope on the data below this fraction of the block's steepest one vanishes. The
+#: slopes are compared with each other, not with a gain of their own: a block's gain is
+#: shared with the linear part next to it, so only their ratios say what it does.
+SLOPE_RATIO = 1e-3
+
+
+# ---------------------------------------------------------------- degenerate blocks
+def _width(low: float, high: float) -> float | None:
+    """The width of an argument range, None when there is none to compare with."""
+    width = float(high) - float(low)
+    return width if np.isfinite(width) and width > 0 else None
+
+
+def _range_text(low: float, high: float) -> str:
+    return f"the range its argument covered in estimation [{low:.4g}, {high:.4g}]"
+
+
+def _coinciding(what: str, gap: float, low: float, high: float, becomes: str) -> list[str]:
+    """A note when two edges ``what`` lie ``gap`` apart, below :data:`EDGE_GAP` of the
+    argument's range: the block has collapsed into what ``becomes`` says (with what to
+    do)."""
+    width = _width(low, high)
+    if width is None or not gap < EDGE_GAP * width:
+        return []
+    return [
+        f"has {what} only {gap:.3g} apart, {gap / width:.2g} of {_range_text(low, high)}: {becomes}"
+    ]
+
+
+def _far_outside(edges: list[tuple[str, float]], low: float, high: float) -> list[str]:
+    """A note for the edge (``name = value`` text, value) furthest beyond the argument's
+    range, when it is more than :data:`EDGE_DISTANCE` widths beyond."""
+    width = _width(low, high)
+    if width is None:
+        return []
+    distance = [(max(low - v, v - high) / width, name) for name, v in edges]
+    worst, name = max(distance, default=(0.0, ""))
+    if not worst > EDGE_DISTANCE:
+        return []
+    return [
+        f"has {name}, {worst:.3g} widths outside {_range_text(low, high)}: no data reach "
+        "it, so neither it nor the block beyond it is identified and the model "
+        "extrapolates there with values the data never chose; fit a block of another "
+        "form (without that side), or use data that reach it"
+    ]
+
+
+def _vanishing(slopes: list[tuple[str, float]], becomes: str) -> list[str]:
+    """A note for the flattest of ``slopes`` (name, value: the slopes the data reach)
+    when it is below :data:`SLOPE_RATIO` of the steepest one."""
+    steepest = max((abs(v) for _, v in slopes), default=0.0)
+    if not steepest > 0 or not np.isfinite(steepest):
+        return []
+    name, value = min(slopes, key=lambda nv: abs(nv[1]))
+    if not abs(value) < SLOPE_RATIO * steepest:
+        return []
+    return [
+        f"has {name} = {value:.3g}, {abs(value) / steepest:.2g} of its steepest slope on the "
+        f"data ({steepest:.3g}): that side is flat, {becomes}"
+    ]
 
 
 class Block(ABC):
@@ -181,6 +255,16 @@ class Block(ABC):
 
     def check_normalised(self, after_linear: bool) -> None:  # noqa: B027 - optional hook
         """Raise :class:`ParameterError` if the fixed entries do not hold their values."""
+
+    def degeneracy(self, low: float, high: float) -> list[str]:
+        """How the block has degenerated for an argument over ``[low, high]`` (the range
+        it covered in estimation): each a clause that completes "the input block
+        (dead-zone) ...", saying what the block has become and what to do. Blocks with
+        edges and slopes (dead zone, saturation, backlash, piecewise-linear maps) look
+        for edges that coincide (:data:`EDGE_GAP`), edges far outside the range
+        (:data:`EDGE_DISTANCE`) and slopes that vanish (:data:`SLOPE_RATIO`); the
+        default finds nothing."""
+        return []
 
     # ------------------------------------------------------------------ fitting aids
     def check_data(self, u: np.ndarray) -> None:  # noqa: B027 - optional hook

@@ -16,7 +16,13 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from blockid.blocks.base import LinearFamily, StaticBlock
+from blockid.blocks.base import (
+    LinearFamily,
+    StaticBlock,
+    _coinciding,
+    _far_outside,
+    _vanishing,
+)
 from blockid.errors import DataError, ParameterError
 
 if TYPE_CHECKING:
@@ -225,6 +231,33 @@ class DeadZone(_PlottableStaticBlock):
         margin = width if width > 0 else max(abs(self.lower), abs(self.upper), 1.0)
         return (self.lower - margin, self.upper + margin)
 
+    def degeneracy(self, low: float, high: float) -> list[str]:
+        """Edges that coincide (no dead band left: a kink), an edge far outside the
+        argument's range (that side and its slope never seen), a slope that vanishes
+        beside the other on a side the data reach (a one-sided dead zone): see
+        :meth:`Block.degeneracy`."""
+        lower, upper = self.lower + 0.0, self.upper + 0.0  # shown without "-0"
+        edges = f"its edges (lower = {lower:.6g}, upper = {upper:.6g})"
+        notes = _coinciding(
+            edges, self.upper - self.lower, low, high,
+            "the dead band has vanished and the block is a kink with two slopes; fit a "
+            "linear model or a piecewise-linear block, or use data that show a dead band",
+        )  # fmt: skip
+        notes += _far_outside(
+            [(f"lower = {lower:.6g} (slope_left = {self.slope_left:.3g} below it)", lower),
+             (f"upper = {upper:.6g} (slope_right = {self.slope_right:.3g} above it)", upper)],
+            low, high,
+        )  # fmt: skip
+        reached = [("slope_left", self.slope_left)] if low < self.lower else []
+        reached += [("slope_right", self.slope_right)] if high > self.upper else []
+        if len(reached) == 2:
+            notes += _vanishing(
+                reached,
+                "so the block is a one-sided dead zone (a rectifier); check that the plant "
+                "is one, or fit a block of another form",
+            )
+        return notes
+
 
 class Saturation(_PlottableStaticBlock):
     r"""Saturation: a linear gain clipped to ``[lower, upper]``.
@@ -315,6 +348,23 @@ class Saturation(_PlottableStaticBlock):
         knee_lo, knee_hi = self.lower / self.slope, self.upper / self.slope
         margin = 0.5 * (knee_hi - knee_lo)
         return (knee_lo - margin, knee_hi + margin)
+
+    def degeneracy(self, low: float, high: float) -> list[str]:
+        """Knees that coincide (no linear part left: a relay), a knee far outside the
+        argument's range (a limit never reached): see :meth:`Block.degeneracy`."""
+        knee_lo, knee_hi = self.lower / self.slope, self.upper / self.slope
+        notes = _coinciding(
+            f"its knees (lower / slope = {knee_lo:.6g}, upper / slope = {knee_hi:.6g})",
+            knee_hi - knee_lo, low, high,
+            "the linear part between the limits has vanished and the block is a relay (a "
+            "step between its limits); fit a block of another form, or use data that show "
+            "the linear part",
+        )  # fmt: skip
+        return notes + _far_outside(
+            [(f"its lower knee lower / slope = {knee_lo:.6g}", knee_lo),
+             (f"its upper knee upper / slope = {knee_hi:.6g}", knee_hi)],
+            low, high,
+        )  # fmt: skip
 
 
 class PiecewiseLinear(_PlottableStaticBlock):
@@ -458,6 +508,22 @@ class PiecewiseLinear(_PlottableStaticBlock):
         lo, hi = float(self.breakpoints[0]), float(self.breakpoints[-1])
         margin = 0.1 * (hi - lo)
         return (lo - margin, hi + margin)
+
+    def degeneracy(self, low: float, high: float) -> list[str]:
+        """The closest neighbouring breakpoints when they coincide (a jump the data
+        cannot resolve), a breakpoint far outside the argument's range (its value never
+        seen): see :meth:`Block.degeneracy`. Flat segments are a shape (a saturation),
+        not a degeneracy, so the slopes are not checked."""
+        bp = self.breakpoints
+        j = int(np.argmin(np.diff(bp)))
+        notes = _coinciding(
+            f"breakpoints_{j} = {bp[j]:.6g} and breakpoints_{j + 1} = {bp[j + 1]:.6g}",
+            float(bp[j + 1] - bp[j]), low, high,
+            "the segment between them is a jump the data cannot resolve; fit fewer knots",
+        )  # fmt: skip
+        return notes + _far_outside(
+            [(f"breakpoints_{k} = {b:.6g}", float(b)) for k, b in enumerate(bp)], low, high
+        )
 
 
 def _dead_zone_family(lower: float, upper: float) -> LinearFamily:
