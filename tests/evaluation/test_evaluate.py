@@ -196,3 +196,43 @@ def test_too_short_data_name_the_model_and_the_shortest_length_passes():
     assert out.skip == 2
     np.testing.assert_allclose(out.outputs[0][:, 0], [0.5, -1.0, 1.375])
     assert out.metrics["mse"] == {"y": pytest.approx(0.0625)}
+
+
+# ---------------------------------------------- warnings before a model misleads (issue 37)
+def _first_order(a: float, b: float) -> ARX:
+    return ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [a]}}, b={"y": {"u": [b]}})
+
+
+def _plant_record() -> Dataset:
+    """``y(t) = 0.8 y(t-1) + 0.2 u(t-1)`` on a 0-10 V staircase: y within [0.17, 9.3]."""
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.uniform(0.0, 10.0, 40), 10)
+    y = np.zeros(u.size)
+    for t in range(1, u.size):
+        y[t] = 0.8 * y[t - 1] + 0.2 * u[t - 1]
+    return Dataset(("u",), ("y",), 1.0, [Experiment("test", u[:, None], y[:, None])])
+
+
+def test_an_output_far_beyond_the_measured_range_is_warned_in_both_modes():
+    data = _plant_record()
+    assert evaluate(_first_order(-0.8, 0.2), data).warnings == []  # the plant itself
+    loud = _first_order(-0.8, 1.0)  # five times the plant's gain
+    (sim,) = evaluate(loud, data).warnings
+    assert "free run of 'y' reaches [0.8565, 46.54] against the measured range" in sim
+    assert "by 4.07 times its width" in sim
+    (pred,) = evaluate(loud, data, "one-step").warnings
+    assert "one-step prediction of 'y' reaches" in pred
+
+
+def test_an_unstable_model_is_warned_and_its_diverged_free_run_marked():
+    data = _plant_record()
+    unstable = _first_order(-1.05, 0.2)
+    sim = evaluate(unstable, data)
+    assert any(w.startswith("the model is unstable: its linear part has a pole at 1.05")
+               for w in sim.warnings)  # fmt: skip
+    assert "reaches 3.41e+09" in sim.diverged and "a pole at 1.05" in sim.diverged
+    assert sim.to_dict()["diverged"] == sim.diverged
+    one_step = evaluate(unstable, data, "one-step")  # predicts one step: not diverged
+    assert one_step.diverged is None and "diverged" not in one_step.to_dict()
+    assert any("unstable" in w for w in one_step.warnings)
+    assert evaluate(_first_order(-0.8, 0.2), data).diverged is None

@@ -11,6 +11,7 @@ import pandas as pd
 from blockid.data.dataset import Dataset
 from blockid.errors import DataError, ParameterError
 from blockid.evaluation.metrics import json_safe, metrics_by_output, undefined_notes
+from blockid.evaluation.plausibility import divergence, output_range_notes, pole_notes
 
 __all__ = ["MODES", "ModelOutput", "evaluate", "score_model"]
 
@@ -40,8 +41,16 @@ class ModelOutput:
         "fit_percent": ...}`` over all experiments, initial samples excluded.
     warnings : list of str
         E.g. that the data drive a block-oriented model outside the ranges it was
-        estimated on (its polynomial blocks extrapolate there), or that a metric is
-        undefined (the fit percent of a constant output).
+        estimated on (its polynomial blocks extrapolate there), that its output leaves
+        the measured output's range or its linear part has poles on, near or beyond the
+        unit circle or at the Nyquist frequency
+        (:mod:`blockid.evaluation.plausibility`), or that a metric is undefined (the
+        fit percent of a constant output).
+    diverged : str, optional
+        Why the model output has diverged on these data (not finite, or astronomically
+        beyond the measured range: :func:`~blockid.evaluation.plausibility.divergence`);
+        None when it has not. Its metrics then mean nothing: ``simulate`` and
+        ``predict`` stop with an error.
     """
 
     mode: str
@@ -51,6 +60,7 @@ class ModelOutput:
     metrics: dict[str, dict[str, float]]
     warnings: list[str] = field(default_factory=list)
     initial_samples: int | None = None
+    diverged: str | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The data as a table, with a ``<output>_sim`` / ``<output>_pred`` column each."""
@@ -74,6 +84,8 @@ class ModelOutput:
         if self.initial_samples is not None:
             doc["initial_samples"] = self.initial_samples
         doc.update(metrics=self.metrics, warnings=self.warnings)
+        if self.diverged is not None:
+            doc["diverged"] = self.diverged
         return json_safe(doc)
 
 
@@ -128,8 +140,12 @@ def evaluate(
     y_hat = np.vstack([out[skip:] for out in outputs])
     metrics = metrics_by_output(y, y_hat, data.outputs)
     warnings: list[str] = undefined_notes(metrics)
+    what = "free run" if mode == "simulation" else "one-step prediction"
+    warnings += output_range_notes(y, y_hat, data.outputs, what)
     for model_part in getattr(model, "subsystems", [(None, model)]):
         sub = model_part[1]
+        prefix = f"{model_part[0]}: " if model_part[0] else ""
+        warnings += [prefix + note for note in pole_notes(sub.fitted_poles())]
         if hasattr(sub, "extrapolation"):
             for exp in data.experiments:
                 cols = [
@@ -138,9 +154,9 @@ def evaluate(
                 if None in cols:
                     continue  # fed by another subsystem: checked through its own input
                 for note in sub.extrapolation(exp.u[:, cols]):
-                    prefix = f"{model_part[0]}: " if model_part[0] else ""
                     warnings.append(f"{prefix}{note} (experiment {exp.name!r})")
-    return ModelOutput(mode, data, outputs, skip, metrics, warnings, n_init)
+    diverged = divergence(y, y_hat, data.outputs, model.fitted_poles())
+    return ModelOutput(mode, data, outputs, skip, metrics, warnings, n_init, diverged)
 
 
 def score_model(model: Any, data: Dataset) -> tuple[ModelOutput, ModelOutput | None, str | None]:

@@ -106,6 +106,21 @@ class Model(ABC):
         ranges are recorded (linear models)."""
         return {}
 
+    def fitted_poles(self) -> np.ndarray:
+        """The poles the model's parameters put where they are: its ``poles()`` (of the
+        model linearised at its operating point) without those a block holds by
+        construction (an integrator's at 1, which a chain leaves out); empty for a model
+        without poles (a network: its subsystems have them)."""
+        poles = getattr(self, "poles", None)
+        return np.zeros(0, dtype=complex) if poles is None else np.asarray(poles(), dtype=complex)
+
+    def block_ranges(self) -> list[tuple[str, Any, tuple[float, float]]]:
+        """``(name, block, (low, high))`` for every nonlinear block whose argument's range
+        in estimation is recorded ("input block", "loop block p1", ...): what the blocks'
+        :meth:`~blockid.blocks.base.Block.degeneracy` is judged on. Empty for a model
+        without such blocks."""
+        return []
+
     def _check_signals(self, u: Any, y: Any = None) -> tuple[np.ndarray, np.ndarray | None]:
         """Coerce ``u`` (N, nu) and ``y`` (N, ny) and check their shapes."""
         u = np.asarray(u, dtype=float)

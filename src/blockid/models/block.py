@@ -204,6 +204,12 @@ class ChainModel(Model):
         """Poles of all linear blocks."""
         return np.concatenate([g.poles() for g in self.linear_blocks])
 
+    def fitted_poles(self) -> np.ndarray:
+        """Poles of the fitted linear blocks (an integrator's, at 1 by construction, left
+        out)."""
+        fitted = [g.poles() for g in self.linear_blocks if not g.integrates]
+        return np.concatenate([np.zeros(0, dtype=complex), *fitted]).astype(complex)
+
     def _range_key(self, i: int) -> str:
         if i == 0:
             return "u"
@@ -529,6 +535,18 @@ class ChainModel(Model):
             if key in self.ranges:
                 out[key] = excursion(self.ranges[key], s)
             s = self._apply_at(i, s)
+        return out
+
+    def block_ranges(self) -> list[tuple[str, Block, tuple[float, float]]]:
+        """See :meth:`Model.block_ranges`: the nonlinear blocks whose input range is
+        recorded (relative to the input offset, as the blocks see it)."""
+        out = []
+        for i, block in enumerate(self.blocks):
+            key = self._range_key(i)
+            if block.role == "linear" or key not in self.ranges:
+                continue
+            name = "input block" if i == 0 else "output block" if key == "x" else f"block {i + 1}"
+            out.append((name, block, (self.ranges[key][0], self.ranges[key][1])))
         return out
 
     def linear_signals(self, u: Any) -> list[tuple[LinearBlock, np.ndarray, np.ndarray]]:

@@ -796,6 +796,22 @@ class BlockStateSpace(ForwardSensitivities, Model):
                 out[f"z {c}"] = excursion(tuple(self.output_range[j]), z[:, j])
         return out
 
+    def block_ranges(self) -> list[tuple[str, Any, tuple[float, float]]]:
+        """See :meth:`Model.block_ranges`: the input blocks on their normalised inputs,
+        the loop blocks on their arguments ``p``, the output blocks on ``z`` (where the
+        fit recorded those ranges)."""
+        sides = (
+            ("input block on", self.inputs, self.input_blocks, self.input_range),
+            ("loop block", self.loops, self.loop_blocks, self.loop_range),
+            ("output block on", self.outputs, self.output_blocks, self.output_range),
+        )
+        out = []
+        for what, names, blocks, ranges in sides:
+            for name, block, seen in zip(names, blocks, ranges, strict=True):
+                if block is not None and np.all(np.isfinite(seen)):
+                    out.append((f"{what} {name}", block, (float(seen[0]), float(seen[1]))))
+        return out
+
     def static_curves(self, u: Any, n_points: int = 400) -> list[dict[str, Any]]:
         """Each block's curve over the range its argument takes when input ``u`` is
         simulated from ``x(0) = 0``, in the signals' units where they have them: an

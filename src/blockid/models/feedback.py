@@ -482,6 +482,12 @@ class LinearFeedback(OneLinearBlock, Model):
         """A copy that remembers the ranges seen in ``experiments``."""
         return self.replace(ranges=self.estimation_ranges(experiments))
 
+    def block_ranges(self) -> list[tuple[str, Any, tuple[float, float]]]:
+        """See :meth:`Model.block_ranges`: the fed-back block on the range of ``y``."""
+        if "y" not in self.ranges:
+            return []
+        return [("feedback block", self.feedback, (self.ranges["y"][0], self.ranges["y"][1]))]
+
     def extrapolation(self, u: Any) -> list[str]:
         """Warnings when the simulated output (from rest) leaves the range of ``y`` seen
         in estimation and the fed-back block is one that says nothing reliable there
