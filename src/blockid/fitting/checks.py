@@ -31,7 +31,15 @@ affine by its form, such as a degree-1 polynomial carrying an input offset, is n
 noted). A fitted linear block with a pole within twice the stability margin of the
 unit circle (``|p| >= 1 - 2 margin``) sits on the margin the fit enforces: near
 +1 the plant probably integrates, and an explicit integrator (``integrator=1``, a block
-whose pole at 1 is not fitted) is the model to try. The notes belong in the result's
+whose pole at 1 is not fitted) is the model to try. Three more warn before a model
+misleads: a free run on the estimation data whose output leaves the measured output's
+range (:func:`output_range_warnings`), poles on or near the unit circle or at the
+Nyquist frequency (:func:`pole_warnings`), both with the limits of
+:mod:`blockid.evaluation.plausibility` that ``simulate`` applies too, and static or
+hysteretic blocks that have degenerated over the ranges their arguments covered
+(:func:`degenerate_block_notes`: edges that coincide, edges far outside the range,
+slopes that vanish, each block judging itself by
+:meth:`~blockid.blocks.base.Block.degeneracy`). The notes belong in the result's
 ``settings["warnings"]``.
 """
 
@@ -55,8 +63,11 @@ __all__ = [
     "simulation_mse",
     "linear_baseline",
     "check_model",
+    "degenerate_block_notes",
     "linear_block_notes",
     "margin_notes",
+    "output_range_warnings",
+    "pole_warnings",
     "rest_notes",
 ]
 
@@ -196,6 +207,46 @@ def rest_notes(model: Any, data: Dataset) -> list[str]:
         f"{MAX_REST_RATIO:g}): it fits from measured initial outputs but runs away from "
         "rest; start its simulations from measured outputs (blockid simulate "
         "--initial-samples N), or try lower orders or another block"
+    ]
+
+
+def output_range_warnings(model: Any, data: Dataset) -> list[str]:
+    """Warnings when the model's free run on ``data`` (from the first ``max_lag``
+    measured outputs, as the fit's metrics) leaves the measured output's range by more
+    than :data:`~blockid.evaluation.plausibility.MAX_OUTPUT_EXCURSION` of its width."""
+    from blockid.evaluation.plausibility import output_range_notes
+
+    skip = model.max_lag
+    with np.errstate(all="ignore"):
+        y_hat = np.vstack([model.simulate(e.u, e.y[:skip])[skip:] for e in data.experiments])
+    y = np.vstack([e.y[skip:] for e in data.experiments])
+    return output_range_notes(y, y_hat, data.outputs, "free run", "on the estimation data")
+
+
+def pole_warnings(model: Any, data: Dataset) -> list[str]:
+    """Warnings for the model's fitted poles (:meth:`~blockid.models.base.Model.fitted_poles`)
+    on or outside the unit circle (an ARX fitted with ``allow_unstable``), within twice
+    the stability margin of it (a chain's linear blocks get :func:`margin_notes`
+    instead, with its advice on integrators), or at the Nyquist frequency
+    (:func:`~blockid.evaluation.plausibility.pole_notes`)."""
+    from blockid.evaluation.plausibility import pole_notes
+
+    noted = bool(getattr(model, "linear_blocks", ()))
+    return pole_notes(
+        model.fitted_poles(), 2.0 * stability_margin(data), near_noted=noted,
+        unstable_advice="use it to predict one step ahead only (blockid predict), or fit "
+        "it again without allow_unstable for a model that simulates",
+    )  # fmt: skip
+
+
+def degenerate_block_notes(model: Any) -> list[str]:
+    """Warnings for the nonlinear blocks that have degenerated over the ranges their
+    arguments covered in estimation (:meth:`~blockid.models.base.Model.block_ranges`),
+    as each block judges itself (:meth:`~blockid.blocks.base.Block.degeneracy`)."""
+    return [
+        f"the {name} ({block.kind}) {clause}"
+        for name, block, (low, high) in model.block_ranges()
+        for clause in block.degeneracy(low, high)
     ]
 
 

@@ -180,7 +180,9 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
 
 
 def _finish(result: FitResult, data: Dataset, structure: str, uncertainty: bool) -> FitResult:
-    """A fit's last checks: a finite error, notes on its linear blocks and its rest."""
+    """A fit's last checks: a finite error; notes on its linear blocks, its run from
+    rest, its poles, its output's range, its degenerate blocks and its refinement's
+    stop (:mod:`blockid.fitting.checks`)."""
     mse = result.estimation_metrics.get("mse", {})
     if not all(np.isfinite(v) for v in mse.values()):
         raise EstimationError(
@@ -189,10 +191,18 @@ def _finish(result: FitResult, data: Dataset, structure: str, uncertainty: bool)
             "overflow; rescale the signals (to SI units, or by their typical size) and fit "
             "again"
         )
-    from blockid.fitting.checks import linear_block_notes, rest_notes
+    from blockid.fitting.checks import (
+        degenerate_block_notes,
+        linear_block_notes,
+        output_range_warnings,
+        pole_warnings,
+        rest_notes,
+    )
 
-    notes = linear_block_notes(result.model, data) + rest_notes(result.model, data)
-    notes += _evaluation_limit_notes(result)
+    model = result.model
+    notes = linear_block_notes(model, data) + rest_notes(model, data)
+    notes += pole_warnings(model, data) + output_range_warnings(model, data)
+    notes += degenerate_block_notes(model) + _evaluation_limit_notes(result)
     if notes:
         warnings = [*result.settings.get("warnings", []), *notes]
         result = replace(result, settings={**result.settings, "warnings": warnings})
