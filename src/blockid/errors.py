@@ -14,6 +14,7 @@ __all__ = [
     "ModelFileError",
     "EstimationError",
     "ParameterError",
+    "SimulationError",
 ]
 
 
@@ -55,3 +56,8 @@ class EstimationError(BlockidError):
     """
 
     history: dict | None = None
+
+
+class SimulationError(BlockidError):
+    """A model's output diverged on the data it was run on (not finite, or astronomically
+    beyond the measured output's range): its metrics would mean nothing."""

@@ -298,3 +298,47 @@ def test_a_model_file_is_not_written_under_a_table_s_name(command, cubic_csv, tm
     r = runner.invoke(app, [command, str(cubic_csv), "-u", "u", "-y", "y", "-o", str(out), *extra])
     assert r.exit_code == 2 and "a model file is JSON, not .csv" in r.stderr
     assert str(tmp_path / "m.json") in r.stderr and not out.exists()
+
+
+def test_simulate_refuses_a_diverging_model_in_one_line_and_predict_warns(tmp_path):
+    """A model file with a pole outside the unit circle simulated to an RMSE of 3.9e67 with
+    exit 0 (issue 37): now one error line, exit 2, no table written; one-step prediction
+    still works and warns on stderr, with --json too."""
+    from blockid.models import ARX, save_model
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0.0, 10.0, 3000)
+    y = np.zeros(u.size)
+    for t in range(1, u.size):
+        y[t] = 0.9 * y[t - 1] + 0.1 * u[t - 1]
+    data = tmp_path / "d.csv"
+    pd.DataFrame({"u": u, "y": y}).to_csv(data, index=False)
+    model = tmp_path / "unstable.json"
+    save_model(ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-1.05]}}, b={"y": {"u": [0.1]}}), model)
+    table = tmp_path / "sim.csv"
+    r = runner.invoke(app, ["simulate", str(model), str(data), "-o", str(table)])
+    assert r.exit_code == 2 and r.stdout == ""
+    (line,) = r.stderr.strip().splitlines()
+    assert line.startswith("error: the model's free-run simulation diverges on")
+    assert "a pole at 1.05" in line and not table.exists()
+    r = runner.invoke(app, ["predict", str(model), str(data), "--json"])
+    assert r.exit_code == 0 and json.loads(r.stdout)["mode"] == "one-step"
+    assert "warning: the model is unstable: its linear part has a pole at 1.05" in r.stderr
+
+
+def test_identify_passes_on_the_selected_model_s_warnings(tmp_path):
+    """The selected model's warnings (here: a fitted pole at -0.97, a Nyquist-frequency
+    mode of the plant) on stderr, with --json too, and in the document (issue 37)."""
+    rng = np.random.default_rng(1)
+    u = np.repeat(rng.uniform(-1.0, 1.0, 60), 10)
+    y = np.zeros(u.size)
+    for t in range(1, u.size):
+        y[t] = -0.97 * y[t - 1] + u[t - 1]
+    data = tmp_path / "nyquist.csv"
+    pd.DataFrame({"u": u, "y": y + 0.01 * rng.standard_normal(u.size)}).to_csv(data, index=False)
+    args = ["identify", str(data), "-u", "u", "-y", "y", "--structures", "arx", "--effort",
+            "quick", "-q", "--json"]  # fmt: skip
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    (note,) = json.loads(r.stdout)["selected"]["warnings"]
+    assert "Nyquist" in note and f"warning: {note}" in r.stderr

@@ -22,6 +22,7 @@ from blockid.cli._common import (
     refuse_figures,
     refuse_model_name,
     refuse_to_overwrite,
+    stderr,
     stdout,
 )
 from blockid.cli._data import check_arguments, load_data, select_range
@@ -198,6 +199,8 @@ def identify(
                 data=None if validation_data else whole, estimation=est, validation=val,
                 estimation_range=estimation, validation_range=validation, force=force,
             )  # fmt: skip
+    for note in result.warnings:  # with --json too: stderr (and in the document)
+        stderr.print(f"warning: {note}", markup=False)
     if json_out:
         print_json(result.to_dict())
         return

@@ -125,6 +125,16 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
                 parameter="band",
             )
         result = evaluate(model, data, mode, initial_samples=initial_samples)
+        where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+        if result.diverged is not None:
+            from blockid.errors import SimulationError
+
+            raise SimulationError(
+                f"the model's {_LABELS[mode]} diverges on {where}: {result.diverged}; its "
+                "metrics would mean nothing, so none are printed and nothing is written: "
+                "refit the model (the fits keep every pole inside the unit circle) or "
+                "check the model file"
+            )
         columns = {}
         if band is not None:
             from blockid.evaluation.uncertainty import band_columns, load_covariance
@@ -135,12 +145,13 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             for key, values in columns.items():
                 frame[key] = values
             write_table(frame, out, overwrite=force)
-        where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
         figure = None
         if plot is not None:
             from blockid.plotting.runs import run_figure
 
             figure = run_figure(result, plot, data_label=where, overwrite=force)
+        for note in result.warnings:  # with --json too: stderr (and in the document)
+            stderr.print(f"warning: {note}", markup=False)
         if json_out:
             paths = [str(p) for p in data_paths]
             doc = {"model": str(model_path), "data": paths, "range": rng, **result.to_dict()}
@@ -152,8 +163,6 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
                 doc["band"] = {"level": band, "mean_width": width}
             print_json(doc)
             return
-        for note in result.warnings:
-            stderr.print(f"warning: {note}", markup=False)
         title = f"{_LABELS[mode]} on {where}"
         if initial_samples is not None:
             title += f", started from {initial_samples} measured outputs"

@@ -271,6 +271,20 @@ class IdentifyResult:
     def cut_by_time_limit(self) -> bool:
         return bool(self.search.get("cut_by_time_limit", False))
 
+    @property
+    def warnings(self) -> list[str]:
+        """The selected model's warnings: its fit's on all estimation data (not that its
+        refinement stopped at its evaluation limit: the effort set that limit, and
+        ``identify`` has no ``--max-nfev`` to raise it) and its scores' (``simulation``,
+        ``one_step``)."""
+        from blockid.fitting.dispatch import _evaluation_limit_notes
+
+        budget = _evaluation_limit_notes(self.fit)
+        notes = [n for n in self.fit.settings.get("warnings", []) if n not in budget]
+        for run in (self.simulation, self.one_step):
+            notes += [n for n in (run.warnings if run is not None else []) if n not in notes]
+        return notes
+
     def _repr_html_(self) -> str:
         """The notebook display: :func:`blockid.reporting.notebook.identify_html`."""
         from blockid.reporting.notebook import identify_html
@@ -303,6 +317,8 @@ class IdentifyResult:
             selected["flags"] = list(self.selected.flags)
         if self.one_step_error:
             selected["one_step_error"] = self.one_step_error
+        if self.warnings:
+            selected["warnings"] = self.warnings
         return {
             "selected": selected,
             "models": [s.to_dict() for s in self.ranked],
