@@ -1,5 +1,6 @@
 """Validation of identified models: error metrics, simulation and prediction on data."""
 
+from blockid.evaluation.horizon import k_step_prediction
 from blockid.evaluation.metrics import (
     METRICS,
     fit_percent,
@@ -9,12 +10,16 @@ from blockid.evaluation.metrics import (
     mse,
     rmse,
 )
+from blockid.evaluation.residuals import ResidualAnalysis, residual_analysis
 from blockid.evaluation.validate import MODES, ModelOutput, evaluate
 
 __all__ = [
     "MODES",
     "ModelOutput",
     "evaluate",
+    "k_step_prediction",
+    "ResidualAnalysis",
+    "residual_analysis",
     "METRICS",
     "fit_percent",
     "max_absolute_error",

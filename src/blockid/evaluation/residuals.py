@@ -294,7 +294,7 @@ def residual_analysis(
     # its predictor gain; a simulation-error fit is not (its noise is the plant's, coloured)
     noise_model = None
     if mode == "one-step":
-        noise_model = model.structure == "arx" or getattr(model, "K", None) is not None
+        noise_model = bool(getattr(model, "has_noise_model", False))
     return ResidualAnalysis(
         noise_model=noise_model,
         mode=mode,

@@ -77,6 +77,9 @@ class ARX(Model):
     """
 
     structure = "arx"
+    #: Fitted with its noise model (equation error): its one-step residual should be
+    #: white (:func:`~blockid.evaluation.residual_analysis`).
+    has_noise_model = True
 
     def __init__(
         self,

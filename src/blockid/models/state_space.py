@@ -472,6 +472,12 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
                 E[:, j], F[:, j] = self.E[:, i], self.F[:, i]
         return self.replace(exponents=expo, E=E, F=F)
 
+    @property
+    def has_noise_model(self) -> bool:
+        """A predictor gain ``K`` (a subspace estimate's innovation form): its one-step
+        residual should be white (:func:`~blockid.evaluation.residual_analysis`)."""
+        return self.K is not None
+
     def replace(self, **changes: Any) -> PolynomialStateSpace:
         """A copy with some constructor arguments changed."""
         kwargs = dict(
