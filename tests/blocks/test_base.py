@@ -114,3 +114,17 @@ def test_static_forward_hands_on_a_float_output():
     assert w.dtype == np.float64
     assert w.tolist() == [-1.0, 0.0, 1.0]
     np.testing.assert_array_equal(S, np.zeros((3, 1)))
+
+
+def test_degeneracy_limits_are_the_ones_the_docs_state():
+    """A block's degeneracy (issue 37): the default finds none; the limits are those
+    docs/cli.md's table of warnings states."""
+    from pathlib import Path
+
+    from blockid.blocks.base import EDGE_DISTANCE, EDGE_GAP, SLOPE_RATIO
+
+    assert TwoSegmentPolynomial.from_segments([0.0, 1.0], [0.0, 2.0]).degeneracy(-1, 1) == []
+    doc = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
+    assert f"closer than {EDGE_GAP:g} of the range (`blocks.base.EDGE_GAP`)" in doc
+    assert f"more than {EDGE_DISTANCE:g} range width outside it (`EDGE_DISTANCE`)" in doc
+    assert f"below {SLOPE_RATIO:g} of the block's steepest (`SLOPE_RATIO`" in doc

@@ -58,3 +58,15 @@ def test_pole_notes_name_one_pole_of_each_kind():
     assert "of the unit circle" in once
     assert pole_notes(np.array([-(1.0 - POLE_MARGIN / 2)]), near_noted=True) == []
     assert len(pole_notes(np.array([1.02, -0.98]))) == 2  # unstable, and a Nyquist mode
+
+
+def test_the_limits_are_the_ones_docs_cli_states():
+    from pathlib import Path
+
+    from blockid.evaluation.plausibility import NYQUIST_MARGIN
+
+    doc = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
+    assert f"{MAX_OUTPUT_EXCURSION:g} (`evaluation.plausibility.MAX_OUTPUT_EXCURSION`)" in doc
+    assert f"{POLE_MARGIN:g} (`POLE_MARGIN`)" in doc
+    assert f"within {NYQUIST_MARGIN:g} of −1 (`NYQUIST_MARGIN`)" in doc
+    assert DIVERGED_EXCURSION == 1e6 and "more than 10⁶ widths" in doc
