@@ -54,7 +54,7 @@ def test_the_arx_predictor_iterated_by_hand_and_the_error_growing_with_the_horiz
 def test_a_bad_horizon_and_a_record_too_short_are_named():
     data = _record(n=30)
     model = fit_model(data, "arx", na=2, nb=2, nk=1).model
-    with pytest.raises(ParameterError, match="horizon"):
+    with pytest.raises(ParameterError, match="steps ahead"):
         k_step_prediction(model, data, 0)
-    with pytest.raises(DataError, match="shorter horizon"):
+    with pytest.raises(DataError, match="fewer steps ahead"):
         k_step_prediction(model, data, 40)

@@ -473,6 +473,18 @@ def _check_margin(case, default, changed, value):
     assert changed.settings["margin"] == value
 
 
+def _check_start_degree(case, default, changed, value):
+    assert "rungs" not in default.settings and default.model.degree == 3
+    assert [r["degree"] for r in changed.settings["rungs"]] == [value, 3]
+    assert changed.model.degree == 3 and changed.settings["start_degree"] == value
+
+
+def _check_rung_nfev(case, default, changed, value):
+    assert default.settings["rungs"][1]["max_nfev"] == case.options["max_nfev"]
+    assert changed.settings["rungs"][1]["max_nfev"] == value
+    assert changed.settings["rungs"][0]["max_nfev"] == case.options["max_nfev"]
+
+
 # ----------------------------------------------------------------------------- the table
 @dataclass(frozen=True)
 class Expect:
@@ -594,6 +606,8 @@ EXPECT: dict[str, Expect] = {
     "degree": Expect(3, _check_degree),
     "monomials": Expect("states", _check_monomials),
     "margin": Expect(1.0, _check_margin),
+    "start_degree": Expect(2, _check_start_degree, {"degree": 3}),
+    "rung_nfev": Expect(1, _check_rung_nfev, {"degree": 3, "start_degree": 2}),
     "max_nfev": Expect(2, _check_max_nfev),
     "tail_fraction": Expect(0.0, _check_tail_fraction),
     "patience": Expect(1, _check_patience, {"max_nfev": 40}, n=lambda case: 150),

@@ -28,39 +28,41 @@ from blockid.errors import DataError, ParameterError
 __all__ = ["k_step_prediction"]
 
 
-def k_step_prediction(model: Any, data: Dataset, horizon: int) -> Any:
-    """``model``'s ``horizon``-step-ahead prediction on ``data`` with its metrics, as a
+def k_step_prediction(model: Any, data: Dataset, steps: int) -> Any:
+    """``model``'s ``steps``-step-ahead prediction on ``data`` with its metrics, as a
     :class:`~blockid.evaluation.validate.ModelOutput` (``mode`` ``"k-step"``; the first
-    ``max_lag + horizon - 1`` samples of each experiment, which no prediction of that
+    ``max_lag + steps - 1`` samples of each experiment, which no prediction of that
     horizon reaches, are copied from the measurement and not scored).
 
     Raises
     ------
     ParameterError
-        For a horizon that is not a whole number >= 1.
+        For ``steps`` (the horizon) not a whole number >= 1.
     DataError
         When an experiment is too short for one prediction of that horizon.
     """
     from blockid.evaluation.metrics import metrics_by_output, undefined_notes
     from blockid.evaluation.validate import ModelOutput
 
-    if isinstance(horizon, bool) or not isinstance(horizon, int | np.integer) or horizon < 1:
-        raise ParameterError(f"horizon must be a whole number >= 1, got {horizon!r}",
-                             parameter="horizon")  # fmt: skip
+    if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps < 1:
+        raise ParameterError(
+            f"the prediction's steps ahead must be a whole number >= 1, got {steps!r}",
+            parameter="steps",
+        )
     if tuple(data.inputs) != tuple(model.inputs) or tuple(data.outputs) != tuple(model.outputs):
         raise DataError(
             f"the model expects inputs {list(model.inputs)} and outputs {list(model.outputs)}, "
             f"but the data have inputs {list(data.inputs)} and outputs {list(data.outputs)}"
         )
     lag = int(model.max_lag)
-    skip = lag + int(horizon) - 1
+    skip = lag + int(steps) - 1
     outputs = []
     for exp in data.experiments:
         if exp.n_samples <= skip:
             raise DataError(
-                f"experiment {exp.name!r} has {exp.n_samples} samples: a {horizon}-step "
-                f"prediction needs more than max_lag + horizon - 1 = {skip}; give a "
-                "shorter horizon or a longer record"
+                f"experiment {exp.name!r} has {exp.n_samples} samples: a {steps}-step "
+                f"prediction needs more than max_lag + steps - 1 = {skip}; give fewer "
+                "steps ahead or a longer record"
             )
         out = np.array(exp.y, dtype=float, copy=True)
         for t in range(skip, exp.n_samples):
