@@ -83,10 +83,27 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             ),
         ] = None,
         initial_samples: InitialSamples = None,
+        steps: Annotated[
+            int | None,
+            typer.Option(
+                "--steps",
+                metavar="K",
+                min=1,
+                help="predict: K-step-ahead prediction (the outputs measured up to K "
+                "samples back; 1: one step, the default).",
+                show_default=False,
+            ),
+        ] = None,
         force: Force = False,
         json_out: Json = False,
     ) -> None:
         from blockid.errors import ParameterError
+
+        if steps is not None and mode != "one-step":
+            raise ParameterError(
+                "--steps applies to predict only (simulate is the free run: every step ahead)",
+                parameter="steps",
+            )
 
         if band is not None and mode != "simulation":
             raise ParameterError(
@@ -124,7 +141,12 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
                 "estimated state instead. Drop one of them",
                 parameter="band",
             )
-        result = evaluate(model, data, mode, initial_samples=initial_samples)
+        if steps is not None and steps > 1:
+            from blockid.evaluation.horizon import k_step_prediction
+
+            result = k_step_prediction(model, data, steps)
+        else:
+            result = evaluate(model, data, mode, initial_samples=initial_samples)
         where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
         if result.diverged is not None:
             from blockid.errors import SimulationError
@@ -164,6 +186,8 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             print_json(doc)
             return
         title = f"{_LABELS[mode]} on {where}"
+        if steps is not None and steps > 1:
+            title = f"{steps}-step-ahead prediction on {where}"
         if initial_samples is not None:
             title += f", started from {initial_samples} measured outputs"
         stdout.print(metrics_table(title, [(model.structure, result.metrics)]))

@@ -67,7 +67,7 @@ class ModelOutput:
         frame = self.data.to_frame()
         y_hat = np.vstack(self.outputs)
         for j, name in enumerate(self.data.outputs):
-            frame[f"{name}_{MODES[self.mode]}"] = y_hat[:, j]
+            frame[f"{name}_{MODES.get(self.mode, 'pred')}"] = y_hat[:, j]  # k-step: pred
         return frame
 
     def to_dict(self) -> dict[str, Any]:

@@ -18,7 +18,11 @@ import numpy as np
 __all__ = ["MODE_TITLE", "plot_run", "run_figure", "shown_samples"]
 
 #: How each mode of evaluation is named in titles.
-MODE_TITLE = {"simulation": "free-run simulation", "one-step": "one-step prediction"}
+MODE_TITLE = {
+    "simulation": "free-run simulation",
+    "one-step": "one-step prediction",
+    "k-step": "k-step-ahead prediction",
+}
 
 #: Points drawn per curve at most; longer records are thinned (and the title says so).
 MAX_POINTS = 200_000
@@ -104,7 +108,11 @@ def plot_run(output: Any, *, data_label: str = "data", max_points: int | None = 
 
 
 #: The file :func:`run_figure` writes, by mode.
-RUN_FIGURES = {"simulation": "simulation.png", "one-step": "prediction.png"}
+RUN_FIGURES = {
+    "simulation": "simulation.png",
+    "one-step": "prediction.png",
+    "k-step": "prediction.png",
+}
 
 
 def run_figure(
