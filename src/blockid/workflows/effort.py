@@ -86,7 +86,7 @@ EFFORTS: dict[str, Effort] = {
             families=3, screen_nfev=15, screen_samples=10_000, finalists=2, final_nfev=60,
             grow_steps=1, state_plans=((2, "full"), (3, "states")), state_parameters=300,
             state_keep=2, final_samples=20_000, warm_starts=2,
-            warm_starts_long=1, climb_parameters=300, climb_nfev=20,
+            warm_starts_long=1, climb_parameters=600, climb_nfev=20,
             block_state_plans=(
                 ("polynomial:degree=3", None), (None, "polynomial:degree=3"),
                 ("polynomial:degree=3", "polynomial:degree=3"),
