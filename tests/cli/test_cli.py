@@ -342,3 +342,27 @@ def test_identify_passes_on_the_selected_model_s_warnings(tmp_path):
     assert r.exit_code == 0, r.output
     (note,) = json.loads(r.stdout)["selected"]["warnings"]
     assert "Nyquist" in note and f"warning: {note}" in r.stderr
+
+
+@pytest.mark.parametrize("command", ["fit", "identify"])
+def test_an_output_that_could_not_be_written_is_refused_before_any_work(
+    command, cubic_csv, tmp_path, monkeypatch
+):
+    """``-o missing/m.json`` once ran the whole search and then failed to write; now
+    refused first, naming the folder, and the search never starts."""
+    import blockid.fitting
+    from blockid.workflows import identify as search
+
+    def never(*a, **k):
+        raise AssertionError("the work started")
+
+    monkeypatch.setattr(blockid.fitting, "fit_model", never)
+    monkeypatch.setattr(search, "identify", never)
+    extra = (
+        ["--structure", "arx", "--na", "2", "--nb", "2", "--nk", "1"] if command == "fit" else []
+    )
+    out = tmp_path / "missing" / "m.json"
+    r = runner.invoke(app, [command, str(cubic_csv), "-u", "u", "-y", "y", "-o", str(out), *extra])
+    assert r.exit_code == 2, r.output
+    assert f"folder {tmp_path / 'missing'} does not exist" in r.stderr
+    assert "nothing was computed" in r.stderr and not out.parent.exists()

@@ -23,6 +23,7 @@ from blockid.fitting.registry import OPTIONS, option_flag
 
 __all__ = [
     "busy",
+    "check_writable",
     "cli_errors",
     "error_line",
     "flag",
@@ -159,8 +160,29 @@ def refuse_to_overwrite(out: Path | None, force: bool) -> None:
     no need to force it)."""
     from blockid.data.files import is_stream
 
-    if out is not None and out.exists() and not is_stream(out) and not force:
+    if out is None or is_stream(out):
+        return
+    if out.exists() and not force:
         raise ParameterError(f"{out} exists; pass --force to replace it")
+    check_writable(out)
+
+
+def check_writable(out: Path) -> None:
+    """Stop before any work when ``out`` could not be written at the end: its folder is
+    missing or not writable (a search of minutes must not end in "cannot write")."""
+    import os
+
+    folder = out.parent if str(out.parent) else Path(".")
+    if not folder.is_dir():
+        raise ParameterError(
+            f"cannot write {out}: folder {folder} does not exist; create it or choose "
+            "another path (nothing was computed)"
+        )
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ParameterError(
+            f"cannot write {out}: folder {folder} is not writable; choose another path "
+            "(nothing was computed)"
+        )
 
 
 def refuse_model_name(out: Path | None) -> None:
