@@ -18,7 +18,14 @@ from typing import Annotated, Any
 import typer
 
 from blockid.cli._flags import shared
-from blockid.fitting.registry import COMPARED_BY_DEFAULT, OPTIONS, STRUCTURES, Option, option_flag
+from blockid.fitting.registry import (
+    COMPARED_BY_DEFAULT,
+    COMPARED_MULTIVARIABLE,
+    OPTIONS,
+    STRUCTURES,
+    Option,
+    option_flag,
+)
 
 __all__ = [
     "ComparedStructures",
@@ -136,7 +143,8 @@ ComparedStructures = Annotated[
     shared(
         "structures",
         f"Comma-separated structures to compare, of {', '.join(STRUCTURES)} "
-        f"(default: {', '.join(COMPARED_BY_DEFAULT)}).",
+        f"(default: {', '.join(COMPARED_BY_DEFAULT)}; with several inputs or outputs "
+        f"{', '.join(COMPARED_MULTIVARIABLE)}).",
         show_default=False,
     ),
 ]

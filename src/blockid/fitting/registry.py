@@ -52,6 +52,8 @@ from blockid.errors import ParameterError
 
 __all__ = [
     "COMPARED_BY_DEFAULT",
+    "COMPARED_MULTIVARIABLE",
+    "compared_by_default",
     "OPTIONS",
     "STRUCTURES",
     "Method",
@@ -920,6 +922,15 @@ def searched_structures() -> tuple[str, ...]:
 
 #: The structures ``compare`` identifies unless told otherwise (paper B's four).
 COMPARED_BY_DEFAULT = ("arx", "hammerstein", "wiener", "hammerstein-wiener")
+#: ... on data of several inputs or outputs, which the chain structures cannot take.
+COMPARED_MULTIVARIABLE = ("arx", "state-space", "polynomial-state-space")
+
+
+def compared_by_default(n_inputs: int, n_outputs: int) -> tuple[str, ...]:
+    """The structures ``compare`` and ``report`` identify unless told otherwise, by the
+    data's shape: paper B's four on one input and one output, else ARX and the linear
+    and polynomial state space."""
+    return COMPARED_BY_DEFAULT if n_inputs == n_outputs == 1 else COMPARED_MULTIVARIABLE
 
 
 def get_structure(name: Any) -> Structure:

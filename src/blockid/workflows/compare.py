@@ -10,7 +10,7 @@ from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError
 from blockid.evaluation.validate import ModelOutput, score_model
 from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, accepted_options, fit_model
-from blockid.fitting.registry import COMPARED_BY_DEFAULT
+from blockid.fitting.registry import STRUCTURES, compared_by_default
 from blockid.fitting.result import FitResult
 
 __all__ = ["ModelScore", "CompareResult", "compare_structures"]
@@ -69,7 +69,7 @@ class CompareResult:
 def compare_structures(
     estimation: Dataset,
     validation: Dataset,
-    structures: Sequence[str] = COMPARED_BY_DEFAULT,
+    structures: Sequence[str] | None = None,
     *,
     method: str | None = None,
     options: dict[str, Any] | None = None,
@@ -80,8 +80,24 @@ def compare_structures(
     ``method="key-term-rls"`` compares paper B's four models fitted its way. Options
     (orders ``na, nb, nk, r1, r2`` and method settings) are passed to every structure
     that uses them. A structure whose estimator fails is kept in the result with its
-    error message rather than dropped.
+    error message rather than dropped. ``structures`` default by the data's shape
+    (:func:`~blockid.fitting.registry.compared_by_default`): paper B's four on one input
+    and one output, else ARX and the linear and polynomial state space.
     """
+    from blockid.errors import ParameterError
+
+    shape = (estimation.n_inputs, estimation.n_outputs)
+    if structures is None:
+        structures = compared_by_default(*shape)
+    chains = [s for s in structures if STRUCTURES[s].block_oriented]
+    if shape != (1, 1) and chains:
+        raise ParameterError(
+            f"{', '.join(chains)}: a chain of blocks has one input and one output; the data have "
+            f"{shape[0]} input(s) and {shape[1]} output(s): compare arx, state-space, "
+            "polynomial-state-space or block-state-space (--structures), or leave "
+            "--structures out for the default of several signals",
+            parameter="structures",
+        )
     options = dict(options or {})
     result = CompareResult()
     for structure in structures:
