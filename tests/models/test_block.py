@@ -289,6 +289,7 @@ def test_a_block_model_of_two_outputs_is_refused_with_the_advice():
     with pytest.raises(OrderError) as info:
         Hammerstein("u", ["y1", "y2"], input_block=Polynomial([0.0, 1.0]), na=1, nb=1, nk=1)
     assert str(info.value) == (
-        "block-oriented models have one output; got 2 (['y1', 'y2']). "
-        "Use an ARX model or a network of blocks for several signals"
+        "a chain of blocks has one output; got 2 (['y1', 'y2']). For several signals use "
+        "structure arx, state-space, polynomial-state-space or block-state-space "
+        "(--structure / --structures), paper B's key-term-rls method, or a network of blocks"
     )

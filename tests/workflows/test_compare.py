@@ -1,11 +1,11 @@
 """compare_structures: the default structures follow the data's shape, and a chain
-asked for on several signals is refused naming the structures that take them."""
+that cannot take several signals says which structures can."""
 
 from __future__ import annotations
 
 import pytest
 
-from blockid.errors import ParameterError
+from blockid.errors import BlockidError
 from blockid.workflows import compare_structures
 
 from reference import mimo_hw_record
@@ -20,5 +20,5 @@ def test_several_signals_get_the_state_spaces_and_arx_by_default():
     ]  # fmt: skip
     fitted = [m for m in result.models if m.error is None]
     assert {m.structure for m in fitted} >= {"state-space", "polynomial-state-space"}
-    with pytest.raises(ParameterError, match="state-space, polynomial-state-space"):
+    with pytest.raises(BlockidError, match="arx, state-space, polynomial-state-space"):
         compare_structures(est, val, ["arx", "wiener"], options={"na": 2, "nb": 2, "nk": 1})

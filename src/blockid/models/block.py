@@ -70,8 +70,10 @@ def _one_name(names: Any, what: str) -> tuple[str]:
     names = (names,) if isinstance(names, str) else tuple(names)
     if len(names) != 1:
         raise OrderError(
-            f"block-oriented models have one {what}; got {len(names)} ({list(names)}). "
-            "Use an ARX model or a network of blocks for several signals"
+            f"a chain of blocks has one {what}; got {len(names)} ({list(names)}). For "
+            "several signals use structure arx, state-space, polynomial-state-space or "
+            "block-state-space (--structure / --structures), paper B's key-term-rls "
+            "method, or a network of blocks"
         )
     return names
 

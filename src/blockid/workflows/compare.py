@@ -10,7 +10,7 @@ from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError
 from blockid.evaluation.validate import ModelOutput, score_model
 from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, accepted_options, fit_model
-from blockid.fitting.registry import STRUCTURES, compared_by_default
+from blockid.fitting.registry import compared_by_default
 from blockid.fitting.result import FitResult
 
 __all__ = ["ModelScore", "CompareResult", "compare_structures"]
@@ -84,20 +84,8 @@ def compare_structures(
     (:func:`~blockid.fitting.registry.compared_by_default`): paper B's four on one input
     and one output, else ARX and the linear and polynomial state space.
     """
-    from blockid.errors import ParameterError
-
-    shape = (estimation.n_inputs, estimation.n_outputs)
     if structures is None:
-        structures = compared_by_default(*shape)
-    chains = [s for s in structures if STRUCTURES[s].block_oriented]
-    if shape != (1, 1) and chains:
-        raise ParameterError(
-            f"{', '.join(chains)}: a chain of blocks has one input and one output; the data have "
-            f"{shape[0]} input(s) and {shape[1]} output(s): compare arx, state-space, "
-            "polynomial-state-space or block-state-space (--structures), or leave "
-            "--structures out for the default of several signals",
-            parameter="structures",
-        )
+        structures = compared_by_default(estimation.n_inputs, estimation.n_outputs)
     options = dict(options or {})
     result = CompareResult()
     for structure in structures:
