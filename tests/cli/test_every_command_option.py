@@ -948,7 +948,7 @@ def identify_force(f, calls):
 
 def identify_json(f, calls):
     plain = _identify(f).stdout
-    assert "candidates ranked by cross-validated free-run RMSE" in plain
+    assert "candidates by cross-validated free-run RMSE, lowest first" in plain
     with mock.patch.object(_common, "sys", _OnATerminal()):
         doc = _json(_identify(f, "--json"))  # no progress bar either
     assert doc == json.loads(json.dumps(_identified().to_dict()))

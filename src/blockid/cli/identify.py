@@ -214,14 +214,14 @@ def _print(result: Any) -> None:
     from rich.table import Table
 
     table = Table(
-        title=f"candidates ranked by cross-validated free-run RMSE ({result.holdout})",
+        title=f"candidates by cross-validated free-run RMSE, lowest first ({result.holdout})",
         title_justify="left",
     )
     for col in ("", "structure and options", "stage", "CV RMSE", "fit %", "params", "s"):
         table.add_column(col, justify="left" if col in ("", "structure and options") else "right")
-    for i, s in enumerate(result.ranked[:15]):
+    for s in result.best_scored(15):
         table.add_row(
-            "*" if i == 0 else ("!" if s.flags else ""),
+            "*" if s is result.selected else ("!" if s.flags else ""),
             escape(s.candidate.label),
             s.stage,
             f"{s.rmse:.4g}",
@@ -231,8 +231,9 @@ def _print(result: Any) -> None:
         )
     stdout.print(table)
     stdout.print(
-        "* the selected model, refitted on all estimation data; ! flagged (see the JSON "
-        "or the report)"
+        "* the selected model, refitted on all estimation data (among scores within 2 % "
+        "of the best, the fewest parameters; a model beyond linear only if it beats the "
+        "linear one consistently); ! flagged (see the JSON or the report)"
     )
     for flag in result.selected.flags:
         stdout.print(f"flag on the selected model: {flag}", markup=False, soft_wrap=True)

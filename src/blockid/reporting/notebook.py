@@ -85,9 +85,9 @@ def identify_html(result: Any) -> str:
         parts.append(p(escape(f"Flag: {flag}")))
     rows = [
         [s.candidate.label, s.stage, s.n_parameters, s.rmse, s.fit_percent]
-        for s in result.ranked[:_TOP]
+        for s in result.best_scored(_TOP)
     ]
-    header = ["candidate (best first)", "stage", "parameters", "CV RMSE", "CV fit %"]
+    header = ["candidate (lowest CV RMSE first)", "stage", "parameters", "CV RMSE", "CV fit %"]
     parts.append(
         f"<details><summary>best {len(rows)} candidates</summary>{table(header, rows)}</details>"
     )

@@ -156,18 +156,19 @@ def search_section(identify: Any, baseline: LinearBaseline) -> str:
     for flag in sel.flags:
         parts.append(paragraph(f"Flag on the chosen model: {flag}", "note"))
     rank, best = best_linear(identify.ranked)
-    shown = list(identify.ranked[:SHOWN])
-    if best is not None and rank >= SHOWN:
+    shown = identify.best_scored(SHOWN)
+    if best is not None and best not in shown:
         shown.append(best)  # the baseline's row, below the best ones
     rows = [
         [s.candidate.label, s.stage, s.n_parameters, s.rmse, s.fit_percent, s.seconds]
         for s in shown
     ]
     classes = ["best" if s is sel else "baseline" if s is best else None for s in shown]
-    header = ["candidate (best first)", "stage", "parameters", "CV RMSE", "CV fit %", "seconds"]
+    header = ["candidate (lowest CV RMSE first)", "stage", "parameters", "CV RMSE", "CV fit %",
+              "seconds"]  # fmt: skip
     parts.append(table(header, rows, classes))
     if len(identify.ranked) > SHOWN:
-        more = len(identify.ranked) - SHOWN - (best is not None and rank >= SHOWN)
+        more = len(identify.ranked) - len(shown)
         parts.append(paragraph(f"... and {more} more candidates (in the figure below)."))
     if len(identify.ranked) > 1:
         points = [(s.candidate.structure, s.n_parameters, s.rmse) for s in identify.ranked]

@@ -285,6 +285,16 @@ class IdentifyResult:
             notes += [n for n in (run.warnings if run is not None else []) if n not in notes]
         return notes
 
+    def best_scored(self, n: int) -> list[Score]:
+        """The ``n`` scored candidates with the lowest cross-validated RMSE, lowest first
+        (ties: by label), and the selected one after them if it is not among them: the
+        tables' order. (``ranked`` is the choice's order: the selected candidate first,
+        and among near-ties the one with fewer parameters before a lower score.)"""
+        ordered = sorted(self.ranked, key=lambda s: (s.rmse, s.candidate.label))[:n]
+        if self.selected not in ordered:
+            ordered.append(self.selected)
+        return ordered
+
     def _repr_html_(self) -> str:
         """The notebook display: :func:`blockid.reporting.notebook.identify_html`."""
         from blockid.reporting.notebook import identify_html
