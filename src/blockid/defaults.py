@@ -11,7 +11,21 @@ The recursive estimators' defaults differ by estimator on purpose; each entry sa
 
 from __future__ import annotations
 
-__all__ = ["DEGREE", "MAX_ORDER", "RECURSIVE", "TIE", "TOLERANCE", "WEIGHTING", "recursive_default"]
+__all__ = [
+    "DEGREE",
+    "FORGETTING",
+    "MAX_NFEV",
+    "MAX_ORDER",
+    "PATIENCE",
+    "PNLSS_NFEV",
+    "RECURSIVE",
+    "STATE_SPACE_NFEV",
+    "TAIL_FRACTION",
+    "TIE",
+    "TOLERANCE",
+    "WEIGHTING",
+    "recursive_default",
+]
 
 #: Degree of a polynomial block when none is given: r1 (input block) and r2 (output
 #: block), paper B's r1 = r2 = 3.
@@ -21,6 +35,21 @@ DEGREE = 3
 #: (as ``scipy.optimize.least_squares`` reads them; MINPACK's test for ``ftol``): tight,
 #: so that a fit ends at convergence or at its ``max_nfev``, which says so.
 TOLERANCE = 1e-10
+
+#: The simulation-error refinement of a chain of blocks (and of the feedback and
+#: Wiener-Hammerstein models): at most ``MAX_NFEV`` simulations; early stopping on the
+#: last ``TAIL_FRACTION`` of the record after ``PATIENCE`` evaluations without a gain.
+MAX_NFEV = 200
+TAIL_FRACTION = 0.2
+PATIENCE = 5
+#: ... of a linear or block state space (``STATE_SPACE_NFEV``) and of a polynomial state
+#: space, whose nonlinear refinement crawls for a few hundred evaluations before it
+#: converges (the Silverbox: 342) (``PNLSS_NFEV``).
+STATE_SPACE_NFEV = 100
+PNLSS_NFEV = 500
+
+#: Forgetting factor of recursive least squares (1: none; a schedule may be given).
+FORGETTING = 1.0
 
 #: The largest state dimension a state-space fit reads its default order among, and the
 #: subspace method's weighting (PO-MOESP; ``cva`` the alternative).
@@ -46,8 +75,8 @@ TIE = 0.02
 #: - ``key-term-rls`` (paper B): P(0) = 1e6 I and forgetting 0.98 for 200 samples then
 #:   1, paper B's settings (SPEC); 20 passes at most, stopping when the estimate settles.
 RECURSIVE: dict[str, dict[str, object]] = {
-    "rls": {"forgetting": 1.0, "initial_covariance": 1e8},
-    "hierarchical-rls": {"forgetting": 1.0, "initial_covariance": 1e8},
+    "rls": {"forgetting": FORGETTING, "initial_covariance": 1e8},
+    "hierarchical-rls": {"forgetting": FORGETTING, "initial_covariance": 1e8},
     "aw-rls": {"eps1": 1.0, "eps2": 0.1, "initial_covariance": 1e5},
     "backlash-aw-rls": {
         "eps1": 10.0,

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from blockid._kernels import rls as _k
-from blockid.defaults import RECURSIVE
+from blockid.defaults import FORGETTING, RECURSIVE
 from blockid.errors import ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.estimators.rls import RecursiveEstimator
@@ -79,7 +79,7 @@ class HierarchicalRLS(RecursiveEstimator):
         self,
         *,
         groups: int | Sequence[Sequence[int]] = 2,
-        forgetting: float | str | ForgettingSchedule = 1.0,
+        forgetting: float | str | ForgettingSchedule = FORGETTING,
         initial_covariance: float = RECURSIVE["hierarchical-rls"]["initial_covariance"],  # type: ignore[assignment]
         initial_parameters: Any = 0.0,
         max_covariance_trace: float | None = None,

@@ -24,7 +24,7 @@ import numpy as np
 
 from blockid._kernels import rls as _k
 from blockid._kernels import writable
-from blockid.defaults import RECURSIVE
+from blockid.defaults import FORGETTING, RECURSIVE
 from blockid.errors import EstimationError, ParameterError
 from blockid.estimators._base import Interval, RegressionEstimator, check_regression
 from blockid.estimators.forgetting import ForgettingSchedule
@@ -167,7 +167,7 @@ class RecursiveLeastSquares(RecursiveEstimator):
     def __init__(
         self,
         *,
-        forgetting: float | str | ForgettingSchedule = 1.0,
+        forgetting: float | str | ForgettingSchedule = FORGETTING,
         initial_covariance: float = RECURSIVE["rls"]["initial_covariance"],  # type: ignore[assignment]
         initial_parameters: Any = 0.0,
         max_covariance_trace: float | None = None,

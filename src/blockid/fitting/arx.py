@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset
-from blockid.defaults import RECURSIVE
+from blockid.defaults import FORGETTING, RECURSIVE
 from blockid.errors import EstimationError, OrderError, ParameterError
 from blockid.estimators import (
     AdaptiveWeightedRLS,
@@ -70,7 +70,7 @@ ARX_METHODS = ("batch", "rls", "aw-rls", "hierarchical-rls")
 def make_estimator(
     method: str,
     *,
-    forgetting: float | str | ForgettingSchedule = 1.0,
+    forgetting: float | str | ForgettingSchedule = FORGETTING,
     initial_covariance: float | None = None,
     eps1: float = RECURSIVE["aw-rls"]["eps1"],  # type: ignore[assignment]
     eps2: float = RECURSIVE["aw-rls"]["eps2"],  # type: ignore[assignment]
@@ -292,7 +292,7 @@ def fit_arx(
     nk: Any = 1,
     *,
     method: str = "batch",
-    forgetting: float | str | ForgettingSchedule = 1.0,
+    forgetting: float | str | ForgettingSchedule = FORGETTING,
     initial_covariance: float | None = None,
     eps1: float = RECURSIVE["aw-rls"]["eps1"],  # type: ignore[assignment]
     eps2: float = RECURSIVE["aw-rls"]["eps2"],  # type: ignore[assignment]

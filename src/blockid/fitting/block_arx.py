@@ -41,6 +41,7 @@ import numpy as np
 
 from blockid.blocks.base import StaticBlock, block_template
 from blockid.data.dataset import Dataset, Experiment
+from blockid.defaults import FORGETTING
 from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
@@ -253,7 +254,7 @@ def fit_block_arx(
     na: int = 2,
     nb: int = 2,
     nk: int = 1,
-    forgetting: Any = 1.0,
+    forgetting: Any = FORGETTING,
     initial_covariance: float | None = None,
     passes: int = 1,
 ) -> FitResult:

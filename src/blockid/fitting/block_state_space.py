@@ -32,7 +32,7 @@ from blockid._kernels import writable
 from blockid._kernels.state_space import channel_response
 from blockid.blocks.base import Block, StaticBlock, block_template, channel_specs
 from blockid.data.dataset import Dataset
-from blockid.defaults import MAX_ORDER, TOLERANCE, WEIGHTING
+from blockid.defaults import MAX_ORDER, STATE_SPACE_NFEV, TOLERANCE, WEIGHTING
 from blockid.errors import ParameterError
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space import (
@@ -323,7 +323,7 @@ def fit_block_state_space(
     horizon: int | None = None,
     weighting: str = WEIGHTING,
     feedthrough: bool = False,
-    max_nfev: int = 100,
+    max_nfev: int = STATE_SPACE_NFEV,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,

@@ -47,7 +47,7 @@ from blockid.blocks import Polynomial
 from blockid.blocks.base import LinearFamily, StaticBlock
 from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
-from blockid.defaults import TOLERANCE
+from blockid.defaults import MAX_NFEV, PATIENCE, TAIL_FRACTION, TOLERANCE
 from blockid.errors import BlockidError, EstimationError, ParameterError
 from blockid.fitting.checks import simulation_mse, stability_margin
 from blockid.fitting.initial import _lagged, _least_squares, _stabilise
@@ -241,9 +241,9 @@ def fit_feedback(
     nk: int = 1,
     r: int = 3,
     feedback_block: StaticBlock | None = None,
-    max_nfev: int = 200,
-    tail_fraction: float = 0.2,
-    patience: int = 5,
+    max_nfev: int = MAX_NFEV,
+    tail_fraction: float = TAIL_FRACTION,
+    patience: int = PATIENCE,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,

@@ -76,7 +76,7 @@ from scipy.optimize import least_squares
 
 from blockid.blocks.base import Block
 from blockid.data.dataset import Dataset
-from blockid.defaults import DEGREE, TOLERANCE
+from blockid.defaults import DEGREE, MAX_NFEV, PATIENCE, TAIL_FRACTION, TOLERANCE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.fitting.checks import check_model, margin_for, simulation_mse, stability_margin
 from blockid.fitting.initial import initial_estimate, resolve_structure
@@ -401,9 +401,9 @@ def refine(
     model: BlockModel,
     data: Dataset,
     *,
-    max_nfev: int = 200,
-    tail_fraction: float = 0.2,
-    patience: int = 5,
+    max_nfev: int = MAX_NFEV,
+    tail_fraction: float = TAIL_FRACTION,
+    patience: int = PATIENCE,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
@@ -588,9 +588,9 @@ def fit_simulation_error(
     initial: BlockModel | None = None,
     input_block: Block | None = None,
     output_block: Block | None = None,
-    max_nfev: int = 200,
-    tail_fraction: float = 0.2,
-    patience: int = 5,
+    max_nfev: int = MAX_NFEV,
+    tail_fraction: float = TAIL_FRACTION,
+    patience: int = PATIENCE,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,

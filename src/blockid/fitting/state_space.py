@@ -76,7 +76,7 @@ import numpy as np
 from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_simulate
 from blockid.data.dataset import Dataset
-from blockid.defaults import MAX_ORDER, TIE, TOLERANCE, WEIGHTING
+from blockid.defaults import MAX_ORDER, PNLSS_NFEV, STATE_SPACE_NFEV, TIE, TOLERANCE, WEIGHTING
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.checks import margin_for, stability_margin
@@ -479,7 +479,7 @@ def refine_state_space(
     *,
     initial_states: list[np.ndarray] | None = None,
     feedthrough: bool = True,
-    max_nfev: int = 100,
+    max_nfev: int = STATE_SPACE_NFEV,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
@@ -575,7 +575,7 @@ def fit_state_space(
     weighting: str = WEIGHTING,
     feedthrough: bool = False,
     refine: bool = True,
-    max_nfev: int = 100,
+    max_nfev: int = STATE_SPACE_NFEV,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
@@ -728,7 +728,7 @@ def fit_polynomial_state_space(
     margin: float = 0.25,
     start_degree: int | None = None,
     rung_nfev: int | None = None,
-    max_nfev: int = 500,
+    max_nfev: int = PNLSS_NFEV,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,

@@ -40,7 +40,7 @@ import numpy as np
 from blockid.blocks import Polynomial
 from blockid.blocks.linear import LinearBlock
 from blockid.data.dataset import Dataset
-from blockid.defaults import TOLERANCE
+from blockid.defaults import MAX_NFEV, PATIENCE, TAIL_FRACTION, TOLERANCE
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
 from blockid.fitting.checks import margin_for, simulation_mse, stability_margin
@@ -195,9 +195,9 @@ def fit_wiener_hammerstein(
     nk: int = 0,
     r2: int = 5,
     starts: int = 3,
-    max_nfev: int = 200,
-    tail_fraction: float = 0.2,
-    patience: int = 5,
+    max_nfev: int = MAX_NFEV,
+    tail_fraction: float = TAIL_FRACTION,
+    patience: int = PATIENCE,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
