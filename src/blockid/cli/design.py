@@ -25,7 +25,6 @@ __all__ = ["design"]
 #: The table's columns besides the signal's (``--name``).
 COLUMNS = ("t", "realisation", "period")
 #: Lines listed one by one in the summary; longer lists show their ends.
-_SHOWN = 12
 
 
 def _option(flag: str, metavar: str, help: str) -> Any:
@@ -254,69 +253,15 @@ def _make(kind: str, given: dict[str, Any]) -> Any:
 
 
 def _print(x: Any) -> None:
-    """The summary: what was designed, a row per realisation, the excited lines."""
+    """The summary (:meth:`~blockid.design.excitation.Excitation.summary`) as a table."""
     from rich.table import Table
 
-    fs = 1.0 / x.sampling_time
-    table = Table(
-        title=f"{KINDS[x.kind]}: {_count(x.realisations, 'realisation')} x "
-        f"{_count(x.periods, 'period')} x {x.samples} samples at {fs:g} Hz (period "
-        f"{x.period_seconds:g} s, lines {x.resolution:.4g} Hz apart)",
-        title_justify="left",
-    )
-    for column in ("realisation", "RMS", "mean", "peak", "crest factor"):
+    title, columns, rows, text = x.summary()
+    table = Table(title=title, title_justify="left")
+    for column in columns:
         table.add_column(column, justify="right")
-    start = x.crest_factor_start
-    if start is not None:
-        table.add_column("crest factor, random phases", justify="right")
-    for r in range(x.realisations):
-        mean = x.signals[r].mean()
-        mean = 0.0 if abs(mean) <= 1e-12 * x.rms[r] else mean  # a multisine's rounding
-        row = [str(r + 1), f"{x.rms[r]:.4g}", f"{mean:.3g}", f"{x.peak[r]:.4g}"]
-        row.append(f"{x.crest_factor[r]:.3f}")
-        if start is not None:
-            row.append(f"{start[r]:.3f}")
+    for row in rows:
         table.add_row(*row)
     stdout.print(table)
-    stdout.print(f"excited lines {_lines(x.lines, x.resolution)}", markup=False)
-    if x.left_out is not None:
-        stdout.print(
-            f"odd lines left out {_lines(x.left_out, x.resolution)}: odd nonlinear distortion "
-            "shows there, even distortion at the even lines",
-            markup=False,
-        )
-    settings = x.settings
-    if "clock" in settings:
-        low, high = settings["levels"]
-        held = settings["clock"]
-        text = f"levels {low:g} and {high:g}; "
-        if "polynomial" in settings:
-            text = f"feedback polynomial {settings['polynomial']}; " + text
-        if held == 1:
-            text += "one sample a bit: the power spread evenly up to the Nyquist frequency"
-        else:
-            text += (
-                f"each bit held {held} samples: power 3 dB down at "
-                f"{settings['half_power_hz']:.4g} Hz, none at multiples of {fs / held:g} Hz"
-            )
-        stdout.print(text, markup=False)
-
-
-def _lines(lines: Any, resolution: float) -> str:
-    """``(count): k1, k2, ... (f1 .. f2 Hz)``; a long list by its ends."""
-    if len(lines) == 0:
-        return "none"
-    ks = [int(k) for k in lines]
-    if len(ks) <= _SHOWN:
-        shown = ", ".join(map(str, ks))
-    else:
-        half = _SHOWN // 2
-        shown = f"{', '.join(map(str, ks[:half]))}, ..., {', '.join(map(str, ks[-half:]))}"
-    step = {b - a for a, b in zip(ks, ks[1:], strict=False)}
-    kind = ", every line" if step == {1} else ", every odd line" if step == {2} else ""
-    band = f"{ks[0] * resolution:.4g} .. {ks[-1] * resolution:.4g} Hz"
-    return f"({len(ks)}{kind}): {shown} ({band})"
-
-
-def _count(n: int, what: str) -> str:
-    return f"{n} {what}" + ("" if n == 1 else "s")
+    for line in text:
+        stdout.print(line, markup=False)

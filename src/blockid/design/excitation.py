@@ -145,6 +145,53 @@ class Excitation:
             }
         )
 
+    def summary(self) -> tuple[str, list[str], list[list[str]], list[str]]:
+        """What ``blockid design`` prints: a title, the columns and rows of a table (a
+        row per realisation: RMS, mean, peak, crest factor and, optimised, the random
+        phases' crest factor) and lines of text (the excited lines, the left-out ones,
+        a binary signal's levels and spectrum)."""
+        fs = 1.0 / self.sampling_time
+        title = (
+            f"{KINDS[self.kind]}: {_count(self.realisations, 'realisation')} x "
+            f"{_count(self.periods, 'period')} x {self.samples} samples at {fs:g} Hz (period "
+            f"{self.period_seconds:g} s, lines {self.resolution:.4g} Hz apart)"
+        )
+        columns = ["realisation", "RMS", "mean", "peak", "crest factor"]
+        start = self.crest_factor_start
+        if start is not None:
+            columns.append("crest factor, random phases")
+        rows = []
+        for r in range(self.realisations):
+            mean = self.signals[r].mean()
+            mean = 0.0 if abs(mean) <= 1e-12 * self.rms[r] else mean  # a multisine's rounding
+            row = [str(r + 1), f"{self.rms[r]:.4g}", f"{mean:.3g}", f"{self.peak[r]:.4g}",
+                   f"{self.crest_factor[r]:.3f}"]  # fmt: skip
+            if start is not None:
+                row.append(f"{start[r]:.3f}")
+            rows.append(row)
+        text = [f"excited lines {_lines(self.lines, self.resolution)}"]
+        if self.left_out is not None:
+            text.append(
+                f"odd lines left out {_lines(self.left_out, self.resolution)}: odd nonlinear "
+                "distortion shows there, even distortion at the even lines"
+            )
+        settings = self.settings
+        if "clock" in settings:
+            low, high = settings["levels"]
+            held = settings["clock"]
+            line = f"levels {low:g} and {high:g}; "
+            if "polynomial" in settings:
+                line = f"feedback polynomial {settings['polynomial']}; " + line
+            if held == 1:
+                line += "one sample a bit: the power spread evenly up to the Nyquist frequency"
+            else:
+                line += (
+                    f"each bit held {held} samples: power 3 dB down at "
+                    f"{settings['half_power_hz']:.4g} Hz, none at multiples of {fs / held:g} Hz"
+                )
+            text.append(line)
+        return title, columns, rows, text
+
     def to_dict(self) -> dict[str, Any]:
         """The design and its measured properties as a JSON-ready document."""
         lines = self.lines
@@ -179,3 +226,27 @@ class Excitation:
             for r in range(self.realisations)
         ]
         return doc
+
+
+#: Lines listed one by one at most; a longer list is shown by its ends.
+_SHOWN = 12
+
+
+def _lines(lines: Any, resolution: float) -> str:
+    """``(count): k1, k2, ... (f1 .. f2 Hz)``; a long list by its ends."""
+    if len(lines) == 0:
+        return "none"
+    ks = [int(k) for k in lines]
+    if len(ks) <= _SHOWN:
+        shown = ", ".join(map(str, ks))
+    else:
+        half = _SHOWN // 2
+        shown = f"{', '.join(map(str, ks[:half]))}, ..., {', '.join(map(str, ks[-half:]))}"
+    step = {b - a for a, b in zip(ks, ks[1:], strict=False)}
+    kind = ", every line" if step == {1} else ", every odd line" if step == {2} else ""
+    band = f"{ks[0] * resolution:.4g} .. {ks[-1] * resolution:.4g} Hz"
+    return f"({len(ks)}{kind}): {shown} ({band})"
+
+
+def _count(n: int, what: str) -> str:
+    return f"{n} {what}" + ("" if n == 1 else "s")
