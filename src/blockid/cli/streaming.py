@@ -261,7 +261,9 @@ def stream(
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
-    note = _guard_note(event.guard)
+    from blockid.workflows.stream_guard import guard_note
+
+    note = guard_note(event.guard)
     if note is not None:
         stderr.print(note, markup=False)
     if event.stopped:
@@ -279,27 +281,6 @@ def stream(
         raise EstimationError(f"no model written to {out}: {problem}")
     save(*session.saved())
     stderr.print(f"model written to {out}", markup=False)
-
-
-def _guard_note(summary: dict[str, Any] | None) -> str | None:
-    """One line on standard error when the guard kept samples from the estimator."""
-    if not summary:
-        return None
-    parts = [
-        f"{summary[key]} {what}"
-        for key, what in (
-            ("rejected", "rejected (an outlier, or a value out of range)"),
-            ("held", "held (their regressors reach back to a rejected or diverged row)"),
-            ("diverged", "diverged (the last good estimate restored)"),
-            ("outliers", "outliers learned from (--no-guard)"),
-            ("relented", "time(s) stepped aside for a change that lasted"),
-            ("restarted", "warm-up(s) started again after a glitch learned in it"),
-        )
-        if summary.get(key)
-    ]
-    if not parts:
-        return None
-    return f"guard: {', '.join(parts)}; see the lines with not_learned or error_message"
 
 
 class _Stopped(Exception):

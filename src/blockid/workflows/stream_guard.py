@@ -67,7 +67,7 @@ from typing import Any
 
 from blockid.errors import ParameterError
 
-__all__ = ["THRESHOLD", "StreamGuard", "warmup"]
+__all__ = ["THRESHOLD", "StreamGuard", "guard_note", "warmup"]
 
 #: Default threshold: a prediction error ``THRESHOLD`` times the running scale of the
 #: errors, or a value that far beyond a signal's range (in widths of the range).
@@ -378,3 +378,25 @@ _STATE = (
     "run", "learned", "good", "good_row", "candidate", "candidate_row", "since", "diverged_at",
     "outlier_at", "counts",
 )  # fmt: skip
+
+
+def guard_note(summary: dict[str, Any] | None) -> str | None:
+    """The line ``blockid stream`` prints on standard error when the guard kept samples
+    from the estimator (``summary``: the final event's ``guard`` counts); None if none."""
+    if not summary:
+        return None
+    parts = [
+        f"{summary[key]} {what}"
+        for key, what in (
+            ("rejected", "rejected (an outlier, or a value out of range)"),
+            ("held", "held (their regressors reach back to a rejected or diverged row)"),
+            ("diverged", "diverged (the last good estimate restored)"),
+            ("outliers", "outliers learned from (--no-guard)"),
+            ("relented", "time(s) stepped aside for a change that lasted"),
+            ("restarted", "warm-up(s) started again after a glitch learned in it"),
+        )
+        if summary.get(key)
+    ]
+    if not parts:
+        return None
+    return f"guard: {', '.join(parts)}; see the lines with not_learned or error_message"
