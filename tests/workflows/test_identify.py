@@ -461,7 +461,7 @@ def test_a_refit_stopped_short_of_the_cross_validated_score_is_fitted_longer():
     10 % worse than the candidate's cross-validated score is fitted again with three
     times the evaluations (Silverbox: PNLSS stopped at 150 evaluations at 0.56 mV on its
     own data against 0.22 cross-validated; 245 evaluations reach 0.22)."""
-    from blockid.workflows.identify import _refit
+    from blockid.workflows.refit import _refit
     from blockid.workflows.search_space import Candidate
 
     data = dead_zone_record()
@@ -483,7 +483,7 @@ def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stop
     ftol at its linear start), so it is refused with the numbers, whatever stopped it;
     identify then fits the next candidate."""
     from blockid.errors import EstimationError
-    from blockid.workflows.identify import _fell_short, _refit
+    from blockid.workflows.refit import _fell_short, _refit
     from blockid.workflows.search_space import Candidate
 
     data = dead_zone_record()
@@ -500,7 +500,7 @@ def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stop
 def test_when_every_refit_falls_short_the_first_is_returned_with_a_note(monkeypatch):
     """The refusal must not turn a search into an error: with the factor set so that every
     refit falls short, the best candidate's refit comes back, said so in the notes."""
-    from blockid.workflows import identify as module
+    from blockid.workflows import refit as module
 
     monkeypatch.setattr(module, "REFIT_FAILED", 1e-9)
     data = dead_zone_record(600)
@@ -651,7 +651,7 @@ def test_a_refit_worse_than_a_start_from_a_folds_model_is_replaced(monkeypatch):
     with a note and the numbers in the JSON."""
     import json
 
-    from blockid.workflows import identify as module
+    from blockid.workflows import refit as module
 
     real = module._refit
 
@@ -703,7 +703,7 @@ def test_on_emps_a_start_from_a_folds_model_finds_what_the_direct_refit_misses()
     import pandas as pd
 
     from blockid.data.folds import fold_plan
-    from blockid.workflows.identify import _final_fit, _segment_rmse, _Start
+    from blockid.workflows.refit import _final_fit, _segment_rmse, _Start
     from blockid.workflows.search_space import Candidate
 
     frame = pd.read_csv(EMPS)
@@ -728,7 +728,7 @@ def test_a_warm_start_replaces_the_direct_fit_only_when_better_by_more_than_the_
     from dataclasses import dataclass
     from types import SimpleNamespace
 
-    from blockid.workflows.identify import _final, _Started
+    from blockid.workflows.refit import _final, _Started
 
     @dataclass
     class Fit:
