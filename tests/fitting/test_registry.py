@@ -292,8 +292,8 @@ def test_an_undeclared_option_kind_is_an_internal_error_naming_it():
 _OWN_MINIMA = {
     ("fitting/backlash.py", "na"), ("fitting/backlash.py", "nb"), ("fitting/backlash.py", "nk"),
     ("fitting/key_term.py", "na"), ("fitting/key_term.py", "nb"), ("fitting/key_term.py", "nk"),
-    ("fitting/key_term.py", "r2"), ("fitting/online.py", "na"), ("fitting/online.py", "nb"),
-    ("fitting/online.py", "nk"), ("fitting/online.py", "r2"), ("fitting/initial.py", "r2"),
+    ("fitting/key_term.py", "r2"), ("fitting/online_paper.py", "na"), ("fitting/online_paper.py", "nb"),
+    ("fitting/online_paper.py", "nk"), ("fitting/online_paper.py", "r2"), ("fitting/initial.py", "r2"),
     ("blocks/polynomial.py", "degree"), ("models/state_space.py", "degree"),
     ("fitting/feedback.py", "feedback_block"), ("fitting/recursive.py", "initial_parameters"),
     # nb >= 1 of the block model on an ARX core (the inputs must enter; an ARX allows 0)
