@@ -11,7 +11,15 @@ from blockid.models import ARX, Hammerstein
 from blockid.models.block import WienerHammerstein
 from blockid.models.feedback import LinearFeedback
 from blockid.models.state_space import StateSpace
-from blockid.plotting.linear import LinearDynamics, linear_dynamics, linear_figure, pole_rows
+from blockid.plotting.linear import (
+    PZ_REACH,
+    LinearDynamics,
+    describe_dynamics,
+    linear_dynamics,
+    linear_figure,
+    oscillation,
+    pole_rows,
+)
 
 BLOCK = LinearBlock(2, 2, 3, a=[-1.5, 0.7], b=[1.0, 0.5])
 
@@ -124,3 +132,44 @@ def test_an_integrating_block_has_an_infinite_gain_and_no_gain_line():
     step = fig.axes[1]
     assert len(step.lines) == 1
     np.testing.assert_allclose(step.lines[0].get_ydata()[:4], [0.0, 0.1, 0.2, 0.3])
+
+
+def test_a_negative_real_pole_is_a_mode_at_the_nyquist_frequency():
+    """Its envelope decays with -T/ln|p|; it turns at the Nyquist frequency (period 2
+    samples), which the table and the sentence say (once an empty cell and 'slowest
+    pole |p| = 0.999')."""
+    g = LinearDynamics("g", np.array([1.0]), np.poly([-0.999, 0.5]), 0.02)
+    (nyquist, real) = [r for r in pole_rows(g) if r[0] == "pole"]
+    assert nyquist[1] == "-0.999"
+    assert nyquist[3] == f"{-0.02 / np.log(0.999):.4g} s"
+    assert nyquist[4] == "25 Hz: the Nyquist frequency, period 2 samples"
+    assert real[4] == "none"
+    text = describe_dynamics(g)
+    assert "its least damped pole p = -0.999 is a mode at the Nyquist frequency" in text
+    assert "slowest pole" not in text
+    high = abs(g.frequency_response(np.pi))
+    assert f"|G(-1)| = {high:.4g}" in text
+    near = LinearDynamics("g", np.array([1.0]), np.poly([-0.95 + 0.1j, -0.95 - 0.1j]), None)
+    (pair,) = [r for r in pole_rows(near) if r[0] == "pole"]
+    assert "near the Nyquist frequency, period 2.07 samples" in pair[4]
+    assert "least damped poles -0.95 ± 0.1j" in describe_dynamics(near)
+    assert (
+        oscillation(0.8 + 0.1j, None) == f"{np.angle(0.8 + 0.1j) / (2 * np.pi):.4g} cycles/sample"
+    )
+
+
+def test_a_far_zero_leaves_the_unit_circle_readable():
+    """A zero at -7.8 once stretched the axes to +-8.6 (the unit circle a dot): the
+    z-plane stays within +-1.5 and an arrow at the border names the zero."""
+    g = LinearDynamics("g", 0.1 * np.poly([-7.8, 0.5]), np.poly([0.9, 0.8, -0.3]), None)
+    pz = linear_figure([g]).axes[0]
+    assert pz.get_xlim() == (-PZ_REACH, PZ_REACH) and pz.get_ylim() == (-PZ_REACH, PZ_REACH)
+    marks = [a for a in pz.texts if "-7.8" in a.get_text()]
+    assert [m.get_text() for m in marks] == ["zero -7.8"]
+    (arrow,) = [a for a in pz.texts if a.arrow_patch is not None and not a.get_text()]
+    x, y = arrow.xy
+    assert x == pytest.approx(-0.92 * PZ_REACH) and y == pytest.approx(0.0)
+    near = LinearDynamics("g", np.array([1.0]), np.poly([0.5, 0.2]), None)
+    pz = linear_figure([near]).axes[0]
+    assert pz.get_xlim() == pytest.approx((-1.1, 1.1))  # all inside: around the circle
+    assert not pz.texts

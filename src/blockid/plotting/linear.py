@@ -24,10 +24,27 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LinearDynamics", "linear_dynamics", "linear_figure", "pole_rows"]
+__all__ = [
+    "NEAR_NYQUIST",
+    "PZ_REACH",
+    "LinearDynamics",
+    "at_nyquist",
+    "describe_dynamics",
+    "linear_dynamics",
+    "linear_figure",
+    "oscillation",
+    "pole_rows",
+    "time_constant",
+]
 
 #: Frequencies of the Bode plot: this many, log-spaced from PI * 1e-3 to PI rad/sample.
 N_FREQUENCIES = 400
+#: A complex pole whose angle is within this of pi (a period under 2.22 samples) is named
+#: a mode near the Nyquist frequency; a negative real pole is one at it.
+NEAR_NYQUIST = 0.1 * np.pi
+#: The pole-zero plot reaches this far from 0 at most (1.1 times the largest pole or
+#: zero, at least 1.1): a zero at -7.8 would otherwise shrink the unit circle to a dot.
+PZ_REACH = 1.5
 
 
 @dataclass(frozen=True)
@@ -181,11 +198,55 @@ def _complex(z: complex) -> str:
     return f"{z.real:.5g} {'+' if z.imag > 0 else '-'} {abs(z.imag):.5g}j"
 
 
+def time_constant(p: complex, dt: float | None) -> float:
+    """``-T / ln|p|``: the time in which the envelope ``|p|^k`` of the pole's mode falls
+    by the factor e (in samples without ``T``); infinite on or outside the unit circle.
+
+    >>> round(time_constant(-0.999, None), 1), round(time_constant(0.5j, 0.1), 4)
+    (999.5, 0.1443)
+    """
+    r = abs(p)
+    return float(-(dt or 1.0) / np.log(r)) if 0.0 < r < 1.0 else float("inf")
+
+
+def oscillation(p: complex, dt: float | None) -> str:
+    """How the mode ``p^k`` of a pole turns, in words (module docstring: ``angle(p) / (2
+    pi T)`` hertz, or cycles/sample without ``T``): ``""`` for a positive real pole (it
+    does not oscillate), the Nyquist frequency for a negative real pole (its sign
+    alternates every sample: a period of 2 samples), and ``near the Nyquist frequency``
+    for a complex pole within :data:`NEAR_NYQUIST` of ``z = -1``'s angle.
+
+    >>> oscillation(-0.999, None)
+    '0.5 cycles/sample: the Nyquist frequency, period 2 samples'
+    >>> oscillation(0.9j, 0.1), oscillation(0.5, 0.1)
+    ('2.5 Hz', '')
+    """
+    unit = "Hz" if dt else "cycles/sample"
+    angle = abs(float(np.angle(p)))
+    cycles = angle / (2 * np.pi) / (dt or 1.0)
+    if _is_real(p):
+        if p.real >= 0:
+            return ""
+        return f"{0.5 / (dt or 1.0):.4g} {unit}: the Nyquist frequency, period 2 samples"
+    if angle >= np.pi - NEAR_NYQUIST:
+        period = 2 * np.pi / angle
+        return f"{cycles:.4g} {unit}: near the Nyquist frequency, period {period:.3g} samples"
+    return f"{cycles:.4g} {unit}"
+
+
+def at_nyquist(p: complex) -> bool:
+    """Whether the mode of ``p`` oscillates at or near the Nyquist frequency (a negative
+    real pole, or a complex one within :data:`NEAR_NYQUIST` of ``z = -1``'s angle)."""
+    return abs(p) > 1e-12 and abs(float(np.angle(p))) >= np.pi - NEAR_NYQUIST
+
+
 def pole_rows(system: LinearDynamics) -> list[list[Any]]:
     """Rows ``[what, value, |z|, time constant, oscillation]`` for a table of the poles
-    and zeros: each conjugate pair once (``a ± bj``), time constant ``-T / ln|p|`` and
-    oscillation frequency ``angle(p) / (2 pi T)`` in seconds and hertz when the sampling
-    time ``T`` is known, in samples and cycles/sample otherwise."""
+    and zeros: each conjugate pair once (``a ± bj``); for a pole the time constant of
+    its envelope (:func:`time_constant`) and how it oscillates (:func:`oscillation`: a
+    negative real pole at the Nyquist frequency), in seconds and hertz when the sampling
+    time ``T`` is known, in samples and cycles/sample otherwise; for a complex zero the
+    frequency its angle stands for."""
     ts = system.dt
     unit_t, unit_f = ("s", "Hz") if ts else ("samples", "cycles/sample")
     rows: list[list[Any]] = []
@@ -196,20 +257,77 @@ def pole_rows(system: LinearDynamics) -> list[list[Any]]:
             if z.imag < -1e-12 or r < 1e-12:
                 continue  # its conjugate is listed; those at 0 are counted below
             value = _complex(z) if abs(z.imag) < 1e-12 else _complex(z).replace("+", "±")
-            tau = ""
+            tau, osc = "", ""
             if what == "pole":
                 tau = (
-                    f"{-(ts or 1.0) / np.log(r):.4g} {unit_t}"
+                    f"{time_constant(z, ts):.4g} {unit_t}"
                     if r < 1.0
                     else "none (on or outside the unit circle)"
                 )
-            cycles = abs(np.angle(z)) / (2 * np.pi) / (ts or 1.0)
-            osc = f"{cycles:.4g} {unit_f}" if abs(z.imag) > 1e-12 else ""
+                osc = oscillation(z, ts) or "none"
+            elif abs(z.imag) > 1e-12:
+                osc = f"{abs(np.angle(z)) / (2 * np.pi) / (ts or 1.0):.4g} {unit_f}"
             rows.append([what, value, float(r), tau, osc])
         if at_zero:
             note = "(delay)" if what == "pole" else ""
             rows.append([what if at_zero == 1 else f"{at_zero} {what}s", "0", 0.0, note, ""])
     return rows
+
+
+def describe_dynamics(system: LinearDynamics) -> str:
+    """One sentence: static gain, delay, stability and the least damped mode (its pole,
+    the time constant of its envelope, how it oscillates: a negative real pole is named a
+    mode at the Nyquist frequency, not a slow pole), and, for a mode at or near the
+    Nyquist frequency that decays slowly (``|p| >= 0.9``), the gain there against the
+    static gain.
+
+    >>> g = LinearDynamics("g", np.array([1.0]), np.array([1.0, 0.999]), None)
+    >>> describe_dynamics(g)  # doctest: +NORMALIZE_WHITESPACE
+    'g: static gain 0.5003, delay 1 sample, stable; its least damped pole p = -0.999 is
+    a mode at the Nyquist frequency: its sign alternates every sample (period 2
+    samples), its envelope decays with time constant 999.5 samples; gain at the Nyquist
+    frequency |G(-1)| = 1000 (60 dB), against the static gain 0.5003 (-6.02 dB).'
+    """
+    head = system.name
+    text = f"{head}: static gain {system.static_gain():.4g}, delay {system.describe_delay()}"
+    p = system.poles()
+    moving = p[np.abs(p) > 1e-12]
+    if not moving.size:
+        return text + "."
+    slow = complex(moving[np.argmax(np.abs(moving))])
+    slow = slow.conjugate() if slow.imag < 0 else slow  # a pair is written a ± bj
+    r = float(abs(slow))
+    if r >= 1.0:
+        return text + f", NOT stable: a pole at |p| = {r:.4g}."
+    unit = "s" if system.dt else "samples"
+    tau = f"time constant {time_constant(slow, system.dt):.4g} {unit}"
+    turns = oscillation(slow, system.dt)
+    if _is_real(slow) and slow.real < 0:
+        text += (
+            f", stable; its least damped pole p = {slow.real:.4g} is a mode at the Nyquist "
+            "frequency: its sign alternates every sample (period 2 samples), its envelope "
+            f"decays with {tau}"
+        )
+    elif _is_real(slow):
+        text += f", stable, slowest pole p = {slow.real:.4g} ({tau})"
+    else:
+        pair = _complex(slow).replace("+", "±")
+        kind = "least damped" if at_nyquist(slow) else "slowest"
+        text += f", stable, {kind} poles {pair}, |p| = {r:.4g} ({tau}), oscillating at {turns}"
+    if at_nyquist(slow) and r >= 0.9:
+        high = abs(complex(system.frequency_response(np.pi)))
+        gain = system.static_gain()
+        with np.errstate(divide="ignore"):
+            text += (
+                f"; gain at the Nyquist frequency |G(-1)| = {high:.4g} "
+                f"({20 * np.log10(high):.3g} dB), against the static gain {gain:.4g} "
+                f"({20 * np.log10(abs(gain)):.3g} dB)"
+            )
+    return text + "."
+
+
+def _is_real(p: complex) -> bool:
+    return abs(p.imag) < 1e-12 * max(abs(p), 1.0)
 
 
 def _time_axis(system: LinearDynamics, n: int) -> tuple[np.ndarray, str]:
@@ -223,8 +341,43 @@ def _frequency_axis(system: LinearDynamics, w: np.ndarray) -> tuple[np.ndarray, 
     return w, "frequency [rad/sample]"
 
 
+def _mark_beyond(ax: Any, roots: dict[str, np.ndarray], reach: float) -> None:
+    """An arrow at the border of a z-plane of half-width ``reach`` towards every pole or
+    zero beyond it, labelled with its value (those in one direction share an arrow)."""
+    arrows: dict[tuple[float, float], tuple[complex, list[str]]] = {}
+    for what, values in roots.items():
+        for v in values:
+            far = max(abs(v.real), abs(v.imag))
+            if far <= reach:
+                continue
+            tip = complex(v) * (0.92 * reach / far)
+            key = (round(tip.real, 1), round(tip.imag, 1))  # one arrow per direction
+            arrows.setdefault(key, (tip, []))[1].append(f"{what} {_complex(complex(v))}")
+    for tip, labels in arrows.values():
+        x, y = tip.real, tip.imag
+        ax.annotate(
+            "",
+            (x, y),
+            (0.84 * x, 0.84 * y),
+            arrowprops={"arrowstyle": "->", "color": "0.3", "lw": 0.9},
+        )
+        beside = abs(x) >= abs(y)  # on the left or right border: the text above the arrow
+        ax.annotate(
+            "\n".join(dict.fromkeys(labels)),
+            (x, y),
+            (0, 5) if beside else (5, 0),
+            textcoords="offset points",
+            ha=("left" if x < 0 else "right") if beside else "left",
+            va="bottom" if beside or y < 0 else "top",
+            fontsize=7,
+            color="C0" if labels[0].startswith("zero") else "C3",
+        )
+
+
 def draw_pole_zero(ax: Any, system: LinearDynamics) -> None:
-    """The z-plane: unit circle, poles (x) and zeros (o)."""
+    """The z-plane: unit circle, poles (x) and zeros (o), at most :data:`PZ_REACH` out
+    (so the unit circle stays readable); a pole or zero beyond is marked by an arrow at
+    the border, labelled with its value."""
     theta = np.linspace(0.0, 2 * np.pi, 361)
     ax.plot(np.cos(theta), np.sin(theta), color="0.6", lw=0.8, label="unit circle")
     ax.axhline(0.0, color="0.85", lw=0.6)
@@ -244,7 +397,8 @@ def draw_pole_zero(ax: Any, system: LinearDynamics) -> None:
             fontsize=7,
             color="C3",
         )
-    reach = max(1.1, 1.1 * float(np.max(np.abs(np.r_[p, z, 0.0]))))
+    reach = min(PZ_REACH, max(1.1, 1.1 * float(np.max(np.abs(np.r_[p, z, 0.0])))))
+    _mark_beyond(ax, {"pole": p, "zero": z}, reach)
     ax.set_xlim(-reach, reach)
     ax.set_ylim(-reach, reach)
     ax.set_aspect("equal")

@@ -19,7 +19,7 @@ import numpy as np
 
 from blockid.plotting.blocks import block_name
 from blockid.plotting.html import encode_png, image, table
-from blockid.plotting.linear import linear_dynamics
+from blockid.plotting.linear import describe_dynamics, linear_dynamics
 from blockid.plotting.parameters import parameter_table
 
 __all__ = [
@@ -81,24 +81,11 @@ def _signals(model: Any) -> str:
 
 
 def linear_summary(model: Any) -> list[str]:
-    """One sentence per linear transfer function: static gain, delay, stability and
-    the slowest pole with its time constant."""
-    out = []
-    for g in linear_dynamics(model):
-        p = g.poles()
-        moving = p[np.abs(p) > 1e-12]
-        text = f"{g.name}: static gain {g.static_gain():.4g}, delay {g.describe_delay()}"
-        if moving.size:
-            slow = moving[np.argmax(np.abs(moving))]
-            r = float(abs(slow))
-            if r < 1.0:
-                tau = -(g.dt or 1.0) / np.log(r)
-                unit = "s" if g.dt else "samples"
-                text += f", stable, slowest pole |p| = {r:.4g} (time constant {tau:.4g} {unit})"
-            else:
-                text += f", NOT stable: a pole at |p| = {r:.4g}"
-        out.append(text + ".")
-    return out
+    """One sentence per linear transfer function
+    (:func:`~blockid.plotting.linear.describe_dynamics`): static gain, delay, stability
+    and the least damped mode, a negative real pole named a mode at the Nyquist
+    frequency."""
+    return [describe_dynamics(g) for g in linear_dynamics(model)]
 
 
 def _parameters_html(model: Any, fit: Any) -> str:

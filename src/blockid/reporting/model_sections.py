@@ -72,7 +72,10 @@ def linear_section(entries: list[Entry]) -> str:
             "model (input side first; it acts on the signal between the blocks, relative "
             "to the operating point), an ARX model with one input and one output, the "
             "forward path of a feedback model, or the linear part of a state-space model. "
-            "Poles at z = 0 are part of the delay; a pole close to a zero nearly cancels."
+            "Poles at z = 0 are part of the delay; a pole close to a zero nearly cancels. "
+            "A pole's time constant is that of its envelope |p|^k; a negative real pole "
+            "alternates its sign every sample: a mode at the Nyquist frequency (period 2 "
+            "samples), named so."
         )
     ]
     shown = 0
