@@ -57,6 +57,7 @@ _WHERE = {
     "HammersteinEstimator": "blockid.fitting.estimator",
     "HammersteinWienerEstimator": "blockid.fitting.estimator",
     "WienerEstimator": "blockid.fitting.estimator",
+    "best_linear_approximation": "blockid.evaluation",
     "evaluate": "blockid.evaluation",
     "identify": "blockid.workflows.identify",
     "false_nearest_neighbours": "blockid.fitting.orders",

@@ -48,7 +48,7 @@ def test_the_zoom_appears_only_on_long_records():
     output = _output(40_000)
     fig = rf.validation_figure(output, 1000)
     (zoom,) = _zooms(fig)
-    start, stop = rf.zoom_window(output.data.experiments[0].y, output.skip)
+    start, stop = rf.zoom_window(output.data.experiments[0].y, output.skip, output.outputs[0])
     assert 200 <= stop - start <= 600
     measured = next(line for line in zoom.lines if line.get_label() == "measured")
     np.testing.assert_array_equal(measured.get_ydata(), output.data.experiments[0].y[start:stop, 0])
@@ -69,6 +69,49 @@ def test_the_zoom_goes_where_the_output_varies_most():
     start, stop = rf.zoom_window(y)
     assert stop - start == 200  # four periods of 50 samples
     assert 24_700 <= start and stop <= 25_300
+
+
+def test_the_zoom_goes_where_the_model_errs_most_not_to_the_end():
+    """The output varies most at the end of the record, the model errs most in its
+    middle: the zoom shows the error (it once went to the end, a sliver where the model
+    did well)."""
+    t = np.arange(40_000)
+    y = np.sin(2 * np.pi * t / 100) * (1.0 + 4.0 * (t > 39_000))
+    y_hat = y.copy()
+    y_hat[20_000:20_100] += 0.5  # the model's one bad stretch
+    start, stop = rf.zoom_window(y, 0, y_hat)
+    assert stop - start == 400  # four periods of 100 samples
+    assert start <= 20_000 and 20_100 <= stop
+    assert rf.zoom_window(y)[1] > 39_000  # without the model: where the output varies most
+
+
+def _drawn(ax, label):
+    """The artists of ``ax`` drawn with ``label``'s zorder (an envelope's second edge
+    and its last samples are unlabelled)."""
+    artists = list(ax.lines) + list(ax.collections)
+    first = next(a for a in artists if a.get_label() == label)
+    return [a for a in artists if a.get_zorder() == first.get_zorder()]
+
+
+@pytest.mark.parametrize("n", [2000, 40_000])
+def test_the_measured_trace_is_drawn_over_the_model_and_stays_visible(n):
+    """Measured output thin and dark above the model's wider, lighter trace (in a long
+    record its envelope by its two edges, not a fill that would hide or be hidden)."""
+    output = _output(n)
+    ax = rf.validation_figure(output, 0).axes[0]
+    model = _drawn(ax, "free-run simulation")
+    measured = _drawn(ax, "measured")
+    assert min(a.get_zorder() for a in measured) > max(a.get_zorder() for a in model)
+    assert all(type(a).__name__ == "Line2D" for a in measured)  # lines, never a fill
+    if n <= rf.MAX_POINTS:
+        assert [type(a).__name__ for a in model] == ["Line2D"]
+        assert model[0].get_linewidth() > measured[0].get_linewidth()
+        np.testing.assert_array_equal(measured[0].get_ydata(), output.data.experiments[0].y[:, 0])
+    else:
+        lo, hi = measured[0].get_ydata(), measured[1].get_ydata()  # the envelope's edges
+        assert lo.size == hi.size > 1000 and np.all(lo <= hi)
+        assert any(type(a).__name__ == "FillBetweenPolyCollection" or "Poly" in type(a).__name__
+                   for a in model)  # the model's envelope filled, under the edges  # fmt: skip
 
 
 def test_the_static_curve_shows_its_deviation_from_the_best_line():

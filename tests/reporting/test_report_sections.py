@@ -14,6 +14,7 @@ from blockid.data import Dataset
 from blockid.evaluation import evaluate
 from blockid.fitting import fit_model
 from blockid.plotting.linear import linear_dynamics, pole_rows
+from blockid.plotting.report_figures import zoom_window
 from blockid.reporting import build_report
 from blockid.workflows.identify import Candidate, IdentifyResult, Score
 from reporting.page import Report
@@ -102,6 +103,11 @@ def test_the_zoom_appears_only_on_long_records(compared):
     start, stop = int(found.group(1)), int(found.group(2))
     assert 4000 <= start < stop < n and 200 <= stop - start + 1 <= 600
     assert float(found.group(3)) == pytest.approx(start * 0.01)
+    # the window where the model errs most, the caption says so
+    sim = result.models[0].simulation
+    window = zoom_window(sim.data.experiments[0].y, sim.skip, sim.outputs[0])
+    assert (start, stop + 1) == (4000 + window[0], 4000 + window[1])
+    assert "where the model errs most" in caption
 
 
 # ------------------------------------------------------------------ identify

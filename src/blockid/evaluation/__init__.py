@@ -1,5 +1,9 @@
-"""Validation of identified models: error metrics, simulation and prediction on data."""
+"""Validation of identified models: error metrics, simulation and prediction on data;
+and the plant's best linear approximation measured from data."""
 
+from blockid.evaluation.bla import best_linear_approximation, robust_bla
+from blockid.evaluation.bla_result import BestLinearApproximation
+from blockid.evaluation.frf import welch_bla
 from blockid.evaluation.horizon import k_step_prediction
 from blockid.evaluation.metrics import (
     METRICS,
@@ -10,10 +14,16 @@ from blockid.evaluation.metrics import (
     mse,
     rmse,
 )
+from blockid.evaluation.periods import find_period
 from blockid.evaluation.residuals import ResidualAnalysis, residual_analysis
 from blockid.evaluation.validate import MODES, ModelOutput, evaluate
 
 __all__ = [
+    "BestLinearApproximation",
+    "best_linear_approximation",
+    "find_period",
+    "robust_bla",
+    "welch_bla",
     "MODES",
     "ModelOutput",
     "evaluate",

@@ -77,12 +77,22 @@ def _legend_outside(fig: Any, axes: Sequence[Any], ncol: int = 6) -> None:
         )
 
 
-def _line(ax: Any, t: np.ndarray, x: np.ndarray, envelope_alpha: float = 0.9, **style: Any) -> None:
-    """``x`` against ``t``; beyond MAX_POINTS samples its min/max envelope per bin (drawn
-    with ``envelope_alpha``, so that an envelope drawn over another leaves it visible)."""
+def _line(
+    ax: Any,
+    t: np.ndarray,
+    x: np.ndarray,
+    envelope_alpha: float = 0.9,
+    edges: bool = False,
+    lw: float = 0.9,
+    **style: Any,
+) -> None:
+    """``x`` against ``t``; beyond MAX_POINTS samples its min/max envelope per bin,
+    filled (with ``envelope_alpha``, so that an envelope drawn over another leaves it
+    visible) or, with ``edges``, drawn as its two edges only (so a filled envelope under
+    it shows through)."""
     n = x.size
     if n <= MAX_POINTS:
-        ax.plot(t, x, lw=0.9, **style)
+        ax.plot(t, x, lw=lw, **style)
         return
     width = int(np.ceil(n / (MAX_POINTS // 2)))
     m = n // width * width
@@ -92,9 +102,14 @@ def _line(ax: Any, t: np.ndarray, x: np.ndarray, envelope_alpha: float = 0.9, **
         hi = np.nanmax(x[:m].reshape(-1, width), axis=1)
     tc = t[:m].reshape(-1, width).mean(axis=1)
     label = style.pop("label", None)
-    ax.fill_between(tc, lo, hi, lw=0.6, alpha=envelope_alpha, label=label, **style)
+    if edges:
+        ax.plot(tc, lo, lw=min(lw, 0.7), label=label, **style)
+        ax.plot(tc, hi, lw=min(lw, 0.7), **style)
+    else:
+        fill = {k: v for k, v in style.items() if k != "alpha"}  # the envelope's own alpha
+        ax.fill_between(tc, lo, hi, lw=0.6, alpha=envelope_alpha, label=label, **fill)
     if m < n:
-        ax.plot(t[m:], x[m:], lw=0.9, **style)
+        ax.plot(t[m:], x[m:], lw=lw, **style)
 
 
 def _time(ts: float | None, first: int, n: int) -> np.ndarray:
@@ -199,18 +214,25 @@ def search_figure(
 
 
 # ----------------------------------------------------------------------------- outputs
-def zoom_window(y: np.ndarray, skip: int = 0) -> tuple[int, int] | None:
+def zoom_window(
+    y: np.ndarray, skip: int = 0, y_hat: np.ndarray | None = None
+) -> tuple[int, int] | None:
     """The samples ``(start, stop)`` of a record's zoom, or None for a record short
     enough to be read whole (at most :data:`MAX_POINTS` samples).
 
     The window spans four periods of the measured output's dominant frequency (the
-    peak of its periodogram), 200 to 600 samples, where the output varies most (so it
-    shows the model at work rather than at rest). ``y`` is (N,) or (N, ny); the first
-    ``skip`` samples (initial conditions) are left out.
+    peak of its periodogram), 200 to 600 samples: few enough that measured and model
+    output can be told apart at the figure's width. With the model's output ``y_hat``
+    it lies where the model errs most (the largest sum of squared errors over the
+    window, each output's error divided by that output's standard deviation), wherever
+    that is in the record; without it, where the measured output varies most. ``y``
+    and ``y_hat`` are (N,) or (N, ny); the first ``skip`` samples (initial conditions)
+    are left out.
 
     >>> t = np.arange(40_000)
-    >>> start, stop = zoom_window(np.sin(2 * np.pi * t / 100) * (t > 30_000))
-    >>> stop - start, start >= 30_000 - 400
+    >>> y = np.sin(2 * np.pi * t / 100)
+    >>> start, stop = zoom_window(y, 0, y + (np.abs(t - 12_000) < 50))
+    >>> stop - start, start <= 11_950 and 12_050 <= stop
     (400, True)
     >>> zoom_window(np.zeros(1000)) is None
     True
@@ -219,13 +241,16 @@ def zoom_window(y: np.ndarray, skip: int = 0) -> tuple[int, int] | None:
     n = y.shape[0]
     if n <= MAX_POINTS:
         return None
-    part = y[skip:] - np.nanmean(y[skip:], axis=0)
-    part = np.nan_to_num(part / np.maximum(np.nanstd(part, axis=0), 1e-300))
+    scale = np.maximum(np.nanstd(y[skip:], axis=0), 1e-300)
+    part = np.nan_to_num((y[skip:] - np.nanmean(y[skip:], axis=0)) / scale)
     power = np.sum(np.abs(np.fft.rfft(part, axis=0)) ** 2, axis=1)
     freqs = np.fft.rfftfreq(part.shape[0])
     peak = int(np.argmax(power[1:])) + 1 if power.size > 1 else 0
     length = int(np.clip(4.0 / freqs[peak], 200, 600)) if peak else 400
     length = min(length, part.shape[0])
+    if y_hat is not None:
+        error = (y - np.asarray(y_hat, float).reshape(y.shape))[skip:] / scale
+        part = np.clip(np.nan_to_num(error, nan=0.0, posinf=1e6, neginf=-1e6), -1e6, 1e6)
     energy = np.concatenate([[0.0], np.cumsum(np.sum(part**2, axis=1))])
     windowed = energy[length:] - energy[:-length]
     start = int(np.argmax(windowed))
@@ -250,7 +275,10 @@ def validation_figure(
     data = output.data
     mode = "free-run simulation" if output.mode == "simulation" else "one-step prediction"
     exps = data.experiments
-    windows = [zoom_window(exp.y, output.skip) for exp in exps]
+    windows = [
+        zoom_window(exp.y, output.skip, y_hat)
+        for exp, y_hat in zip(exps, output.outputs, strict=True)
+    ]
     per = 3 if any(w is not None for w in windows) else 2
     rows = per * len(data.outputs)
     fig = _new_figure(9.0, 0.7 + 1.8 * rows)
@@ -263,8 +291,12 @@ def validation_figure(
         for j, name in enumerate(data.outputs):
             ax, ax_e = axes[per * j, c], axes[per * j + 1, c]
             ax_e.sharex(ax)
-            _line(ax, t, exp.y[:, j], color="0.25", label="measured")
-            _line(ax, t, y_hat[:, j], 0.6, color="C1", label=mode)
+            # the model under the measurement, wider and lighter, the measurement on top,
+            # thin and dark (its envelope by its edges): neither hides the other
+            _line(ax, t, y_hat[:, j], 0.55, lw=1.6, color="C1", alpha=0.85, label=mode,
+                  zorder=2)  # fmt: skip
+            _line(ax, t, exp.y[:, j], edges=True, lw=0.7, color="0.1", label="measured",
+                  zorder=3)  # fmt: skip
             if band is not None:
                 ax.fill_between(
                     t, band[0][:, j], band[1][:, j], color="C1", alpha=0.25, lw=0,
@@ -320,7 +352,9 @@ def _zoom(
         ax.fill_between(t[a:b], band[0][a:b, j], band[1][a:b, j], color="C1", alpha=0.25, lw=0)
     ax.plot(t[a:b], curves[1][a:b], color="C1", lw=1.6, alpha=0.9)
     ax.plot(t[a:b], curves[0][a:b], color="0.15", lw=0.8, label="measured")
-    full.axvspan(t[a], t[b - 1], color="0.5", alpha=0.25, lw=0, label="zoomed window")
+    full.axvspan(t[a], t[b - 1], color="0.5", alpha=0.3, lw=0, label="zoomed window")
+    for edge in (t[a], t[b - 1]):  # a narrow window stays visible in a long record
+        full.axvline(edge, color="0.35", lw=0.7, zorder=1)
     ax.set_title(f"zoom on {zoom_title(window, *where)}", fontsize=9)
     ax.set_ylabel(f"{full.get_ylabel()}\n(zoom)", fontsize=8)
     ax.set_xlabel(_time_label(where[1]), fontsize=8)

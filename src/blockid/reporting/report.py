@@ -258,16 +258,18 @@ def _zoom_text(e: Entry, first: int) -> str:
     shown = [
         zoom_title(w, first, output.data.sampling_time)
         + (f" in experiment {x.name!r}" if len(exps) > 1 else "")
-        for x in exps
-        if (w := figures.zoom_window(x.y, output.skip)) is not None
+        for x, y_hat in zip(exps, output.outputs, strict=True)
+        if (w := figures.zoom_window(x.y, output.skip, y_hat)) is not None
     ]
     if not shown:
         return ""
     return (
         f" The record is longer than {figures.MAX_POINTS} samples, so the full view draws "
-        "each pixel column's minimum to maximum, and the third panel zooms on "
-        f"{', '.join(shown)} (shaded grey above): about four periods of the output's "
-        "dominant frequency, where it varies most, so that measured (dark) and simulated "
+        "each pixel column's minimum to maximum (the measurement by its edges, over the "
+        f"model's filled band), and the third panel zooms on {', '.join(shown)} (shaded "
+        "grey above, between two lines): four periods of the output's dominant "
+        "frequency, 200 to 600 samples, where the model errs most (the largest sum of "
+        "squared errors over such a window), so that measured (dark) and simulated "
         "output can be told apart."
     )
 
@@ -287,8 +289,9 @@ def _outputs(entries: list[Entry], ranges: dict[str, str | None], draws: dict[in
             figure(
                 encode_png(fig),
                 f"{e.label}: measured and simulated output",
-                f"{e.label}: free-run simulation on the {where} — measured output (grey) "
-                f"and model output (orange) above, residual (measured minus simulated) "
+                f"{e.label}: free-run simulation on the {where} — measured output (dark, "
+                "thin, on top) and model output (orange, wide, under it) above, residual "
+                f"(measured minus simulated) "
                 f"below; all {e.simulation.data.n_samples} samples drawn, the first "
                 f"{e.simulation.skip} of each experiment are initial conditions copied from "
                 f"the measurement.{band}{_zoom_text(e, first)}",
