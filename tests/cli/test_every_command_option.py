@@ -35,10 +35,12 @@ from typer.testing import CliRunner
 import blockid.data
 import blockid.design
 import blockid.evaluation
+import blockid.evaluation.bla
 import blockid.evaluation.residuals
 import blockid.fitting
 import blockid.fitting.network
 import blockid.fitting.orders
+import blockid.plotting.bla
 import blockid.plotting.figures
 import blockid.plotting.residuals
 import blockid.plotting.runs
@@ -178,6 +180,8 @@ def calls(monkeypatch) -> Calls:
     spy(blockid.workflows, "compare_structures")
     spy(blockid.evaluation, "evaluate")
     spy(blockid.evaluation.residuals, "residual_analysis")
+    spy(blockid.evaluation.bla, "best_linear_approximation")
+    spy(blockid.plotting.bla, "bla_figure", lambda b, where, **k: Path(where) / "bla.png")
     spy(blockid.plotting.residuals, "residual_figure",
         lambda a, where, **k: Path(where) / "residuals.png")  # fmt: skip
     spy(blockid.fitting.orders, "false_nearest_neighbours")
@@ -623,6 +627,140 @@ def _residuals_command() -> dict[str, Callable[..., None]]:
 
     return {
         "rng": range_, "mode": mode, "lags": lags, "confidence": confidence, "plot": plot,
+        "ts": ts, "time_column": time_column, "experiment_column": experiment_column,
+        "force": force, "json_out": json_out,
+    }  # fmt: skip
+
+
+# ----------------------------------------------------------------------------- bla
+def _periodic_csv(f: Files) -> Path:
+    """3 realisations of 3 periods of 64 samples of a multisine through the test plant:
+    columns clock (TIME, 0.5 s a sample), r (the realisation), u, y."""
+    path = f.path("periodic.csv")
+    if not path.exists():
+        x = blockid.design.multisine(64, sampling_time=DT, f_max=0.6, periods=3,
+                                     realisations=3, seed=1)  # fmt: skip
+        frame = x.to_frame("u").rename(columns={"realisation": "r", "t": TIME})
+        rng = np.random.default_rng(0)
+        frame["y"] = np.concatenate(
+            [_plant().simulate(u)[:, 0] + 0.01 * rng.standard_normal(u.size) for u in x.signals]
+        )
+        frame.to_csv(path, index=False)
+    return path
+
+
+def _bla_run(f: Files, *args: Any, code: int = 0) -> Any:
+    """``bla`` on the periodic record, each realisation an experiment."""
+    return _run("bla", _periodic_csv(f), "-u", "u", "-y", "y", "--experiment-column", "r",
+                *args, code=code)  # fmt: skip
+
+
+def _bla_command() -> dict[str, Callable[..., None]]:
+    """The checks of ``bla``."""
+
+    def measured(calls: Calls) -> tuple[Any, dict[str, Any]]:
+        (data,), kwargs = calls.one("best_linear_approximation")
+        return data, kwargs
+
+    def inputs(f, calls):
+        doc = _json(_run("bla", f.csv, "-u", "u2", "-y", "y", "--json"))
+        assert measured(calls)[0].inputs == ("u2",) and doc["input"] == "u2"
+        r = _run("bla", f.csv, "-u", "u", "-u", "u2", "-y", "y", code=2)
+        assert "from one input to one output; got 2 input(s)" in r.stderr
+
+    def outputs(f, calls):
+        doc = _json(_run("bla", f.csv, "-u", "u", "-y", "y2", "--json"))
+        assert measured(calls)[0].outputs == ("y2",) and doc["output"] == "y2"
+
+    def period(f, calls):
+        doc = _json(_bla_run(f, "--period", "64", "--json"))
+        assert measured(calls)[1]["period"] == 64 and doc["samples"] == 64
+        r = _bla_run(f, "--period", "50", code=2)
+        assert "not a whole number of periods of 50" in r.stderr and "(option --period)" in r.stderr
+
+    def periods(f, calls):
+        doc = _json(_bla_run(f, "--periods", "3", "--json"))
+        assert measured(calls)[1]["periods"] == 3 and doc["periods"] == 3
+
+    def transient_periods(f, calls):
+        doc = _json(_bla_run(f, "--transient-periods", "1", "--json"))
+        assert measured(calls)[1]["transient_periods"] == 1
+        assert doc["periods"] == 2 and doc["transient_periods"] == 1
+        r = _bla_run(f, "--transient-periods", "3", code=2)
+        assert "would drop every period" in r.stderr and "--transient-periods" in r.stderr
+
+    def method(f, calls):
+        doc = _json(_bla_run(f, "--method", "welch", "--json"))
+        assert measured(calls)[1]["method"] == "welch" and doc["method"] == "welch"
+        assert "--method 'fast'" in _bla_run(f, "--method", "fast", code=2).stderr
+
+    def segment(f, calls):
+        doc = _json(_run("bla", f.csv, "-u", "u", "-y", "y", "--segment", "32", "--json"))
+        assert measured(calls)[1]["segment"] == 32 and doc["samples"] == 32
+
+    def bands(f, calls):
+        doc = _json(_bla_run(f, "--bands", "0:0.2,0.2:0.6", "--json"))
+        assert measured(calls)[1]["bands"] == [(0.0, 0.2), (0.2, 0.6)]
+        assert [b["high_hz"] for b in doc["bands"]] == [0.2, 0.6]
+        assert len(_json(_bla_run(f, "--bands", "2", "--json"))["bands"]) == 2
+        assert "(option --bands)" in _bla_run(f, "--bands", "x", code=2).stderr
+
+    def confidence(f, calls):
+        doc = _json(_bla_run(f, "--confidence", "0.9", "--json"))
+        assert measured(calls)[1]["confidence"] == 0.9 and doc["confidence"] == 0.9
+        assert "confidence must lie between" in _bla_run(f, "--confidence", "9", code=2).stderr
+
+    def rng(f, calls):
+        _json(_run("bla", f.csv, "-u", "u", "-y", "y", "--range", "0:200", "--json"))
+        assert measured(calls)[0].n_samples == 200
+
+    def plot(f, calls):
+        where = f.path("figs")
+        r = _bla_run(f, "--plot", where)
+        (_bla, folder), kwargs = calls.one("bla_figure")
+        assert folder == where and kwargs == {"overwrite": False}
+        assert f"figure written to {where / 'bla.png'}" in r.stdout
+
+    def out(f, calls):
+        target = f.path("bla.json")
+        r = _bla_run(f, "-o", target)
+        assert f"results written to {target}" in r.stdout
+        assert json.loads(target.read_text())["method"] == "robust"
+
+    def ts(f, calls):
+        doc = _json(_bla_run(f, "--ts", "0.25", "--json"))
+        assert measured(calls)[0].sampling_time == 0.25 and doc["sampling_time"] == 0.25
+
+    def time_column(f, calls):
+        doc = _json(_bla_run(f, "--time-column", TIME, "--json"))
+        assert measured(calls)[0].sampling_time == DT and doc["sampling_time"] == DT
+
+    def experiment_column(f, calls):
+        doc = _json(_bla_run(f, "--json"))  # the base gives --experiment-column r
+        assert measured(calls)[0].n_experiments == 3 and doc["realisations"] == 3
+        # one record of three realisations: it does not repeat, Welch's estimate
+        whole = _json(_run("bla", _periodic_csv(f), "-u", "u", "-y", "y", "--json"))
+        assert whole["method"] == "welch" and whole["realisations"] == 1
+
+    def force(f, calls):
+        _force(lambda *a, code=0: _bla_run(f, *a, code=code), f.path("bla.json"))
+        where = f.path("figs")
+        where.mkdir()
+        (where / "bla.png").write_text("old")
+        assert "exist(s); pass --force" in _bla_run(f, "--plot", where, code=2).stderr
+        _bla_run(f, "--plot", where, "--force")
+        assert calls.one("bla_figure")[1]["overwrite"] is True
+
+    def json_out(f, calls):
+        text = _bla_run(f).stdout
+        assert "BLA u -> y on" in text and "verdict" not in text
+        doc = _json(_bla_run(f, "--json"))
+        assert doc["method"] == "robust" and doc["figure"] is None and doc["out"] is None
+
+    return {
+        "inputs": inputs, "outputs": outputs, "period": period, "periods": periods,
+        "transient_periods": transient_periods, "method": method, "segment": segment,
+        "bands": bands, "confidence": confidence, "rng": rng, "plot": plot, "out": out,
         "ts": ts, "time_column": time_column, "experiment_column": experiment_column,
         "force": force, "json_out": json_out,
     }  # fmt: skip
@@ -1614,6 +1752,7 @@ QUIET = {
     ),
     "fleet": _quiet(lambda f, *a: _fleet(f, "--force", *a), "fitting records"),
     "design": _quiet(_design, "designing the random-phase multisine"),
+    "bla": _quiet(_bla_run, "measuring the best linear approximation"),
     "demo": _quiet(_workflow("demo"), "paper B's experiment"),
     "reproduce windtunnel": _quiet(_workflow("reproduce", "windtunnel"), "paper A's experiment"),
     "reproduce electrohydraulic": _quiet(
@@ -1661,6 +1800,7 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     **{("simulate", k): v for k, v in _model_command("simulate").items()},
     **{("predict", k): v for k, v in _model_command("predict").items()},
     **{("residuals", k): v for k, v in _residuals_command().items()},
+    **{("bla", k): v for k, v in _bla_command().items()},
     ("orders", "inputs"): orders_input,
     ("orders", "outputs"): orders_output,
     ("orders", "estimation"): orders_estimation,

@@ -57,6 +57,8 @@ SHARED: dict[str, tuple[tuple[str, ...], str | None]] = {
     "report": (("--report",), "FILE"),
     "scheduler": (("--scheduler",), "ADDRESS"),
     "range": (("--range",), "START:STOP"),
+    "periods": (("--periods",), "N"),
+    "confidence": (("--confidence",), "LEVEL"),
 }
 
 #: (parameter name, help) of every option :func:`shared` made: the test's evidence that

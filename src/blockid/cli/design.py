@@ -120,11 +120,11 @@ def design(
     ] = None,
     periods: Annotated[
         int | None,
-        _option(
-            "--periods",
-            "N",
+        shared(
+            "periods",
             "Exact repetitions of the period in each realisation" + _default("periods") + ".",
-        ),  # fmt: skip
+            show_default=False,
+        ),
     ] = None,
     realisations: Annotated[
         int | None,

@@ -22,6 +22,7 @@ import typer
 from typer.core import TyperGroup
 
 from blockid.cli import (
+    bla,
     design,
     examples,
     export,
@@ -149,6 +150,7 @@ SHORT_HELP = {
     "residuals": "Test a model's residual: white, and independent of the input?",
     "orders": "Choose na, nb, nk by false nearest neighbours.",
     "design": "Design an excitation: multisine, odd multisine, PRBS.",
+    "bla": "Measure the best linear approximation: noise and distortion levels.",
     "identify": "Search structures and orders; keep the best model.",
     "export": "Export a model as a Python module or transfer functions.",
     "stream": "Learn a model sample by sample from standard input.",
@@ -166,6 +168,7 @@ for _name, _command in (
     ("residuals", residuals.residuals),
     ("orders", orders.orders),
     ("design", design.design),
+    ("bla", bla.bla),
     ("identify", identify.identify),
     ("export", export.export),
     ("stream", streaming.stream),

@@ -39,7 +39,7 @@ def residuals(
     lags: Annotated[int, typer.Option(metavar="M", min=1, help="Largest lag tested.")] = 25,
     confidence: Annotated[
         float,
-        typer.Option(metavar="LEVEL", help="Of the bounds and the tests (between 0 and 1)."),
+        shared("confidence", "Of the bounds and the tests (between 0 and 1)."),
     ] = 0.99,
     plot: Annotated[
         Path | None,

@@ -1,0 +1,206 @@
+"""``blockid bla``: the best linear approximation of a plant, measured, with its noise
+and nonlinear distortion levels per band
+(:func:`blockid.evaluation.bla.best_linear_approximation`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from blockid.cli._common import (
+    busy,
+    cli_errors,
+    print_json,
+    refuse_figures,
+    refuse_to_overwrite,
+    stdout,
+)
+from blockid.cli._data import check_arguments, load_data
+from blockid.cli._flags import (
+    DataPaths,
+    ExperimentColumn,
+    Force,
+    Inputs,
+    Json,
+    Outputs,
+    Quiet,
+    SamplingTime,
+    TimeColumn,
+    shared,
+)
+from blockid.errors import BlockidError, ParameterError
+
+__all__ = ["bla"]
+
+#: Library parameter -> this command's flag, for the one-line errors.
+FLAGS = {
+    "period": "--period",
+    "periods": "--periods",
+    "transient_periods": "--transient-periods",
+    "segment": "--segment",
+    "bands": "--bands",
+    "confidence": "--confidence",
+    "method": "--method",
+    "input": "--input",
+    "output": "--output",
+}
+METHODS = ("auto", "robust", "welch")
+
+
+def _option(flag: str, metavar: str, help: str, **kwargs: Any) -> Any:
+    return typer.Option(flag, metavar=metavar, help=help, **kwargs)
+
+
+@cli_errors
+def bla(
+    data_paths: DataPaths,
+    inputs: Inputs,
+    outputs: Outputs,
+    period: Annotated[
+        int | None,
+        _option(
+            "--period",
+            "N",
+            "Samples in one period [default: found from the input].",
+            show_default=False,
+        ),
+    ] = None,
+    periods: Annotated[
+        int | None,
+        shared("periods", "Or: the periods each realisation holds.", show_default=False),
+    ] = None,
+    transient_periods: Annotated[
+        int,
+        _option(
+            "--transient-periods",
+            "K",
+            "Periods dropped from the start of each realisation (the plant's transient).",
+            min=0,
+        ),
+    ] = 0,
+    method: Annotated[
+        str,
+        shared(
+            "method",
+            "robust: periods and realisations "
+            "(Pintelon-Schoukens); welch: any data (noise and distortion not told "
+            "apart); auto: robust when the input repeats.",
+            metavar="auto|robust|welch",
+        ),
+    ] = "auto",
+    segment: Annotated[
+        int | None,
+        _option(
+            "--segment",
+            "N",
+            "welch: samples of a segment (the resolution) [default: "
+            "the longest power of two that leaves 16 segments].",
+            show_default=False,
+        ),
+    ] = None,
+    bands: Annotated[
+        str,
+        _option(
+            "--bands",
+            "N|LOW:HIGH,..",
+            "Bands of the summary: a number (equal numbers of lines) or edges in Hz.",
+        ),
+    ] = "4",
+    confidence: Annotated[
+        float, shared("confidence", "Of the bounds and the tests (between 0 and 1).")
+    ] = 0.99,
+    rng: Annotated[str | None, shared("range", "Samples to use (default: all).")] = None,
+    plot: Annotated[
+        Path | None,
+        shared("plot", "Write the figure (BLA, noise and distortion levels) to DIR/bla.png."),
+    ] = None,
+    out: Annotated[
+        Path | None, shared("out", "Write the results (the --json document) to this file.")
+    ] = None,
+    ts: SamplingTime = None,
+    time_column: TimeColumn = None,
+    experiment_column: ExperimentColumn = None,
+    force: Force = False,
+    quiet: Quiet = False,
+    json_out: Json = False,
+) -> None:
+    """Measure the best linear approximation of DATA from -u to -y: its frequency
+    response, the noise level and the nonlinear distortion level per band, and whether a
+    nonlinear model is worth trying. Periodic data (several periods and realisations of
+    a multisine, one realisation per experiment) separate noise from distortion; other
+    data get Welch's estimate with its coherence. Give each realisation as its own
+    experiment (--experiment-column, e.g. the 'realisation' column of 'blockid design')."""
+    if len(inputs) != 1 or len(outputs) != 1:
+        raise ParameterError(
+            f"the BLA is measured from one input to one output; got {len(inputs)} input(s) and "
+            f"{len(outputs)} output(s): run the command once per pair"
+        )
+    input, output = inputs[0], outputs[0]
+    if method not in METHODS:
+        raise ParameterError(f"--method {method!r}: choose {', '.join(METHODS)}")
+    check_arguments(data_paths, ranges={"--range": rng})
+    refuse_to_overwrite(out, force)
+    from blockid.evaluation.bla import best_linear_approximation
+    from blockid.evaluation.bla_bands import parse_bands
+    from blockid.plotting.bla import BLA_FIGURE
+
+    refuse_figures(plot, [BLA_FIGURE], force)
+    where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+    with busy("measuring the best linear approximation", quiet or json_out):
+        data = load_data(data_paths, [input], [output], ts, time_column, experiment_column,
+                         rng, "--range")  # fmt: skip
+        options = {"method": method, "period": period, "periods": periods,
+                   "transient_periods": transient_periods, "segment": segment,
+                   "confidence": confidence}  # fmt: skip
+        result = _flagged(best_linear_approximation, data, bands=_flagged(parse_bands, bands),
+                          data_label=where, **options)  # fmt: skip
+    figure = None
+    if plot is not None:
+        from blockid.plotting.bla import bla_figure
+
+        figure = bla_figure(result, plot, overwrite=force)
+    doc = result.to_dict()
+    if out is not None:
+        import json
+
+        from blockid.data.io import json_safe, write_text_atomic
+
+        write_text_atomic(json.dumps(json_safe(doc), indent=2, allow_nan=False) + "\n", out,
+                          overwrite=force)  # fmt: skip
+    if json_out:
+        print_json({**doc, "figure": None if figure is None else str(figure),
+                    "out": None if out is None else str(out)})  # fmt: skip
+        return
+    _print(result)
+    if figure is not None:
+        stdout.print(f"figure written to {figure}", markup=False)
+    if out is not None:
+        stdout.print(f"results written to {out}", markup=False)
+
+
+def _flagged(fn: Any, *args: Any, **kwargs: Any) -> Any:
+    """``fn(...)``, a library error naming this command's flag of its parameter."""
+    try:
+        return fn(*args, **kwargs)
+    except BlockidError as exc:
+        flag = FLAGS.get(exc.parameter or "")
+        if flag is None or flag in str(exc):
+            raise
+        raise type(exc)(f"{exc} (option {flag})") from None
+
+
+def _print(result: Any) -> None:
+    """The band table of the result's ``summary_table``, its notes and the verdict."""
+    from rich.table import Table
+
+    title, columns, rows, text = result.summary_table()
+    table = Table(title=title, title_justify="left")
+    for i, column in enumerate(columns):
+        table.add_column(column, justify="left" if i == 0 else "right")
+    for row in rows:
+        table.add_row(*row)
+    stdout.print(table)
+    for line in text:
+        stdout.print(line, markup=False)
