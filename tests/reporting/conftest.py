@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pytest
 import typer
 from typer.testing import CliRunner
@@ -94,3 +95,53 @@ def compared() -> Compared:
     html = build_report(compare=result, data=data, estimation=est, validation=val,
                         estimation_range="0:1100", validation_range="1100:2200")  # fmt: skip
     return Compared(data, est, val, result, html)
+
+
+# ------------------------------------------------------------------ state space
+TS = 0.01
+#: G(z) = 0.05 (z + 7.8)(z - 0.5) / ((z + 0.999)(z - 0.9)(z - 0.8)): a mode at the
+#: Nyquist frequency that decays with a time constant of 1000 samples, and a far zero.
+NUM = 0.05 * np.polymul([1.0, 7.8], [1.0, -0.5])
+DEN = np.poly([-0.999, 0.9, 0.8])
+
+
+def _score(structure_method: str, model, est, val, standard_errors: bool):
+    from blockid.evaluation.uncertainty import with_standard_errors
+    from blockid.evaluation.validate import score_model
+    from blockid.fitting.result import FitResult
+    from blockid.workflows.compare import ModelScore
+
+    fit = FitResult(model, structure_method, {}, {}, est.n_samples, metrics_mode="simulation")
+    if standard_errors:
+        fit = with_standard_errors(fit, est)
+    simulation, one_step, error = score_model(model, val)
+    return ModelScore("state-space", structure_method, fit, simulation, one_step, None, error)
+
+
+@pytest.fixture(scope="session")
+def state_space_report():
+    """``(model, result, html)``: the plant :data:`NUM` / :data:`DEN` as an output-error
+    state space (no noise model) with its covariance, and the same with a predictor gain
+    K (a noise model), scored on 1000 validation samples, in one report."""
+    from scipy.signal import tf2ss
+
+    from blockid.data import Dataset
+    from blockid.models.state_space import StateSpace
+    from blockid.reporting import build_report
+    from blockid.workflows.compare import CompareResult
+
+    A, B, C, D = tf2ss(NUM, DEN)
+    model = StateSpace(["u"], ["y"], A, B, C, D, sampling_time=TS)
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(2000)
+    y = model.simulate(u)[:, 0] + 0.01 * rng.standard_normal(u.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"], sampling_time=TS)
+    est, val = data.select(0, 1000), data.select(1000, 2000)
+    with_k = model.replace(K=np.full((3, 1), 0.1))
+    result = CompareResult([
+        _score("simulation-error", model, est, val, True),
+        _score("subspace", with_k, est, val, False),
+    ])  # fmt: skip
+    html = build_report(compare=result, data=data, estimation=est, validation=val,
+                        estimation_range="0:1000", validation_range="1000:2000")  # fmt: skip
+    return model, result, html

@@ -6,7 +6,9 @@ from dataclasses import dataclass, field
 from html import escape
 from typing import Any
 
-__all__ = ["Entry", "heading"]
+import numpy as np
+
+__all__ = ["Entry", "heading", "predicts_by_free_run"]
 
 
 @dataclass
@@ -32,3 +34,15 @@ class Entry:
 def heading(entry: Entry) -> str:
     """The ``<h3>`` that opens a model's part of a section."""
     return f"<h3>{escape(entry.label)}</h3>"
+
+
+def predicts_by_free_run(simulation: Any, one_step: Any) -> bool:
+    """Whether a model's one-step prediction is its free-run simulation, sample for
+    sample (two :class:`~blockid.evaluation.ModelOutput` of the same data): a model
+    without a noise model (a state space fitted as output error, without a predictor
+    gain ``K``) has no one-step predictor but its free run, and the report says so
+    instead of repeating the free-run numbers as one-step ones."""
+    if one_step is None or simulation is None:
+        return False
+    pairs = zip(one_step.outputs, simulation.outputs, strict=True)
+    return all(np.array_equal(a, b, equal_nan=True) for a, b in pairs)

@@ -16,6 +16,7 @@ from typing import Any
 
 from blockid.plotting.html import table
 from blockid.plotting.notebook import FIGURES, STYLE, fit_html
+from blockid.reporting.entries import predicts_by_free_run
 from blockid.reporting.search import best_linear
 
 __all__ = ["IDENTIFY_FIGURES", "identify_figures", "identify_html"]
@@ -55,7 +56,10 @@ def identify_html(result: Any) -> str:
                 f"Free-run simulation on the {result.on} data: {_scores(result.simulation)}; "
                 f"one-step prediction: "
                 + (
-                    _scores(result.one_step)
+                    "the same as the free run, sample for sample (the model has no one-step "
+                    "predictor but its free run)"
+                    if predicts_by_free_run(result.simulation, result.one_step)
+                    else _scores(result.one_step)
                     if result.one_step is not None
                     else f"none ({result.one_step_error})"
                 )

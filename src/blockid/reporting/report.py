@@ -29,7 +29,7 @@ from blockid.plotting import report_figures as figures
 from blockid.plotting.html import encode_png
 from blockid.plotting.report_figures import zoom_title
 from blockid.plotting.uncertainty import fit_draws, output_bands
-from blockid.reporting.entries import Entry, heading
+from blockid.reporting.entries import Entry, heading, predicts_by_free_run
 from blockid.reporting.html import figure, page, paragraph, section, table
 from blockid.reporting.model_sections import (
     blocks_section,
@@ -165,6 +165,24 @@ def _overview(
     return section("data", "Data overview", parts)
 
 
+#: The one-step cells of a model whose one-step prediction is its free run.
+_SAME_AS_FREE_RUN = "= free run"
+
+
+def _free_run_note(e: Entry) -> str:
+    why = (
+        "its model has a noise model, yet predicts one step ahead exactly as it runs free"
+        if getattr(e.model, "has_noise_model", False)
+        else "the model has no noise model (a state space fitted as output error has no "
+        "predictor gain K), so the best it can predict one step ahead from measured past "
+        "outputs is its free run from the same initial state"
+    )
+    return (
+        f"{e.label}: one-step prediction = free run, sample for sample: {why}. Its one-step "
+        f"columns say '{_SAME_AS_FREE_RUN}' rather than repeat the free-run numbers."
+    )
+
+
 def _metrics_rows(entries: list[Entry], outputs: tuple[str, ...]) -> tuple[list, list]:
     rows, classes = [], []
     for output in outputs:
@@ -177,19 +195,14 @@ def _metrics_rows(entries: list[Entry], outputs: tuple[str, ...]) -> tuple[list,
                 continue
             sim = e.simulation.metrics
             one = e.one_step.metrics if e.one_step is not None else None
-            rows.append(
-                [
-                    e.label,
-                    output,
-                    _n_parameters(e.fit.model),
-                    sim["mse"][output],
-                    sim["rmse"][output],
-                    sim["fit_percent"][output],
-                    one["mse"][output] if one else "n/a",
-                    one["rmse"][output] if one else "n/a",
-                    one["fit_percent"][output] if one else "n/a",
+            if predicts_by_free_run(e.simulation, e.one_step):
+                one_step = [_SAME_AS_FREE_RUN] * 3
+            else:
+                one_step = [
+                    one[k][output] if one else "n/a" for k in ("mse", "rmse", "fit_percent")
                 ]
-            )
+            row = [e.label, output, _n_parameters(e.fit.model), sim["mse"][output]]
+            rows.append([*row, sim["rmse"][output], sim["fit_percent"][output], *one_step])
             classes.append("best" if e is best and len(scored) > 1 else e.row)
     return rows, classes
 
@@ -212,7 +225,8 @@ def _comparison(entries: list[Entry], outputs: tuple[str, ...], where: str) -> s
             f"Scores on the {where}. Free-run simulation: the model runs from the inputs "
             "alone, its own past outputs fed back (initial conditions: the first measured "
             "samples, left out of the scores). One-step prediction: from measured past "
-            "outputs. Fit % = 100 (1 - |y - y_model| / |y - mean(y)|). Shaded green: the "
+            f"outputs ('{_SAME_AS_FREE_RUN}' where a model has no one-step predictor but its "
+            "free run). Fit % = 100 (1 - |y - y_model| / |y - mean(y)|). Shaded green: the "
             "highest free-run fit % of an output; red: a model whose estimator failed"
             + ("; blue: the linear baseline." if any(e.row == "baseline" for e in entries) else ".")
         ),
@@ -223,6 +237,8 @@ def _comparison(entries: list[Entry], outputs: tuple[str, ...], where: str) -> s
             parts.append(paragraph(f"{e.label} failed: {e.error}", "note"))
         if e.one_step_error:
             parts.append(paragraph(f"{e.label}: no one-step prediction: {e.one_step_error}"))
+        if predicts_by_free_run(e.simulation, e.one_step):
+            parts.append(paragraph(_free_run_note(e)))
         settings = getattr(e.fit, "settings", None) or {}
         # the fit's own warnings (a refinement stopped at its evaluation limit, ...), then
         # the scores' (each once)
@@ -236,7 +252,9 @@ def _comparison(entries: list[Entry], outputs: tuple[str, ...], where: str) -> s
                 (
                     e.label,
                     e.simulation.metrics["fit_percent"][output],
-                    None if e.one_step is None else e.one_step.metrics["fit_percent"][output],
+                    None
+                    if e.one_step is None or predicts_by_free_run(e.simulation, e.one_step)
+                    else e.one_step.metrics["fit_percent"][output],
                 )
                 for e in scored
             ]
@@ -245,7 +263,8 @@ def _comparison(entries: list[Entry], outputs: tuple[str, ...], where: str) -> s
                     encode_png(figures.comparison_figure(bars, output, where)),
                     f"fit % of {output} per model",
                     f"Fit % of {output} on the {where}, free-run simulation (orange) and "
-                    "one-step prediction (blue), per model.",
+                    "one-step prediction (blue), per model (no blue bar where a model has "
+                    "no one-step prediction, or none but its free run).",
                 )
             )
     return section("comparison", "Comparison of the models", parts)
