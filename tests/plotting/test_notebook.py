@@ -135,3 +135,24 @@ def test_importing_the_displays_does_not_import_matplotlib():
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported eagerly'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_a_state_space_summary_lists_basis_free_quantities_and_folds_its_matrices(
+    hammerstein_fit,
+):
+    """The entries of A, B and C depend on the state basis: the summary lists the static
+    gain, poles, Hankel singular values and Markov parameters, the matrices folded."""
+    import re
+
+    _, est, _ = hammerstein_fit
+    fit = fit_model(est, "state-space", nx=2, standard_errors=True)
+    html = fit._repr_html_()
+    outside = Page(re.sub(r"<details>.*?</details>", "", html, flags=re.S))
+    names = [row[0] for t in outside.tables for row in t[1:]]
+    assert "static gain y / u" in names and "Hankel singular value 2" in names
+    assert not any(re.match(r"[ABC]\[", n) for n in names), names
+    gain = next(row for t in outside.tables for row in t[1:] if row[0] == "static gain y / u")
+    assert float(gain[2]) > 0  # a standard error, by the delta method
+    folded = Page(re.search(r"<details>.*?</details>", html, re.S).group(0))
+    assert [row[0] for row in folded.tables[0][1:]] == ["A[0,:]", "A[1,:]", "B[0,:]",
+                                                         "B[1,:]", "C[0,:]"]  # fmt: skip

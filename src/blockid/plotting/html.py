@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from html import escape
 from typing import Any
 
-__all__ = ["DPI", "encode_png", "figure", "image", "paragraph", "table"]
+__all__ = ["DPI", "details", "encode_png", "figure", "image", "paragraph", "table"]
 
 #: Resolution of the embedded figures.
 DPI = 100
@@ -52,6 +52,12 @@ def paragraph(text: str, cls: str | None = None) -> str:
     """A paragraph of plain text (escaped)."""
     attr = f' class="{cls}"' if cls else ""
     return f"<p{attr}>{escape(text)}</p>"
+
+
+def details(summary: str, parts: Sequence[str]) -> str:
+    """A folded block (``<details>``, no script): ``summary`` shown, ``parts`` (HTML)
+    when the reader opens it."""
+    return f"<details>\n<summary>{escape(summary)}</summary>\n" + "\n".join(parts) + "\n</details>"
 
 
 def figure(png_base64: str, alt: str, caption: str) -> str:

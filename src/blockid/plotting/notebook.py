@@ -12,13 +12,15 @@ is kept open). matplotlib is imported only when a figure is drawn.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from html import escape
 from typing import Any
 
 import numpy as np
 
 from blockid.plotting.blocks import block_name
-from blockid.plotting.html import encode_png, image, table
+from blockid.plotting.html import details, encode_png, image, paragraph, table
+from blockid.plotting.invariants import basis_dependent, invariants, matrix_rows
 from blockid.plotting.linear import describe_dynamics, linear_dynamics
 from blockid.plotting.parameters import parameter_table
 
@@ -31,6 +33,7 @@ __all__ = [
     "linear_summary",
     "model_figures",
     "model_html",
+    "parameter_parts",
 ]
 
 #: The figures :func:`model_figures` can draw, in the order it draws them.
@@ -88,16 +91,81 @@ def linear_summary(model: Any) -> list[str]:
     return [describe_dynamics(g) for g in linear_dynamics(model)]
 
 
-def _parameters_html(model: Any, fit: Any) -> str:
+def parameter_parts(
+    model: Any, fit: Any = None, para: Callable[[str], str] = paragraph
+) -> list[str]:
+    """The HTML of a model's parameters (the report's and the notebook's): a table of
+    every estimated parameter with its standard error, and what the table leaves out.
+
+    A state space (:mod:`blockid.plotting.invariants`) gets instead what does not depend
+    on its state basis: its poles, static gains, Hankel singular values and Markov
+    parameters with their standard errors, then the estimated parameters that do not
+    depend on the basis (``D``, blocks, ...); the entries of ``A``, ``B``, ``C`` (and
+    ``E``, ...) folded below, values only (their standard errors are those of an
+    arbitrary basis). ``para`` makes a paragraph of plain text."""
     t = parameter_table(model, fit)
     if not t.names:
+        return []
+    notes = [para(n) for n in t.notes()]
+    mask = basis_dependent(model)
+    found = invariants(model, fit) if mask is not None else None
+    if found is None:
+        return [table(t.HEADER, t.rows(), digits=6), *notes]
+    rows = [r for r, dependent in zip(t.rows(), mask, strict=True) if not dependent]
+    parts = [
+        para(
+            f"A state space is the same model in any state basis (x -> T x), so the "
+            f"{int(mask.sum())} entries of {_listed(model, mask)} are unique only up to "
+            "that basis: what the data determine is listed instead, in "
+            f"{found.units}, with standard errors by the delta method"
+            + (
+                ""
+                if found.standard_errors is not None
+                else " (none: the fit carries no covariance)"
+            )
+            + ". Poles and zeros of every input-output pair, with time constants and "
+            "oscillations, are under Linear dynamics."
+        ),
+        table(("basis-free quantity", *t.HEADER[1:]), found.rows(), digits=6),
+        *[para(n) for n in found.notes],
+    ]
+    if rows:
+        parts.append(table(t.HEADER, rows, digits=6))
+    parts += notes
+    parts.append(
+        details(
+            f"The matrices in the fitted state basis ({int(mask.sum())} entries; they "
+            "depend on the basis)",
+            [
+                para(
+                    "Basis-dependent: another state basis gives other numbers for the "
+                    "same model, so neither these values nor their standard errors mean "
+                    "anything one by one; no standard errors are shown."
+                ),
+                table(["matrix row", "values (fitted basis)"], matrix_rows(model)),
+            ],
+        )
+    )
+    return parts
+
+
+def _listed(model: Any, mask: np.ndarray) -> str:
+    """``"A, B and C"``: the matrices ``mask`` marks."""
+    names = model.free_parameter_names()
+    keys = list(dict.fromkeys(n.partition("[")[0] for n, d in zip(names, mask, strict=True) if d))
+    return ", ".join(keys[:-1]) + f" and {keys[-1]}" if len(keys) > 1 else keys[0]
+
+
+def _parameters_html(model: Any, fit: Any) -> str:
+    parts = parameter_parts(model, fit, lambda n: f"<p style='margin:.2em 0'>{escape(n)}</p>")
+    if not parts:
         return ""
-    body = table(t.HEADER, t.rows(), digits=6)
-    notes = "".join(f"<p style='margin:.2em 0'>{escape(n)}</p>" for n in t.notes())
-    summary = f"{len(t.names)} estimated parameters"
-    if len(t.names) > _FOLD:
-        return f"<details><summary>{summary}</summary>{body}{notes}</details>"
-    return f"<p style='margin:.4em 0 .1em'><b>{summary}</b></p>{body}{notes}"
+    n = len(parameter_table(model, fit).names)
+    summary = f"{n} estimated parameters"
+    body = "".join(parts)
+    if n > _FOLD and basis_dependent(model) is None:
+        return f"<details><summary>{summary}</summary>{body}</details>"
+    return f"<p style='margin:.4em 0 .1em'><b>{summary}</b></p>{body}"
 
 
 def blocks_thumbnail(model: Any, fit: Any = None, dpi: int = 80) -> Any | None:

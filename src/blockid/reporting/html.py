@@ -41,6 +41,8 @@ figcaption { font-size: .88em; color: #444; margin-top: .3em; }
 code, pre { font-family: monospace; font-size: .9em; background: #f4f4f4; }
 pre { padding: .5em; white-space: pre-wrap; overflow-wrap: anywhere; }
 nav ol { columns: 2; font-size: .9em; }
+details { margin: .6em 0; }
+summary { font-size: .92em; color: #333; }
 """
 
 

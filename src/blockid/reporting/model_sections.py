@@ -11,8 +11,7 @@ from blockid.models.block_state_space import BlockStateSpace
 from blockid.plotting import report_figures as figures
 from blockid.plotting.html import encode_png
 from blockid.plotting.linear import linear_dynamics, linear_figure, pole_rows
-from blockid.plotting.notebook import linear_summary
-from blockid.plotting.parameters import parameter_table
+from blockid.plotting.notebook import linear_summary, parameter_parts
 from blockid.plotting.uncertainty import free_covariance
 from blockid.reporting.entries import Entry, heading
 from blockid.reporting.html import figure, paragraph, section, table
@@ -27,27 +26,30 @@ _NO_UNCERTAINTY = (
 
 def parameters_section(entries: list[Entry]) -> str:
     """Per model: every estimated parameter, its value, standard error and relative
-    standard error, and what the table leaves out (fixed parameters, operating point)."""
+    standard error, and what the table leaves out (fixed parameters, operating point);
+    for a state space, what does not depend on its state basis, the matrices folded
+    (:func:`~blockid.plotting.notebook.parameter_parts`)."""
     parts = [
         paragraph(
             "The parameters each fit estimated, in full precision. Standard errors assume "
             "white noise on the output (the output-error noise model; an ARX model's, "
             "white equation error): with process noise they are too small. A relative "
             "standard error near or above 100 % means the data hardly determine the "
-            "parameter."
+            "parameter. A state space's matrices depend on its state basis: it is "
+            "summarised by what does not (poles, static gains, Hankel singular values, "
+            "Markov parameters), its matrices folded below that."
         )
     ]
     shown = 0
     for e in entries:
         if e.model is None:
             continue
-        t = parameter_table(e.model, e.fit)
-        if not t.names:
+        found = parameter_parts(e.model, e.fit)
+        if not found:
             continue
         shown += 1
         parts.append(heading(e))
-        parts.append(table(t.HEADER, t.rows(), digits=6))
-        parts += [paragraph(n) for n in t.notes()]
+        parts += found
     if not shown:
         parts.append(paragraph("No model was identified."))
     return section("parameters", "Parameters", parts)
