@@ -116,17 +116,34 @@ def test_an_arx_fit_has_no_blocks_but_its_dynamics(hammerstein_fit):
     assert "y / u: static gain" in page.all_text
 
 
-def test_a_block_model_of_several_channels_shows_a_panel_per_block_and_its_core():
+def test_a_block_model_of_several_channels_shows_each_block_its_deviation_and_band():
+    """A block state space's blocks as a chain's: the curve and its deviation from the
+    best straight line, each with its 95 % band (the fit carries a covariance), and
+    curves in the notebook summary (they once had neither, and no summary curves)."""
     from reference import mimo_hw_record
 
     data, _ = mimo_hw_record(n=600)
     fit = fit_model(data, "block-state-space", nx=3, input_block="polynomial",
-                    output_block={"y2": "polynomial"})  # fmt: skip
+                    output_block={"y2": "polynomial"}, standard_errors=True)  # fmt: skip
     figures = fit.plot(data)
     assert list(figures) == ["output", "blocks", "linear"]
-    titles = [ax.get_title() for ax in figures["blocks"].axes]
-    assert titles == ["input block on u1 (polynomial)", "input block on u2 (polynomial)",
-                      "output block on y2 (polynomial)"]  # fmt: skip
+    axes = figures["blocks"].axes
+    titles = [ax.get_title() for ax in axes]
+    assert titles[0::2] == ["input block on u1 (polynomial)", "input block on u2 (polynomial)",
+                            "output block on y2 (polynomial)"]  # fmt: skip
+    assert all(t.startswith("deviation from the best straight line") for t in titles[1::2])
+    curves = fit.model.static_curves(np.vstack([x.u for x in data.experiments]))
+    for curve_ax, deviation_ax, c in zip(axes[0::2], axes[1::2], curves, strict=True):
+        np.testing.assert_allclose(curve_ax.lines[0].get_ydata(), c["y"])
+        line = np.polyval(np.polyfit(c["grid"], c["y"], 1), c["grid"])
+        np.testing.assert_allclose(deviation_ax.lines[0].get_ydata(), c["y"] - line, atol=1e-9)
+        assert len(curve_ax.collections) == len(deviation_ax.collections) == 1  # the bands
+    legend = [t.get_text() for t in figures["blocks"].legends[0].get_texts()]
+    assert "95 % band" in legend
+    # without data: over the ranges recorded in estimation, in the summary too
+    assert list(fit.model.plot()) == ["blocks", "linear"]
+    (thumb,) = Page(fit._repr_html_()).images
+    assert len(_png(thumb)) > 3000
 
 
 def test_importing_the_displays_does_not_import_matplotlib():

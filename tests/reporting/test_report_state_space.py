@@ -1,8 +1,8 @@
 """The report of state-space models says what they are: a pole at z = -0.999 named a
 mode at the Nyquist frequency, one-step columns that do not repeat the free run of a
-model without a noise model, and basis-free quantities instead of the entries of A, B
-and C (folded away) (the HTML parsed as a reader sees it,
-tests/reporting/page.py)."""
+model without a noise model, basis-free quantities instead of the entries of A, B and C
+(folded away), and a block state space's blocks with their deviation from a line and
+bands (the HTML parsed as a reader sees it, tests/reporting/page.py)."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from blockid.plotting.uncertainty import free_covariance, sampled_models
+from blockid.reporting import build_report
 from reporting.conftest import DEN, NUM, TS
 from reporting.page import Report
 
@@ -105,3 +106,25 @@ def test_the_parameters_are_basis_free_quantities_the_matrices_folded(state_spac
     assert rows == ["A[0,:]", "A[1,:]", "A[2,:]", "B[0,:]", "B[1,:]", "B[2,:]", "C[0,:]"]
     assert "depend on the basis" in fold.group(0)
     assert any("no standard errors are shown" in p for p in folded.paragraphs)
+
+
+def test_a_block_state_space_gets_deviation_panels_and_bands_in_the_report():
+    from blockid.workflows import compare_structures
+
+    from reference import mimo_hw_record
+
+    data, _ = mimo_hw_record(n=600)
+    est, val = data.select(0, 400), data.select(400, 600)
+    options = dict(nx=3, input_block="polynomial", output_block={"y2": "polynomial"},
+                   standard_errors=True)  # fmt: skip
+    result = compare_structures(est, val, ["block-state-space"], options=options)
+    html = build_report(compare=result, estimation=est, validation=val)
+    page = Report(html)
+    (part,) = page.sections["blocks"][1:]
+    (caption,) = part.captions
+    assert "Right: the curve minus its least-squares straight line" in caption
+    assert "95 % band over 200 parameter draws from the parameter covariance" in caption
+    assert "No uncertainty band is drawn" not in caption
+    # the main parameter table holds the blocks' coefficients, not the core's matrices
+    main = _main(html, part.title)
+    assert "input u1: " in main and "A[0,0]" not in main

@@ -812,51 +812,63 @@ class BlockStateSpace(ForwardSensitivities, Model):
                     out.append((f"{what} {name}", block, (float(seen[0]), float(seen[1]))))
         return out
 
-    def static_curves(self, u: Any, n_points: int = 400) -> list[dict[str, Any]]:
+    def block_curve(self, side: str, k: int, grid: Any) -> np.ndarray:
+        """The ``k``-th ``side`` block (``"input"``, ``"loop"``, ``"output"``) on
+        ``grid`` (its argument, normalised), on the axis :meth:`static_curves` draws it:
+        an input or loop block's own output (normalised), an output block's with the
+        bias ``h`` and in the output's units."""
+        grid = np.asarray(grid, dtype=float)
+        if side == "output":
+            out = np.asarray(self.output_blocks[k](grid), dtype=float) + self.output_bias[k]
+            return self.output_offset[k] + self.output_scale[k] * out
+        blocks = self.input_blocks if side == "input" else self.loop_blocks
+        return np.asarray(blocks[k](grid), dtype=float)
+
+    def static_curves(self, u: Any = None, n_points: int = 400) -> list[dict[str, Any]]:
         """Each block's curve over the range its argument takes when input ``u`` is
-        simulated from ``x(0) = 0``, in the signals' units where they have them: an
+        simulated from ``x(0) = 0`` (without ``u``: the range recorded in estimation,
+        for the blocks that have one), in the signals' units where they have them: an
         input block against its input, an output block's output (with the offset and
         scale) against its argument ``z``. Dicts with ``title``, ``x``, ``y``,
-        ``xlabel``, ``ylabel`` (the report draws one panel each)."""
-        un = self.normalised_input(u)
-        _, z, _ = self.run(un)
+        ``xlabel``, ``ylabel`` (the report draws one panel each), and ``side``, ``index``
+        and ``grid`` (the argument, normalised) for :meth:`block_curve`."""
+
+        def finite(columns: Any) -> list[np.ndarray | None]:
+            return [c if np.all(np.isfinite(c)) else None for c in columns]
+
+        spans = {"loop": finite(self.loop_range), "input": finite(self.input_range),
+                 "output": finite(self.output_range)}  # fmt: skip
+        if u is not None:
+            un = self.normalised_input(u)
+            spans["input"] = list(un.T)
+            spans["output"] = finite(self.run(un)[1].T)
+            if self.loop_blocks:
+                spans["loop"] = finite(self._loop_run(self.block_inputs(un), None)[1].T)
         curves = []
-        if self.loop_blocks:
-            P = self._loop_run(self.block_inputs(un), None)[1]
-            for l, (name, b) in enumerate(zip(self.loops, self.loop_blocks, strict=True)):
-                if not np.all(np.isfinite(P[:, l])):
-                    continue
-                grid = np.linspace(P[:, l].min(), P[:, l].max(), n_points)
-                curves.append({
-                    "title": f"loop block {name} ({b.kind})",
-                    "x": grid,
-                    "y": np.asarray(b(grid), dtype=float),
-                    "xlabel": f"{name} (its argument Cp x + Dp w, normalised)",
-                    "ylabel": f"q{l + 1} (into the core, normalised)",
-                })  # fmt: skip
+
+        def add(side: str, k: int, title: str, x: Any, xlabel: str, ylabel: str) -> None:
+            seen = spans[side][k]
+            if seen is None:
+                return
+            grid = np.linspace(np.min(seen), np.max(seen), n_points)
+            curves.append({
+                "title": title, "x": x(grid), "y": self.block_curve(side, k, grid),
+                "xlabel": xlabel, "ylabel": ylabel, "side": side, "index": k, "grid": grid,
+            })  # fmt: skip
+
+        for l, (name, b) in enumerate(zip(self.loops, self.loop_blocks, strict=True)):
+            add("loop", l, f"loop block {name} ({b.kind})", lambda g: g,
+                f"{name} (its argument Cp x + Dp w, normalised)",
+                f"q{l + 1} (into the core, normalised)")  # fmt: skip
         for i, (c, b) in enumerate(zip(self.inputs, self.input_blocks, strict=True)):
-            if b is None:
-                continue
-            grid = np.linspace(un[:, i].min(), un[:, i].max(), n_points)
-            curves.append({
-                "title": f"input block on {c} ({b.kind})",
-                "x": self.input_offset[i] + self.input_scale[i] * grid,
-                "y": np.asarray(b(grid), dtype=float),
-                "xlabel": c,
-                "ylabel": f"w{i + 1} (core input, normalised)",
-            })  # fmt: skip
+            if b is not None:
+                add("input", i, f"input block on {c} ({b.kind})",
+                    lambda g, i=i: self.input_offset[i] + self.input_scale[i] * g,
+                    c, f"w{i + 1} (core input, normalised)")  # fmt: skip
         for j, (c, b) in enumerate(zip(self.outputs, self.output_blocks, strict=True)):
-            if b is None or not np.all(np.isfinite(z[:, j])):
-                continue
-            grid = np.linspace(z[:, j].min(), z[:, j].max(), n_points)
-            out = np.asarray(b(grid), dtype=float) + self.output_bias[j]
-            curves.append({
-                "title": f"output block on {c} ({b.kind})",
-                "x": grid,
-                "y": self.output_offset[j] + self.output_scale[j] * out,
-                "xlabel": f"z{j + 1} (core output, normalised)",
-                "ylabel": c,
-            })  # fmt: skip
+            if b is not None:
+                add("output", j, f"output block on {c} ({b.kind})", lambda g: g,
+                    f"z{j + 1} (core output, normalised)", c)  # fmt: skip
         return curves
 
     # ------------------------------------------------------------------ files

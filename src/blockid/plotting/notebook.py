@@ -168,36 +168,56 @@ def _parameters_html(model: Any, fit: Any) -> str:
     return f"<p style='margin:.4em 0 .1em'><b>{summary}</b></p>{body}"
 
 
-def blocks_thumbnail(model: Any, fit: Any = None, dpi: int = 80) -> Any | None:
-    """The static blocks' curves side by side, small (the 95 % band where the fit
-    carries standard errors and the band is meaningful), or None without such blocks."""
-    from matplotlib.figure import Figure
-
+def _thumbnail_panels(model: Any, draws: list) -> list[tuple[str, str, np.ndarray, dict]]:
+    """``(title, x label, x, curve)`` of each static block over the range recorded in
+    estimation (:func:`~blockid.plotting.report_figures.static_curve`)."""
+    from blockid.models.block_state_space import BlockStateSpace
     from blockid.plotting.blocks import default_range
     from blockid.plotting.figures import block_roles
-    from blockid.plotting.report_figures import block_signal, static_curve
-    from blockid.plotting.uncertainty import fit_draws
+    from blockid.plotting.report_figures import block_signal, channel_curve, static_curve
 
+    if isinstance(model, BlockStateSpace):  # a block per channel
+        curves = model.static_curves(n_points=200)
+        return [(c["title"], c["xlabel"], c["x"], channel_curve(model, c, draws)) for c in curves]
     if getattr(model, "blocks", None) is None:
-        return None
-    panels = [p for p in block_roles(model) if p[1].role == "static"]
-    if not panels:
-        return None
-    draws = fit_draws(fit, n=100)
-    from matplotlib.ticker import MaxNLocator
-
-    fig = Figure(figsize=(3.0 * len(panels), 2.2), dpi=dpi, layout="constrained")
-    for ax, (i, block, which, xlabel, _) in zip(
-        fig.subplots(1, len(panels), squeeze=False)[0], panels, strict=True
-    ):
+        return []
+    out = []
+    for i, block, which, xlabel, _ in block_roles(model):
+        if block.role != "static":
+            continue
         s = block_signal(model, i, None)
         lo, hi = (float(np.min(s)), float(np.max(s))) if s is not None else default_range(block)
         grid = np.linspace(lo, hi if hi > lo else lo + 1.0, 200)
-        c = static_curve(block, grid, draws, i)
+        out.append(
+            (f"{which}: {block_name(block)}", xlabel, grid, static_curve(block, grid, draws, i))
+        )
+    return out
+
+
+def blocks_thumbnail(model: Any, fit: Any = None, dpi: int = 80) -> Any | None:
+    """The static blocks' curves side by side, small (the 95 % band where the fit
+    carries standard errors and the band is meaningful), each over the range its
+    argument covered in estimation, or None without such blocks. A block state space's
+    blocks too (one per channel)."""
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
+
+    from blockid.plotting.report_figures import wrap
+    from blockid.plotting.uncertainty import fit_draws
+
+    if getattr(model, "blocks", None) is None and not hasattr(model, "static_curves"):
+        return None
+    panels = _thumbnail_panels(model, fit_draws(fit, n=100))
+    if not panels:
+        return None
+    fig = Figure(figsize=(3.0 * len(panels), 2.3), dpi=dpi, layout="constrained")
+    for ax, (title, xlabel, x, c) in zip(
+        fig.subplots(1, len(panels), squeeze=False)[0], panels, strict=True
+    ):
         if c["band"] is not None:
-            ax.fill_between(grid, c["band"][0], c["band"][1], color="C0", alpha=0.2, lw=0)
-        ax.plot(grid, c["w"], color="C0", lw=1.4)
-        ax.set_title(f"{which}: {block_name(block)}", fontsize=8)
+            ax.fill_between(x, c["band"][0], c["band"][1], color="C0", alpha=0.2, lw=0)
+        ax.plot(x, c["w"], color="C0", lw=1.4)
+        ax.set_title(wrap(title, 36), fontsize=8)
         ax.set_xlabel(xlabel.split(" (")[0], fontsize=7)
         ax.tick_params(labelsize=7)
         ax.xaxis.set_major_locator(MaxNLocator(4))
@@ -285,11 +305,11 @@ def model_figures(
     from blockid.models.block_state_space import BlockStateSpace
 
     blocks = getattr(model, "blocks", None)
-    if "blocks" in wanted and isinstance(model, BlockStateSpace) and data is not None:
-        u = np.vstack([x.u for x in data.experiments])
-        curves = model.static_curves(u)
-        if curves:
-            out["blocks"] = rf.curves_figure(curves)
+    if "blocks" in wanted and isinstance(model, BlockStateSpace):
+        u = None if data is None else np.vstack([x.u for x in data.experiments])
+        drawn = rf.channel_blocks_figure(model, u, draws)
+        if drawn is not None:
+            out["blocks"] = drawn[0]
     elif "blocks" in wanted and blocks and any(b.role != "linear" for b in blocks):
         u = None
         if data is not None and len(getattr(model, "inputs", ())) == 1:

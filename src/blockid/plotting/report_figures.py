@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import textwrap
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,6 +24,8 @@ __all__ = [
     "MAX_POINTS",
     "block_signal",
     "blocks_figure",
+    "channel_blocks_figure",
+    "channel_curve",
     "comparison_figure",
     "history_figure",
     "overview_figure",
@@ -366,11 +368,16 @@ def _score(metrics: dict[str, dict[str, float]], name: str) -> str:
 
 # ----------------------------------------------------------------------------- blocks
 def static_curve(
-    block: Any, grid: np.ndarray, models: Sequence[Any] = (), index: int | None = None
+    block: Any,
+    grid: np.ndarray,
+    models: Sequence[Any] = (),
+    index: int | None = None,
+    block_of: Callable[[Any], Any] | None = None,
 ) -> dict[str, Any]:
     """A static block's curve on ``grid``, its deviation from the best straight line,
-    and the 95 % bands of both over the drawn ``models`` (block ``index`` of each),
-    kept only where they are meaningful.
+    and the 95 % bands of both over the drawn ``models`` (block ``index`` of each, or
+    what ``block_of(model)`` returns: a callable of the grid), kept only where they are
+    meaningful.
 
     Returns a dict: ``w`` (the curve), ``line`` (``(offset, slope)`` of the least-squares
     line through the curve on the grid), ``deviation`` (``w`` minus that line), ``band``
@@ -402,10 +409,12 @@ def static_curve(
         "deviation_band": None,
         "notes": [],
     }
-    if not models or index is None:
+    if not models or (index is None and block_of is None):
         return out
-    band = sampled_band(models, lambda m: m.blocks[index](grid))
-    dev_band = sampled_band(models, lambda m: deviation(np.asarray(m.blocks[index](grid)))[1])
+    if block_of is None:
+        block_of = lambda m: m.blocks[index]  # noqa: E731
+    band = sampled_band(models, lambda m: block_of(m)(grid))
+    dev_band = sampled_band(models, lambda m: deviation(np.asarray(block_of(m)(grid)))[1])
     if band is None:
         out["notes"].append("too few valid parameter draws for a band")
         return out
@@ -452,6 +461,71 @@ def _limits(curve: np.ndarray, band: tuple[np.ndarray, np.ndarray] | None) -> tu
     return lo - 0.1 * span, hi + 0.1 * span
 
 
+def _static_panels(
+    fig: Any, grid_spec: Any, r: int, x: np.ndarray, c: dict[str, Any], labels: tuple[str, ...]
+) -> None:
+    """Row ``r``: a static block's curve ``c`` (:func:`static_curve`) against ``x``, and
+    beside it its deviation from the best straight line, each with its band if any."""
+    name, xlabel, ylabel = labels
+    ax, ax_d = fig.add_subplot(grid_spec[r, 0]), fig.add_subplot(grid_spec[r, 1])
+    ax.plot(x, c["w"], color="C0", lw=1.3, label="identified block")
+    ax.plot(x, c["w"] - c["deviation"], color="0.5", ls=":", lw=0.9, label="best straight line")
+    ax_d.plot(x, c["deviation"], color="C0", lw=1.3)
+    ax_d.axhline(0.0, color="0.5", ls=":", lw=0.9)
+    for a, key, curve in ((ax, "band", c["w"]), (ax_d, "deviation_band", c["deviation"])):
+        b = c[key]
+        if b is not None:
+            a.fill_between(x, b[0], b[1], color="C0", alpha=0.2, lw=0, label="95 % band")
+        a.set_ylim(*_limits(curve, b))
+    ax.set_title(wrap(name, 48), fontsize=9)
+    ax.set_xlabel(xlabel, fontsize=8)
+    ax.set_ylabel(wrap(ylabel, 30), fontsize=8)
+    share = np.ptp(c["deviation"]) / max(np.ptp(c["w"]), 1e-300)
+    ax_d.set_title(
+        f"deviation from the best straight line ({100 * share:.3g} % of the range)", fontsize=9
+    )
+    ax_d.set_xlabel(xlabel, fontsize=8)
+    ax_d.set_ylabel("curve minus line", fontsize=8)
+
+
+def channel_curve(model: Any, curve: dict[str, Any], models: Sequence[Any] = ()) -> dict[str, Any]:
+    """:func:`static_curve` of one block of a model with a block per channel, ``curve``
+    one of its ``static_curves()`` (the block on its grid, each drawn model's the same
+    block, :meth:`~blockid.models.block_state_space.BlockStateSpace.block_curve`)."""
+    side, k = curve["side"], curve["index"]
+    return static_curve(
+        lambda g: model.block_curve(side, k, g),
+        curve["grid"],
+        models,
+        block_of=lambda m: lambda g: m.block_curve(side, k, g),
+    )
+
+
+def channel_blocks_figure(
+    model: Any, u: np.ndarray | None = None, models: Sequence[Any] = ()
+) -> tuple[Any, list[str]] | None:
+    """The static blocks of a model with a block per channel (a block state space:
+    :meth:`~blockid.models.block_state_space.BlockStateSpace.static_curves`), each over
+    the range its argument takes when the inputs ``u`` (N, nu) are simulated (without
+    ``u``: the range recorded in estimation), as :func:`blocks_figure` draws a chain's:
+    the curve and its deviation from the best straight line, each with the 95 % band of
+    the drawn ``models`` where it is meaningful. None when no block has a range."""
+    curves = model.static_curves(u)
+    if not curves:
+        return None
+    fig = _new_figure(9.0, 0.5 + 2.9 * len(curves))
+    grid_spec = fig.add_gridspec(len(curves), 2)
+    notes: list[str] = []
+    for r, cv in enumerate(curves):
+        c = channel_curve(model, cv, models)
+        notes += [f"{cv['title']}: {n}." for n in c["notes"]]
+        _static_panels(fig, grid_spec, r, cv["x"], c, (cv["title"], cv["xlabel"], cv["ylabel"]))
+    for ax in fig.axes:
+        ax.tick_params(labelsize=7)
+    _legend_outside(fig, fig.axes)
+    return fig, notes
+
+
 def blocks_figure(
     model: Any, u: np.ndarray | None = None, models: Sequence[Any] = ()
 ) -> tuple[Any, list[str]]:
@@ -493,28 +567,7 @@ def blocks_figure(
         grid = np.linspace(lo, hi, 400)
         c = static_curve(block, grid, models, i)
         notes += [f"{name}: {n}." for n in c["notes"]]
-        ax, ax_d = fig.add_subplot(grid_spec[r, 0]), fig.add_subplot(grid_spec[r, 1])
-        ax.plot(grid, c["w"], color="C0", lw=1.3, label="identified block")
-        ax.plot(
-            grid, c["w"] - c["deviation"], color="0.5", ls=":", lw=0.9, label="best straight line"
-        )
-        ax_d.plot(grid, c["deviation"], color="C0", lw=1.3)
-        ax_d.axhline(0.0, color="0.5", ls=":", lw=0.9)
-        for a, key, curve in ((ax, "band", c["w"]), (ax_d, "deviation_band", c["deviation"])):
-            b = c[key]
-            if b is not None:
-                a.fill_between(grid, b[0], b[1], color="C0", alpha=0.2, lw=0, label="95 % band")
-            a.set_ylim(*_limits(curve, b))
-        ax.set_title(name, fontsize=9)
-        ax.set_xlabel(xlabel, fontsize=8)
-        ax.set_ylabel(ylabel, fontsize=8)
-        share = np.ptp(c["deviation"]) / max(np.ptp(c["w"]), 1e-300)
-        ax_d.set_title(
-            f"deviation from the best straight line ({100 * share:.3g} % of the range)",
-            fontsize=9,
-        )
-        ax_d.set_xlabel(xlabel, fontsize=8)
-        ax_d.set_ylabel("curve minus line", fontsize=8)
+        _static_panels(fig, grid_spec, r, grid, c, (name, xlabel, ylabel))
     for ax in fig.axes:
         ax.tick_params(labelsize=7)
     _legend_outside(fig, [a for a in fig.axes if a.get_legend() is None])
@@ -556,21 +609,4 @@ def history_figure(history: dict[str, Any], max_points: int = 2000, max_panels: 
         ax.axis("off")
     for ax in axes[-1]:
         ax.set_xlabel("sample (all passes over the estimation data)", fontsize=8)
-    return fig
-
-
-def curves_figure(curves: Sequence[dict[str, Any]]) -> Any:
-    """One panel per curve (dicts with ``title``, ``x``, ``y``, ``xlabel``, ``ylabel``;
-    :meth:`~blockid.models.block_state_space.BlockStateSpace.static_curves`), two per
-    row."""
-    cols = min(len(curves), 2)
-    rows = -(-len(curves) // cols)
-    fig = _new_figure(4.6 * cols, 3.2 * rows)
-    for k, c in enumerate(curves):
-        ax = fig.add_subplot(rows, cols, k + 1)
-        ax.plot(c["x"], c["y"], color="C1")
-        ax.set_title(wrap(c["title"], 48), fontsize=9)
-        ax.set_xlabel(c["xlabel"])
-        ax.set_ylabel(c["ylabel"])
-        ax.grid(True, alpha=0.3)
     return fig

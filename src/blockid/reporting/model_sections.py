@@ -111,6 +111,28 @@ def linear_section(entries: list[Entry]) -> str:
     return section("linear", "Linear dynamics", parts)
 
 
+def _band_text(e: Entry, models: list) -> str:
+    if not models:
+        return _NO_UNCERTAINTY
+    source = (
+        "the parameter covariance"
+        if free_covariance(e.fit) is not None
+        else "the standard errors (independent normals)"
+    )
+    return (
+        f"Shaded: 95 % band over {len(models)} parameter draws from {source}, where it is "
+        f"narrower than {figures.BAND_LIMIT:g} times the curve's range."
+    )
+
+
+#: What the right-hand panels of the blocks' figures show.
+_DEVIATION = (
+    "Right: the curve minus its least-squares straight line over that range, which shows "
+    "the nonlinearity at its own scale (the band there is that of each drawn curve's own "
+    "deviation: how sure the shape is, whatever the gain)."
+)
+
+
 def blocks_section(
     entries: list[Entry], estimation: Dataset, est_text: str, draws: dict[int, list]
 ) -> str:
@@ -120,7 +142,7 @@ def blocks_section(
     for e in entries:
         model = e.model
         if isinstance(model, BlockStateSpace):
-            parts += _channel_blocks(e, estimation, est_text)
+            parts += _channel_blocks(e, estimation, est_text, draws.get(id(e), []))
             continue
         blocks = getattr(model, "blocks", None)
         if blocks is None or all(b.role == "linear" for b in blocks):
@@ -130,17 +152,6 @@ def blocks_section(
         u = np.concatenate([x.u[:, 0] for x in estimation.experiments])
         models = draws.get(id(e), [])
         fig, notes = figures.blocks_figure(model, u, models)
-        source = (
-            "the parameter covariance"
-            if free_covariance(e.fit) is not None
-            else "the standard errors (independent normals)"
-        )
-        band = (
-            f"Shaded: 95 % band over {len(models)} parameter draws from {source}, where it is "
-            f"narrower than {figures.BAND_LIMIT:g} times the curve's range."
-            if models
-            else _NO_UNCERTAINTY
-        )
         parts.append(heading(e))
         parts.append(
             figure(
@@ -148,11 +159,8 @@ def blocks_section(
                 f"{e.label}: identified nonlinear blocks",
                 f"{e.label}: identified nonlinear blocks, estimated on the estimation range "
                 f"{est_text}; each curve is drawn over the range its input takes when the "
-                "estimation input is simulated, the axes fitted to the curve. Right: the "
-                "curve minus its least-squares straight line over that range, which shows "
-                "the nonlinearity at its own scale (the band there is that of each drawn "
-                f"curve's own deviation: how sure the shape is, whatever the gain). {band}"
-                + "".join(f" {n}" for n in notes),
+                "estimation input is simulated, the axes fitted to the curve. "
+                f"{_DEVIATION} {_band_text(e, models)}" + "".join(f" {n}" for n in notes),
             )
         )
     if not parts:
@@ -160,24 +168,25 @@ def blocks_section(
     return section("blocks", "Identified nonlinearities", parts)
 
 
-def _channel_blocks(e: Entry, estimation: Dataset, est_text: str) -> list[str]:
-    """A model with a block per channel: one panel per block."""
+def _channel_blocks(e: Entry, estimation: Dataset, est_text: str, models: list) -> list[str]:
+    """A model with a block per channel: a row of panels per block."""
     u = np.vstack([x.u for x in estimation.experiments])
-    curves = e.model.static_curves(u)
-    if not curves:
+    drawn = figures.channel_blocks_figure(e.model, u, models)
+    if drawn is None:
         return []
+    fig, notes = drawn
     return [
         heading(e),
         figure(
-            encode_png(figures.curves_figure(curves)),
+            encode_png(fig),
             f"{e.label}: identified nonlinear blocks",
-            f"{e.label}: one panel per block (the channel in its title), estimated on the "
+            f"{e.label}: one row per block (the channel in its title), estimated on the "
             f"estimation range {est_text}; each curve drawn over the range its argument "
             "takes when the estimation input is simulated from rest. An input block maps "
             "its input (in its units) to the linear core's input (normalised: the gain "
             "between block and core is the core's); an output block maps the core's "
-            "output (normalised) to the output in its units. No uncertainty band is drawn "
-            "for these models.",
+            f"output (normalised) to the output in its units. {_DEVIATION} "
+            f"{_band_text(e, models)}" + "".join(f" {n}" for n in notes),
         ),
     ]
 
