@@ -91,7 +91,7 @@ def test_the_verdict_of_one_period_cannot_tell_noise_from_distortion():
     bla = summarised(bla, bands=1)
     assert bla.bands[0].noise_db is None and bla.bands[0].p_value is None
     assert bla.verdict == (
-        "one period a realisation: noise and nonlinear distortion are not told apart (that "
-        "needs 2 periods or more); the total variance of G is 20.0 dB below |G|² at worst "
+        "one period a realisation: noise and nonlinear distortion are not told apart by periods "
+        "(that needs 2 or more); the total variance of G is 20.0 dB below |G|² at worst "
         "(1-50 Hz)"
     )

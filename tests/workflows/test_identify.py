@@ -827,3 +827,34 @@ def test_the_tables_list_candidates_by_their_score_and_keep_the_chosen_one():
         assert scores == sorted(scores) and result.selected in rows
         best = sorted(s.rmse for s in result.ranked)[: min(n, len(result.ranked))]
         assert scores[: len(best)] == best
+
+
+def test_a_race_on_a_long_record_scores_the_leaders_as_the_full_stage_would():
+    """On a long record the structures are raced: all on the first fold, the best third
+    on the others. The leaders' scores are those of the unraced stage bit for bit, the
+    chosen model too, with fewer fits; the rest are recorded with their first fold's
+    error; a fold-one failure is rejected as before."""
+    from dataclasses import replace
+
+    data = dead_zone_record(20_000, noise=0.02)
+    raced = replace(SMALL, families=None, race=3)
+    full = replace(raced, race=1)
+    options = dict(structures=["arx", "hammerstein"], jobs=1)
+    a = identify(data, effort=raced, **options)
+    b = identify(data, effort=full, **options)
+    assert a.selected.candidate == b.selected.candidate
+    assert np.array_equal(a.model.free_parameters(), b.model.free_parameters())
+    stage = [s for s in a.search["stages"] if s["stage"] == "structures"][0]
+    unraced = [s for s in b.search["stages"] if s["stage"] == "structures"][0]
+    n, kept = stage["candidates"], stage["raced"]["carried_on"]
+    assert n == unraced["candidates"] and kept == max(8, math.ceil(n / 3)) < n
+    assert stage["fits"] == n + kept < unraced["fits"] == 2 * n  # two folds
+    by_key = {s.candidate.key: s.rmse for s in b.ranked if s.stage == "structures"}
+    leaders = [s for s in a.ranked if s.stage == "structures"]
+    assert len(leaders) <= kept and all(by_key[s.candidate.key] == s.rmse for s in leaders)
+    left_out = a.search["raced_out"]
+    assert (
+        len(left_out) + len(leaders) + len([s for s in a.rejected if s.stage == "structures"]) == n
+    )
+    worst_kept = max(s.folds[0].relative for s in leaders)
+    assert all(r["relative"] >= worst_kept and r["stage"] == "structures" for r in left_out)

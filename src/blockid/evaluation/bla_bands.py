@@ -200,28 +200,38 @@ def _verdict(bla: BestLinearApproximation, bands: Sequence[BandSummary], alpha: 
         )
     if bla.periods >= 2:
         return _verdict_with_noise(bla, bands, alpha, level)
-    # several realisations of one period
+    # several realisations of one period: the even lines of an odd excitation hold the
+    # noise (and any even distortion), on the axis of G's variance
     measured = [b for b in bands if b.total_db is not None]
     if not measured:
         return ("one period a realisation and no excited line in the bands: give bands "
                 "that hold the excited lines")  # fmt: skip
-    worst = max(measured, key=lambda b: b.total_db - b.g_db)
-    text = (
-        "one period a realisation: noise and nonlinear distortion are not told apart (that "
-        "needs 2 periods or more); the total variance of G is "
-        f"{worst.g_db - worst.total_db:.1f} dB below |G|² at worst ({_where(worst)})"
-    )
-    odd = [b.nonexcited["odd"] for b in bands if "odd" in b.nonexcited
-           and b.nonexcited["odd"].get("against") == "even"]  # fmt: skip
-    if odd:
-        top = max(odd, key=lambda g: g["over_even_db"] or -np.inf)
-        if any(g["detected"] for g in odd):
-            text += (f"; the odd non-excited lines lie up to {top['over_even_db']:.1f} dB above "
-                     "the even ones: odd nonlinear distortion (the even lines hold the noise "
-                     "and any even distortion)")  # fmt: skip
-        else:
-            text += "; the odd non-excited lines are not above the even ones"
-    return text
+    head = ("one period a realisation: noise and nonlinear distortion are not told apart by "
+            "periods (that needs 2 or more); ")  # fmt: skip
+    if not bla.odd_design or not any("even" in b.nonexcited for b in bands):
+        worst = max(measured, key=lambda b: b.total_db - b.g_db)
+        return (f"{head}the total variance of G is {worst.g_db - worst.total_db:.1f} dB below "
+                f"|G|² at worst ({_where(worst)})")  # fmt: skip
+    found = []  # (dB over the even lines, where)
+    m = bla.realisations
+    for b in bands:
+        even, odd = b.nonexcited.get("even"), b.nonexcited.get("odd")
+        if even and b.total_db is not None:
+            over = b.total_db - even["level_db"]
+            pv = _f_test(10 ** (over / 10), 2 * b.lines * (m - 1), 2 * even["lines"] * m)
+            if pv is not None and pv < alpha:
+                found.append((over, f"the total variance of G lies {over:.1f} dB above them "
+                                    f"in {_where(b)}"))  # fmt: skip
+        if odd and odd.get("against") == "even" and odd["detected"]:
+            found.append((odd["over_even_db"], f"the odd non-excited lines lie "
+                          f"{odd['over_even_db']:.1f} dB above them in {_where(b)}"))  # fmt: skip
+    if not found:
+        return (f"{head}neither the total variance of G nor the odd non-excited lines lie above "
+                f"the even lines (the noise and any even distortion; {level}): no sign of odd "
+                "nonlinear distortion")  # fmt: skip
+    _, where = max(found, key=lambda item: item[0])
+    return (f"{head}against the even lines (the noise and any even distortion), {where}: odd "
+            "nonlinear distortion, a nonlinear model is worth trying")  # fmt: skip
 
 
 _KIND = {"even": "the even lines", "odd": "the odd non-excited lines",
@@ -258,18 +268,18 @@ def _verdict_with_noise(
             seen = [g["distortion_db"] - g["noise_db"] for g in groups if g["detected"]]
             shown.append(f"{kind} lines " + (f"up to {max(seen):+.1f} dB over the noise" if seen
                                              else "at the noise"))  # fmt: skip
-    kinds = f" ({', '.join(shown)})" if shown else ""
+    tested = f" ({'; '.join([level, ', '.join(shown)] if shown else [level])})"
     over = [_where(b) for b in bands if b.overstated]
     if not found and over:
         return (
-            f"{head}no nonlinear distortion above the noise ({level}){kinds}; but the noise "
+            f"{head}no nonlinear distortion above the noise{tested}; but the noise "
             f"variance lies significantly above the total in {', '.join(over)}, where it is "
             "overstated (noise that passes through the plant's dynamics and does not repeat "
             "leaves transients in every period; longer periods make them smaller) and could "
             "hide distortion of its size"
         )
     if not found:
-        return (f"{head}no nonlinear distortion above the noise in any band ({level}){kinds}: "
+        return (f"{head}no nonlinear distortion above the noise in any band{tested}: "
                 "a linear model suffices at this noise level")  # fmt: skip
     margin, where = max(found, key=lambda item: item[0])
     count = [f"in {showing} of {len(bands)} bands"] if len(bands) > 1 else []

@@ -72,6 +72,9 @@ class Effort:
     #: and the iterations of the climbed degree when it is over ``state_parameters``
     climb_parameters: int = 900
     climb_nfev: int = 40
+    #: on a long record, the block structures' screening is raced: every candidate on
+    #: the first fold, the best ``1 / race`` of them on the others (1: no race)
+    race: int = 3
 
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
@@ -105,7 +108,7 @@ EFFORTS: dict[str, Effort] = {
             final_nfev=300, grow_steps=4,
             state_plans=((2, "full"), (3, "states"), (3, "full"), (4, "states")),
             state_parameters=1200, state_keep=3, final_samples=None, loop_single=True,
-            warm_starts=5, climb_parameters=1800, climb_nfev=60,
+            warm_starts=5, climb_parameters=1800, climb_nfev=60, race=2,
         ),
     )
 }  # fmt: skip

@@ -38,7 +38,8 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
    decided from the data, fitted by simulation error with ``screen_nfev`` iterations
    (long records on the first ``screen_samples`` of each fold's training data); with
    an integrating plant (ARX poles within :data:`INTEGRATING_POLE` of 1) also with
-   integrators.
+   integrators. A long record's structures are raced (``_Search._race``): all on the
+   first fold, the best ``1 / race`` of them on the others.
 4. ``finalists`` -- the best ``finalists`` candidates again with ``final_nfev``
    iterations on the whole training folds: new candidates, scored like the rest (a
    longer fit never replaces a shorter one that scored better).
@@ -120,7 +121,13 @@ from blockid.defaults import TIE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.trust import Trust, assess
 from blockid.fitting.registry import STRUCTURES, searched_structures
-from blockid.workflows.effort import EFFORTS, LONG_RECORD, RULES, Effort, check_search
+from blockid.workflows.effort import (
+    EFFORTS,
+    LONG_RECORD,
+    RULES,
+    Effort,
+    check_search,
+)
 from blockid.workflows.parallel import TaskRunner, available_cores
 from blockid.workflows.refit import (
     REFIT_SLACK,
@@ -159,6 +166,9 @@ Progress = Callable[[str, int, int, str], None]
 #: others); test error over the better pick, geometric mean: 1.0003 at 0.75, 1.0005 at
 #: 1.0, 1.008 at 0.5, 1.020 at 0, 1.157 at 1.5 (``docs/identify.md`` has the table).
 LINEAR_MARGIN = 0.75
+#: A race (``_Search._race``) carries on at least this many candidates, and a stage of
+#: fewer new candidates is not raced.
+RACE_MIN = 8
 
 
 # ----------------------------------------------------------------------------- scores
@@ -416,6 +426,7 @@ class _Search:
         self.order: list[Score] = []
         self.cut = False
         self.stages: list[dict[str, Any]] = []
+        self.raced: list[dict[str, Any]] = []  # candidates a race left out (:meth:`_race`)
         shortest = min(s.n_samples for f in plan.folds for s in f.test)
         self.n_init = int(min(50, max(10, shortest // 10)))
         y = np.vstack([e.y for e in data.experiments])
@@ -426,26 +437,85 @@ class _Search:
         return self.deadline is not None and time.monotonic() > self.deadline
 
     def run(
-        self, stage: str, candidates: Sequence[Candidate], screen: bool, capped: bool = True
+        self,
+        stage: str,
+        candidates: Sequence[Candidate],
+        screen: bool,
+        capped: bool = True,
+        race: bool = False,
     ) -> list[Score]:
         """Score ``candidates`` (each fit once: a candidate scored before is not fitted
         again) on every fold; returns their scores in order (the new and the old).
         ``capped=False``: the time limit does not apply (the delay scan, so that a cut
-        search still has a model)."""
+        search still has a model). ``race``: on a long record, the new candidates are
+        raced (:meth:`_race`): only those that lead on the first fold are scored on
+        the others."""
         candidates = unique(candidates)
         new = [c for c in candidates if c.key not in self.scores]
         limit = None
         if self.long:
             limit = self.effort.screen_samples if screen else self.effort.final_samples
-        for cand, folds in zip(
-            new, self._fold_scores(stage, new, self.plan, limit, capped), strict=True
-        ):
+        raced = race and self.long and self.effort.race > 1 and len(self.plan) > 1
+        if raced and len(new) >= RACE_MIN:
+            scored = self._race(stage, new, limit, capped)
+        else:
+            scored = self._fold_scores(stage, new, self.plan, limit, capped)
+        for cand, folds in zip(new, scored, strict=True):
             if folds is None:
-                continue  # cut by the time limit: not scored
+                continue  # cut by the time limit (or raced out): not scored
             score = self._combine(cand, stage, folds)
             self.scores[cand.key] = score
             self.order.append(score)
         return [self.scores[c.key] for c in candidates if c.key in self.scores]
+
+    def _race(
+        self, stage: str, candidates: list[Candidate], limit: int | None, capped: bool
+    ) -> list[list[FoldScore] | None]:
+        """Successive halving in one round: every candidate fitted and scored on the
+        first fold; the best ``1 / effort.race`` of them (at least ``RACE_MIN``, ties by
+        label) on the other folds as well. Each fold's fit is the one the full stage
+        would make, so a candidate that carries on gets the very score it would have
+        had; one that fails the first fold is rejected with its reason, as before; the
+        others are left out, recorded in :attr:`raced` with their first fold's error.
+        ``docs/identify.md`` (racing) has the study behind the rule."""
+        first_plan = FoldPlan(self.plan.folds[:1], self.plan.text)
+        rest_plan = FoldPlan(self.plan.folds[1:], self.plan.text)
+        first = self._fold_scores(stage, candidates, first_plan, limit, capped)
+        record = self.stages.pop()
+        ok = [j for j, f in enumerate(first) if f is not None and not f[0].reason]
+        ok.sort(key=lambda j: (first[j][0].relative, candidates[j].label))  # type: ignore[index]
+        keep = max(RACE_MIN, math.ceil(len(candidates) / self.effort.race))
+        kept, dropped = ok[:keep], ok[keep:]
+        rest = self._fold_scores(stage, [candidates[j] for j in kept], rest_plan, limit, capped)
+        second = self.stages.pop()
+        out: list[list[FoldScore] | None] = [
+            f if f is not None and f[0].reason else None for f in first
+        ]
+        for j, more in zip(kept, rest, strict=True):
+            out[j] = None if more is None else [*first[j], *more]  # type: ignore[misc]
+        for j in dropped:
+            self.raced.append(
+                {
+                    "candidate": candidates[j].label,
+                    "stage": stage,
+                    "fold": self.plan.folds[0].name,
+                    "relative": first[j][0].relative,  # type: ignore[index]
+                }
+            )
+        self.stages.append(
+            {
+                "stage": stage,
+                "candidates": len(candidates),
+                "fits": record["fits"] + second["fits"],
+                "seconds": round(record.get("seconds", 0.0) + second.get("seconds", 0.0), 3),
+                "raced": {
+                    "first_fold": self.plan.folds[0].name,
+                    "carried_on": len(kept),
+                    "left_out": len(dropped),
+                },
+            }
+        )
+        return out
 
     def score_on(
         self, plan: FoldPlan, stage: str, candidates: Sequence[Candidate]
@@ -874,6 +944,7 @@ def identify(
         "folds": plan.to_dict(data),
         "initial_samples": search.n_init,
         "stages": search.stages,
+        "raced_out": search.raced,
         "cut_by_time_limit": search.cut,
         "time_limit": time_limit,
         "beyond_linear": earned,

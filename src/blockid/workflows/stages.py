@@ -416,7 +416,7 @@ def _block_structures(
             f"{integrations} integrator(s) tried first"
         )
     candidates += structure_candidates(block, orders, search.data, screen, eff.families)
-    search.run("structures", candidates, True)
+    search.run("structures", candidates, True, race=True)
     return orders
 
 
