@@ -180,3 +180,31 @@ def test_the_new_sections_are_drawn(example_report, tmp_path, anchors, figures):
         levels = (pixels * 31).astype(int)
         colours = np.unique(levels[..., 0] * 1024 + levels[..., 1] * 32 + levels[..., 2])
         assert colours.size > 50
+
+
+def test_a_state_space_report_reads_at_1280_and_640_px(state_space_report, tmp_path):
+    """The state-space sections (the Nyquist pole named in the table, '= free run' in
+    the one-step cells, the basis-free quantities and the folded matrices, opened) laid
+    out in Chromium: at 1280 px no word split and every table fits; at 640 px still no
+    word split and no overflow of the page; the sections drawn, in colour."""
+    from matplotlib.image import imread
+
+    _, _, page = state_space_report
+    opened = page.replace("<details>", "<details open>")
+    wide = _layout(opened, tmp_path, 1280)
+    assert wide["broken"] == [] and wide["scrolled"] == []
+    assert wide["page"] <= wide["window"]
+    narrow = _layout(opened, tmp_path, 640)
+    assert narrow["broken"] == [] and narrow["page"] <= narrow["window"]
+    for width in (1280, 640):
+        view = tmp_path / f"state-space-{width}.html"
+        view.write_text(_only(opened, ("comparison", "parameters", "linear")), encoding="utf-8")
+        shot = tmp_path / f"state-space-{width}.png"
+        run = _chromium(tmp_path, "--hide-scrollbars", f"--window-size={width},3000",
+                        f"--screenshot={shot}", view.as_uri())  # fmt: skip
+        assert shot.exists(), run.stderr[-2000:]
+        pixels = imread(shot)[..., :3]
+        assert np.any(pixels < 0.9, axis=-1).mean() > 0.02
+        levels = (pixels * 31).astype(int)
+        colours = np.unique(levels[..., 0] * 1024 + levels[..., 1] * 32 + levels[..., 2])
+        assert colours.size > 50
