@@ -53,9 +53,13 @@ def test_pole_notes_name_one_pole_of_each_kind():
     assert "within 0.001 of the unit circle" in near and "time constant of 1999 samples" in near
     (nyquist,) = pole_notes(np.array([-0.97, 0.3]))
     assert "-0.97, within 0.05 of -1" in nyquist and "Nyquist" in nyquist
-    # a pole near -1 on the margin is named once; not at all when noted elsewhere
+    # a pole near -1 on the margin is named once, as the Nyquist mode it is (it does
+    # not drift, and an integrator is no cure); not at all when noted elsewhere
     (once,) = pole_notes(np.array([-(1.0 - POLE_MARGIN / 2)]))
-    assert "of the unit circle" in once
+    assert "Nyquist" in once and "integrator" not in once and "drifts" not in once
+    (both,) = pole_notes(np.array([-0.9995, 0.5]))  # the report's state space
+    assert "-0.9995, within 0.05 of -1" in both and "time constant" not in both
+    assert len(pole_notes(np.array([-0.9995, 0.9995]))) == 2  # a slow mode and a Nyquist one
     assert pole_notes(np.array([-(1.0 - POLE_MARGIN / 2)]), near_noted=True) == []
     assert len(pole_notes(np.array([1.02, -0.98]))) == 2  # unstable, and a Nyquist mode
 

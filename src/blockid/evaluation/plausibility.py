@@ -199,8 +199,14 @@ def pole_notes(
         )
         named[size >= 1.0] = True
     elif size[k] > 1.0 - margin:
-        named[size > 1.0 - margin] = True
-        if not near_noted:
+        # a pole by -1 is named below as the Nyquist mode it is: it neither drifts nor
+        # calls for an integrator
+        slow = (size > 1.0 - margin) & (np.abs(poles + 1.0) >= NYQUIST_MARGIN)
+        named[slow | ((size > 1.0 - margin) & near_noted)] = True
+        if slow.any():
+            k = int(np.argmax(np.where(slow, size, -np.inf)))
+            worst = complex(poles[k])
+        if slow.any() and not near_noted:
             notes.append(
                 f"the model's linear part has a pole at {_shown(worst)} (magnitude "
                 f"{size[k]:.6g}), within {margin:g} of the unit circle: a mode with a time "
