@@ -87,7 +87,8 @@ EFFORTS: dict[str, Effort] = {
         Effort(
             name="quick", folds=3, folds_long=2, max_order=5, max_delay=10, linear_keep=1,
             families=3, screen_nfev=15, screen_samples=10_000, finalists=2, final_nfev=60,
-            grow_steps=1, state_plans=((2, "full"), (3, "states")), state_parameters=300,
+            grow_steps=1, state_plans=((2, "full"), (3, "states"), (3, "full")),
+            state_parameters=300,
             state_keep=2, final_samples=20_000, warm_starts=2,
             warm_starts_long=1, climb_parameters=600, climb_nfev=20,
             block_state_plans=(
