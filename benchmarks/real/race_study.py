@@ -32,7 +32,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -106,10 +105,11 @@ def main(argv: list[str] | None = None) -> int:
           "  ".join(f"eta={e}" for e in ETAS))  # fmt: skip
     for name, s in out["sets"].items():
         keeps = "  ".join(f"{'yes' if s['keeps_top'][e] else 'NO':>5s}" for e in ETAS)
-        print(f"{name:28s} {s['samples']:8d} {s['candidates']:5d} "
-              f"{s['worst_first_fold_rank_of_top']:10d}  {keeps}{'' if s['long'] else '  (short)'}")  # fmt: skip
+        worst, short = s["worst_first_fold_rank_of_top"], "" if s["long"] else "  (short)"
+        print(f"{name:28s} {s['samples']:8d} {s['candidates']:5d} {worst:10d}  {keeps}{short}")
     for name, v in out["loso"].items():
-        print(f"left out {name}: eta {v['eta']} chosen on the others; keeps its top: {v['keeps_top']}")
+        print(f"left out {name}: eta {v['eta']} chosen on the others; keeps its top: "
+              f"{v['keeps_top']}")  # fmt: skip
     if args.out:
         args.out.write_text(json.dumps(out, indent=1))
     return 0
