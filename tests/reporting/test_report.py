@@ -66,7 +66,7 @@ def test_report_records_command_hash_and_versions(example_report):
 
 def test_report_sections_and_captions(example_report):
     html = example_report.html
-    for title in ("Data overview", "Comparison of the models", "Measured and simulated output",
+    for title in ("Data overview", "Best linear approximation", "Comparison of the models", "Measured and simulated output",
                   "Identified nonlinearities", "Parameter trajectories of recursive estimators",
                   "Provenance"):  # fmt: skip
         assert f"<h2>{title}</h2>" in html
@@ -187,9 +187,9 @@ def test_report_of_an_identify_result(hammerstein):
     assert "<td>unstable</td>" in html
     assert "effort quick" in html and "The time limit cut the search" in html
     assert "free-run simulation on the validation range 1100:2200" in html
-    # data, output, linear dynamics, blocks (one model and no ARX in the search: no bar
-    # chart, no search figure, no linear baseline)
-    assert len(IMG.findall(html)) == 4
+    # data, BLA, output, linear dynamics, blocks (one model and no ARX in the search: no
+    # bar chart, no search figure, no linear baseline)
+    assert len(IMG.findall(html)) == 5
     assert "Linear baseline: none, the search scored no ARX model" in html
     apart = build_report(identify=identified, estimation=est, validation=val)  # no record
     assert "Measured estimation data" in apart and "Measured validation data" in apart

@@ -29,6 +29,7 @@ from blockid.plotting import report_figures as figures
 from blockid.plotting.html import encode_png
 from blockid.plotting.report_figures import zoom_title
 from blockid.plotting.uncertainty import fit_draws, output_bands
+from blockid.reporting.bla_section import bla_section
 from blockid.reporting.entries import Entry, heading, predicts_by_free_run
 from blockid.reporting.html import figure, page, paragraph, section, table
 from blockid.reporting.model_sections import (
@@ -429,6 +430,7 @@ def build_report(
 
     with matplotlib.rc_context({"font.size": 8}):
         sections = [_overview(data, estimation, validation, ranges)]
+        sections.append(bla_section(estimation, f"estimation data ({est_text})"))
         if identify is not None:
             sections.append(search_section(identify, baseline))
         sections += [
@@ -440,7 +442,7 @@ def build_report(
             histories_section(entries, est_text),
             _provenance(provenance),
         ]
-    nav = [("data", "Data overview")]
+    nav = [("data", "Data overview"), ("bla", "Best linear approximation")]
     if identify is not None:
         nav.append(("search", "Search of identify()"))
     nav += [
