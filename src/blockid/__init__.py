@@ -64,6 +64,7 @@ _WHERE = {
     "fit_arx": "blockid.fitting",
     "fit_model": "blockid.fitting",
     "metrics_by_output": "blockid.evaluation",
+    "predict": "blockid.evaluation",
     # errors
     "BlockidError": "blockid.errors",
     "DataError": "blockid.errors",

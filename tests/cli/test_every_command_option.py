@@ -852,29 +852,32 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
         r = run(f, "--initial-samples", "0", code=2)
         assert "whole number >= 1" in r.stderr and "(option --initial-samples)" in r.stderr
 
-    def steps(f, calls):
-        if command == "simulate":  # the free run is every step ahead
-            r = run(f, "--steps", "3", code=2)
-            assert "--steps applies to predict only" in r.stderr
+    def horizon(f, calls):
+        if command == "simulate":  # the free run is every horizon at once
+            r = run(f, "--horizon", "3", code=2)
+            assert "--horizon applies to predict only" in r.stderr
             return
-        doc = _json(run(f, "--steps", "3", "--json"))
+        doc = _json(run(f, "--horizon", "3", "--json"))
         one = _json(run(f, "--json"))
-        assert doc["mode"] == "k-step" and one["mode"] == "one-step"
-        lag = doc["initial_samples_per_experiment"] - 2  # max_lag + 3 - 1 not scored
-        assert lag == one["initial_samples_per_experiment"]
+        assert doc["mode"] == "k-step" and one["mode"] == "one-step" and doc["horizon"] == 3
+        assert doc["initial_samples_per_experiment"] == one["initial_samples_per_experiment"]
         assert doc["metrics"]["rmse"]["y"] != one["metrics"]["rmse"]["y"]
-        assert "3-step-ahead prediction on" in run(f, "--steps", "3").stdout
+        assert _json(run(f, "--horizon", "1", "--json"))["metrics"] == one["metrics"]
+        free = _json(run(f, "--horizon", "100000", "--json"))
+        assert free["metrics"] == _json(_run("simulate", f.model, f.csv, "--json"))["metrics"]
+        assert "3-step-ahead prediction on" in run(f, "--horizon", "3").stdout
         path = f.path("k.csv")
-        run(f, "--steps", "3", "-o", path)
+        run(f, "--horizon", "3", "-o", path)
         assert "y_pred" in pd.read_csv(path).columns
 
     return {
         "band": band,
-        "steps": steps,
+        "horizon": horizon,
         "initial_samples": initial_samples,
         "rng": range_,
         "out": out,
         "plot": plot,
+        assert "--horizon" in run(f, "--horizon", "0", code=2).stderr
         "ts": ts,
         "time_column": time_column,
         "experiment_column": experiment_column,

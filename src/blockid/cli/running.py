@@ -83,14 +83,15 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             ),
         ] = None,
         initial_samples: InitialSamples = None,
-        steps: Annotated[
+        horizon: Annotated[
             int | None,
             typer.Option(
-                "--steps",
+                "--horizon",
                 metavar="K",
                 min=1,
-                help="predict: K-step-ahead prediction (the outputs measured up to K "
-                "samples back; 1: one step, the default).",
+                help="predict: the prediction K samples ahead, from the outputs measured "
+                "up to K samples back (1: one step, the default; the record's length or "
+                "more: the free run).",
                 show_default=False,
             ),
         ] = None,
@@ -99,10 +100,11 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
     ) -> None:
         from blockid.errors import ParameterError
 
-        if steps is not None and mode != "one-step":
+        if horizon is not None and mode != "one-step":
             raise ParameterError(
-                "--steps applies to predict only (simulate is the free run: every step ahead)",
-                parameter="steps",
+                "--horizon applies to predict only (simulate is the free run: every "
+                "horizon at once); use blockid predict --horizon K",
+                parameter="horizon",
             )
 
         if band is not None and mode != "simulation":
@@ -141,10 +143,10 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
                 "estimated state instead. Drop one of them",
                 parameter="band",
             )
-        if steps is not None and steps > 1:
-            from blockid.evaluation.horizon import k_step_prediction
+        if horizon is not None and horizon > 1:
+            from blockid.evaluation.horizon import predict as predict_ahead
 
-            result = k_step_prediction(model, data, steps)
+            result = predict_ahead(model, data, horizon)
         else:
             result = evaluate(model, data, mode, initial_samples=initial_samples)
         where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
@@ -186,8 +188,8 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             print_json(doc)
             return
         title = f"{_LABELS[mode]} on {where}"
-        if steps is not None and steps > 1:
-            title = f"{steps}-step-ahead prediction on {where}"
+        if horizon is not None and horizon > 1:
+            title = f"{horizon}-step-ahead prediction on {where}"
         if initial_samples is not None:
             title += f", started from {initial_samples} measured outputs"
         stdout.print(metrics_table(title, [(model.structure, result.metrics)]))

@@ -4,7 +4,7 @@ and the plant's best linear approximation measured from data."""
 from blockid.evaluation.bla import best_linear_approximation, robust_bla
 from blockid.evaluation.bla_result import BestLinearApproximation
 from blockid.evaluation.frf import welch_bla
-from blockid.evaluation.horizon import k_step_prediction
+from blockid.evaluation.horizon import predict
 from blockid.evaluation.metrics import (
     METRICS,
     fit_percent,
@@ -27,7 +27,7 @@ __all__ = [
     "MODES",
     "ModelOutput",
     "evaluate",
-    "k_step_prediction",
+    "predict",
     "ResidualAnalysis",
     "residual_analysis",
     "METRICS",

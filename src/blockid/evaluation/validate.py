@@ -25,7 +25,9 @@ class ModelOutput:
 
     Attributes
     ----------
-    mode : {"simulation", "one-step"}
+    mode : {"simulation", "one-step", "k-step"}
+        ``"k-step"``: the prediction ``horizon`` samples ahead
+        (:func:`~blockid.evaluation.horizon.predict`).
     data : Dataset
         The measured data the model ran on.
     outputs : list of ndarray
@@ -51,6 +53,8 @@ class ModelOutput:
         beyond the measured range: :func:`~blockid.evaluation.plausibility.divergence`);
         None when it has not. Its metrics then mean nothing: ``simulate`` and
         ``predict`` stop with an error.
+    horizon : int, optional
+        ``"k-step"``: the samples ahead predicted.
     """
 
     mode: str
@@ -61,6 +65,7 @@ class ModelOutput:
     warnings: list[str] = field(default_factory=list)
     initial_samples: int | None = None
     diverged: str | None = None
+    horizon: int | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The data as a table, with a ``<output>_sim`` / ``<output>_pred`` column each."""
@@ -83,6 +88,8 @@ class ModelOutput:
         }
         if self.initial_samples is not None:
             doc["initial_samples"] = self.initial_samples
+        if self.horizon is not None:
+            doc["horizon"] = self.horizon
         doc.update(metrics=self.metrics, warnings=self.warnings)
         if self.diverged is not None:
             doc["diverged"] = self.diverged
