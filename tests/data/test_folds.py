@@ -59,6 +59,7 @@ def test_three_or_more_experiments_leave_one_group_out():
 
 def test_short_records_get_fewer_folds_and_too_short_ones_an_error():
     assert len(fold_plan(_data(100), 4, min_samples=30)) == 3
+    assert len(fold_plan(_data(60), 4, min_samples=30)) == 2  # down to two, not further
     with pytest.raises(DataError, match="too short"):
         fold_plan(_data(40), 4, min_samples=30)
     with pytest.raises(DataError, match="at least 2"):

@@ -399,3 +399,21 @@ def test_degree_by_degree_climbs_to_the_plant_and_records_each_rung():
     np.testing.assert_allclose(_linearised_poles(fit.model), [0.5, 0.7], atol=1e-5)
     with pytest.raises(ParameterError, match="start_degree <= degree"):
         fit_polynomial_state_space(data, nx=2, degree=2, start_degree=3)
+
+
+def test_the_subspace_estimate_keeps_the_stability_margin():
+    """A plant whose pole lies between the margin and the unit circle (0.99975 on 2 000
+    samples, margin 0.0005) gets a subspace pole reflected inside ``1 - margin`` (the
+    margin every fit keeps), not merely inside the unit circle."""
+    from scipy.signal import lfilter
+
+    from blockid.fitting.checks import stability_margin
+
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(2000)
+    y = lfilter([0.0, 0.05], [1.0, -0.99975], u)
+    data = Dataset.from_arrays(u, y + 1e-4 * rng.standard_normal(u.size), ["u"], ["y"])
+    margin = stability_margin(data)
+    assert margin == 0.0005
+    (pole,) = np.linalg.eigvals(subspace(data, nx=1).model.A)
+    assert 1.0 - 3 * margin < abs(pole) < 1.0 - margin  # reflected: inside the margin

@@ -858,3 +858,37 @@ def test_a_race_on_a_long_record_scores_the_leaders_as_the_full_stage_would():
     )
     worst_kept = max(s.folds[0].relative for s in leaders)
     assert all(r["relative"] >= worst_kept and r["stage"] == "structures" for r in left_out)
+
+
+def test_warm_starts_begin_beyond_the_slack_and_come_from_the_best_folds(monkeypatch):
+    """The refit's own-data error is held against the folds' pooled error: within
+    REFIT_SLACK of it the direct fit stands alone; beyond it the candidate is refined
+    from its models of its ``warm_starts`` best folds (by held-back error), not others."""
+    from dataclasses import replace
+
+    from blockid.workflows import refit as module
+    from blockid.workflows.refit import REFIT_SLACK, _fold_rmse
+
+    data = dead_zone_record(600)
+    effort = replace(SMALL, warm_starts=1)
+    options = dict(structures=["hammerstein"], effort=effort, jobs=1)
+    plain = identify(data, **options)
+    pooled = _fold_rmse(plain.selected)
+    real = module._refit
+
+    def reporting(factor):
+        def refit(candidate, data, cv_rmse, n_init, notes):
+            fit, _ = real(candidate, data, cv_rmse, n_init, notes)
+            return fit, factor * pooled  # the own-data error the trigger reads
+
+        return refit
+
+    monkeypatch.setattr(module, "_refit", reporting(0.98 * REFIT_SLACK))
+    assert identify(data, **options).search["warm_starts"] == []
+    monkeypatch.setattr(module, "_refit", reporting(1.02 * REFIT_SLACK))
+    warm = identify(data, **options).search["warm_starts"][0]
+    (_, start) = [s["start"] for s in warm["starts"]]
+    relative = [f.relative for f in plain.selected.folds]
+    best = int(np.argmin(relative))
+    assert relative.count(relative[best]) == 1 and max(relative) > relative[best]
+    assert start == f"the model fitted without {plain.search['folds'][best]['name']}"
