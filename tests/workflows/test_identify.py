@@ -856,6 +856,7 @@ def test_a_race_on_a_long_record_scores_the_leaders_as_the_full_stage_would():
     assert (
         len(left_out) + len(leaders) + len([s for s in a.rejected if s.stage == "structures"]) == n
     )
+    assert any(f"{len(left_out)} were left out there" in n for n in a.notes)
     worst_kept = max(s.folds[0].relative for s in leaders)
     assert all(r["relative"] >= worst_kept and r["stage"] == "structures" for r in left_out)
 

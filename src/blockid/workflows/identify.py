@@ -870,6 +870,13 @@ def identify(
     with TaskRunner(data, min(jobs, 64), scheduler) as runner:
         search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
         run_stages(search, chosen, recommended, notes, asked=bool(asked))
+        for raced in (r["raced"] for r in search.stages if "raced" in r):
+            notes.append(
+                f"a long record: the structures were raced, each scored on "
+                f"{raced['first_fold']} first and the best {raced['carried_on']} on every "
+                f"fold; {raced['left_out']} were left out there (search.raced_out in the "
+                "JSON lists them with that fold's error)"
+            )
         ranked_all = search.ranked()
         eligible = [s for s in ranked_all if s.candidate.structure in chosen]
         if not eligible:
