@@ -3,8 +3,9 @@
 Every plant is simulated here (:func:`scipy.signal.lfilter`) on multisines of
 :func:`blockid.design.multisine`: a linear plant (the BLA is its frequency response, the
 distortion is nil), Wiener plants with a static cubic (odd) or square (even)
-nonlinearity, and a Wiener-Hammerstein plant whose true BLA and distortion level are
-computed from many noiseless realisations.
+nonlinearity, a backlash before a low-pass (hysteresis, whose distortion falls outside
+the excited band), and a Wiener-Hammerstein plant whose true BLA and distortion level are computed from many
+noiseless realisations.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import pandas as pd
 import pytest
 from scipy import signal
 
+from blockid.blocks.backlash import Backlash
 from blockid.data import Dataset, Experiment
 from blockid.design import multisine
 from blockid.errors import DataError, ParameterError
@@ -28,12 +30,12 @@ B, A = signal.cheby1(2, 1.0, 0.2)
 B2, A2 = signal.butter(1, 0.35)
 
 
-def _record(plant, *, samples=512, periods=3, realisations=6, odd=False, f_max=0.3,
-            sigma=0.01, seed=0, rms=1.0) -> tuple[Dataset, object]:  # fmt: skip
+def _record(plant, *, samples=512, periods=3, realisations=6, odd=False, f_min=None,
+            f_max=0.3, sigma=0.01, seed=0, rms=1.0) -> tuple[Dataset, object]:  # fmt: skip
     """``realisations`` experiments of ``periods`` periods (the first one the transient)
     of a multisine through ``plant``, white output noise of std ``sigma``."""
-    x = multisine(samples, f_max=f_max, odd=odd, periods=periods, realisations=realisations,
-                  rms=rms, seed=seed)  # fmt: skip
+    x = multisine(samples, f_min=f_min, f_max=f_max, odd=odd, periods=periods,
+                  realisations=realisations, rms=rms, seed=seed)  # fmt: skip
     rng = np.random.default_rng(seed + 100)
     exps = []
     for m, u in enumerate(x.signals):
@@ -59,6 +61,12 @@ def wiener_square(u):
 def wiener_hammerstein(u):
     x = signal.lfilter(B, A, u)
     return signal.lfilter(B2, A2, np.tanh(1.5 * x))
+
+
+def _excited(bla):
+    """The bands that hold excited lines (by default a band of the empty lines above
+    the excitation follows them)."""
+    return [b for b in bla.bands if b.lines]
 
 
 def _true_frf(frequencies, b=B, a=A):
@@ -94,7 +102,7 @@ def test_the_noise_variance_is_that_of_the_noise_added():
 def test_a_linear_plant_shows_no_distortion_total_is_noise():
     data, _ = _record(linear, realisations=8, periods=5, sigma=0.05)
     bla = best_linear_approximation(data, transient_periods=1)
-    for band in bla.bands:
+    for band in _excited(bla):
         assert abs(band.total_db - band.noise_db) < 1.5, band
         assert not band.detected, band
     assert bla.verdict.startswith("no nonlinear distortion above the noise")
@@ -142,7 +150,7 @@ def test_noise_through_the_dynamics_is_overstated_and_said_so():
         u = e.u[:, 0] + 0.1 * rng.standard_normal(e.n_samples)
         driven.append(Experiment(e.name, u, linear(u)))
     bla = best_linear_approximation(Dataset(("u",), ("y",), 1.0, driven), transient_periods=1)
-    assert all(b.overstated and not b.detected for b in bla.bands)
+    assert all(b.overstated and not b.detected for b in _excited(bla))
     assert "overstated (noise that passes through the plant's dynamics" in bla.verdict
 
 
@@ -151,7 +159,7 @@ def test_an_odd_nonlinearity_shows_at_the_odd_lines_left_empty_not_at_the_even_o
     data, x = _record(wiener_cubic, odd=True, realisations=6, periods=4, sigma=0.01)
     bla = best_linear_approximation(data, transient_periods=1)
     assert bla.odd_design and set(bla.lines) == set(x.lines)
-    for band in bla.bands:
+    for band in _excited(bla):
         assert band.detected and band.margin_db > 20, band
         odd, even = band.nonexcited["odd"], band.nonexcited["even"]
         assert odd["detected"] and odd["distortion_db"] - odd["noise_db"] > 20, band
@@ -167,8 +175,8 @@ def test_an_odd_nonlinearity_shows_at_the_odd_lines_left_empty_not_at_the_even_o
 def test_an_even_nonlinearity_shows_at_the_even_lines():
     data, _ = _record(wiener_square, odd=True, realisations=6, periods=4, sigma=0.01)
     bla = best_linear_approximation(data, transient_periods=1)
-    evens = [b.nonexcited["even"] for b in bla.bands]
-    odds = [b.nonexcited["odd"] for b in bla.bands]
+    evens = [b.nonexcited["even"] for b in _excited(bla)]
+    odds = [b.nonexcited["odd"] for b in _excited(bla)]
     assert all(g["detected"] and g["distortion_db"] - g["noise_db"] > 20 for g in evens)
     assert not any(g["detected"] for g in odds)
     # an even nonlinearity puts nothing on the odd (excited) lines: G is the linear part's
@@ -189,7 +197,7 @@ def test_the_bla_of_a_wiener_hammerstein_plant_agrees_with_the_true_one():
     error = np.abs(bla.g - g_true)
     assert np.mean(error <= bla.bound) >= 0.95
     assert np.mean(error <= 0.5 * bla.std) < 0.4
-    for band in bla.bands:
+    for band in _excited(bla):
         mask = (bla.frequencies >= band.low) & (bla.frequencies <= band.high)
         true_db = 10 * np.log10(var_true[mask].mean() / bla.realisations)
         assert band.distortion_db == pytest.approx(true_db, abs=2.0), band
@@ -216,7 +224,7 @@ def test_one_period_compares_g_and_the_odd_lines_with_the_even_ones():
     assert bla.var_noise is None and bla.var_total is not None and bla.periods == 1
     assert bla.verdict.startswith("one period a realisation")
     assert "dB above them in" in bla.verdict and "worth trying" in bla.verdict
-    for band in bla.bands:
+    for band in _excited(bla):
         assert band.total_db - band.nonexcited["even"]["level_db"] > 20, band
         assert band.nonexcited["odd"]["detected"] and band.nonexcited["odd"]["over_even_db"] > 20
     lin, _ = _record(linear, odd=True, realisations=6, periods=2, sigma=0.01)
@@ -235,6 +243,61 @@ def test_a_stray_even_line_of_an_odd_excitation_is_a_disturbance():
     assert (
         "1 even line(s) with input power left out" in bla.notes[0] and "40 (0.07812" in bla.notes[0]
     )
+
+
+# ----------------------------------------------------------------------------- out of band
+def backlash_low_pass(u):
+    """Backlash (play of 0.1 either way), then the low-pass: hysteresis, whose products
+    fall below the excited band as well as above it."""
+    return linear(Backlash(1.0, 0.1, 1.0, 0.1).simulate(u))
+
+
+def _band_limited(plant, seed=3):
+    """One realisation of 4 periods of a random-phase multisine over 0.05-0.2 cycles
+    a sample: 51 empty lines below the band, 307 above it up to Nyquist."""
+    return _record(plant, samples=1024, periods=4, realisations=1, f_min=0.05, f_max=0.2,
+                   sigma=0.01, seed=seed)  # fmt: skip
+
+
+@pytest.mark.parametrize(("plant", "where"), [(backlash_low_pass, 0), (wiener_cubic, -1)])
+def test_by_default_the_distortion_outside_the_excited_band_is_found(plant, where):
+    """The default bands span every line from the first to Nyquist: a band below the
+    excitation (backlash: 19 dB over the noise there) and one above it (the cubic's
+    harmonics), besides the excited band split in four."""
+    data, x = _band_limited(plant)
+    bla = best_linear_approximation(data)
+    assert "nonlinear distortion dominates the noise" in bla.verdict and "worth trying" in (
+        bla.verdict
+    )
+    assert bla.lines[0] == x.lines[0] == 52 and bla.lines[-1] == x.lines[-1] == 204
+    below, *excited, above = bla.bands
+    assert [b.lines for b in (below, above)] == [0, 0] and len(excited) == 4
+    assert (below.low, below.high) == (1 / 1024, 51 / 1024)
+    assert (above.low, above.high) == (205 / 1024, 511 / 1024)
+    found = bla.bands[where].nonexcited["non-excited"]
+    assert found["detected"] and found["distortion_db"] - found["noise_db"] > 10
+    assert any(f" in {b.low:.4g}-{b.high:.4g} Hz, at the non-excited lines" in bla.verdict
+               for b in (below, above))  # fmt: skip
+
+
+def test_by_default_a_linear_plant_with_the_same_design_shows_none():
+    data, _ = _band_limited(linear)
+    bla = best_linear_approximation(data)
+    assert bla.verdict.endswith("no nonlinear distortion above the noise in any band (99% "
+                                "test): a linear model suffices at this noise level")  # fmt: skip
+    assert len(bla.bands) == 6 and not any(
+        g["detected"] for b in bla.bands for g in b.nonexcited.values()
+    )
+
+
+def test_bands_given_that_leave_the_distortion_out_do_not_hide_it():
+    data, _ = _band_limited(backlash_low_pass)
+    bla = best_linear_approximation(data, bands=[(0.05, 0.2)])
+    assert len(bla.bands) == 1 and not bla.bands[0].nonexcited
+    assert "in 0.0009766-0.0498 Hz (outside the bands given), at the non-excited lines" in (
+        bla.verdict
+    )
+    assert "worth trying" in bla.verdict
 
 
 # ----------------------------------------------------------------------------- the periods

@@ -9,7 +9,7 @@ import pytest
 
 from blockid.errors import ParameterError
 from blockid.evaluation.bla_bands import band_edges, parse_bands, summarised
-from blockid.evaluation.bla_result import BestLinearApproximation
+from blockid.evaluation.bla_result import BestLinearApproximation, NonExcitedLines
 
 
 def test_bands_parse_from_a_count_or_edges():
@@ -29,6 +29,15 @@ def test_default_bands_hold_equal_numbers_of_lines_and_split_gaps_in_the_middle(
         band_edges(f, 0)
 
 
+def test_a_number_of_bands_adds_the_empty_lines_below_and_above_the_excited_ones():
+    f = np.array([3.0, 4.0, 5.0, 6.0])
+    assert band_edges(f, 2, empty=np.array([1.0, 2.0, 4.5, 7.0, 8.0])) == [
+        (1.0, 2.0), (3.0, 4.5), (4.5, 6.0), (7.0, 8.0),
+    ]  # fmt: skip
+    assert band_edges(f, 1, empty=np.array([7.0])) == [(3.0, 6.0), (7.0, 7.0)]
+    assert band_edges(f, 1, empty=np.array([])) == [(3.0, 6.0)]
+
+
 def test_given_bands_must_hold_a_line():
     f = np.array([1.0, 2.0, 3.0])
     assert band_edges(f, [(0.0, 1.5), (1.5, 9.0)]) == [(0.0, 1.5), (1.5, 9.0)]
@@ -39,15 +48,21 @@ def test_given_bands_must_hold_a_line():
         band_edges(f, [(2.0, 1.0)])
 
 
-def _bla(total: float, noise: float, m: int = 5, p: int = 4, lines: int = 50):
+def _bla(total: float, noise: float, m: int = 5, p: int = 4, lines: int = 50, above=None):
     """A robust result whose every line has these variances (the bands' tests and the
-    verdict read nothing else)."""
+    verdict read nothing else); ``above``: the (level, noise) of 50 empty lines above."""
     f = np.arange(1, lines + 1, dtype=float)
+    empty = None
+    if above is not None:
+        k = np.arange(lines + 1, lines + 51)
+        empty = NonExcitedLines(lines=k, frequencies=k.astype(float),
+                                kind=np.full(50, "non-excited"), level=np.full(50, above[0]),
+                                noise=np.full(50, above[1]))  # fmt: skip
     return BestLinearApproximation(
         method="robust", frequencies=f, g=np.ones(lines, complex),
         var_total=np.full(lines, total), var_noise=np.full(lines, noise), bound=None,
         confidence=0.99, sampling_time=1.0, realisations=m, periods=p, transient_periods=0,
-        samples=2 * lines + 2, bands=(), verdict="",
+        samples=2 * lines + 2, bands=(), verdict="", nonexcited=empty,
     )  # fmt: skip
 
 
@@ -95,3 +110,28 @@ def test_the_verdict_of_one_period_cannot_tell_noise_from_distortion():
         "(that needs 2 or more); the total variance of G is 20.0 dB below |G|² at worst "
         "(1-50 Hz)"
     )
+
+
+def test_the_verdict_reads_the_empty_lines_the_bands_given_leave_out():
+    """Distortion (20 dB over the noise) only above the excited lines: the default bands
+    hold those lines; bands given that leave them out do not hide it, and say so."""
+    bla = _bla(1.0, 1.0, above=(101.0, 1.0))
+    default = summarised(bla, bands=2)
+    assert [(b.low, b.high) for b in default.bands] == [(1, 25.5), (25.5, 50), (51, 100)]
+    assert default.verdict.startswith("nonlinear distortion dominates the noise by 20.0 dB in "
+                                      "51-100 Hz, at the non-excited lines (in 1 of 3 bands)")  # fmt: skip
+    given = summarised(bla, bands=[(0.0, 50.0)])
+    assert len(given.bands) == 1
+    assert given.verdict.startswith("nonlinear distortion dominates the noise by 20.0 dB in "
+                                    "51-100 Hz (outside the bands given), at the non-excited")  # fmt: skip
+    quiet = summarised(_bla(1.0, 1.0, above=(1.0, 1.0)), bands=[(0.0, 50.0)])
+    assert quiet.verdict.endswith("a linear model suffices at this noise level")
+
+
+def test_empty_lines_below_their_noise_say_it_is_overstated():
+    """The output at the empty lines 10 dB below its own noise: the noise is overstated
+    (noise through the dynamics), as where the total lies below the noise."""
+    bla = summarised(_bla(1.0, 1.0, above=(0.1, 1.0)), bands=2)
+    assert bla.bands[-1].nonexcited["non-excited"]["overstated"]
+    assert "lies significantly above the total it is part of (of G, or of the output at the " \
+        "empty lines) in 51-100 Hz, where it is overstated" in bla.verdict  # fmt: skip

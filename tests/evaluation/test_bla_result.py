@@ -43,8 +43,10 @@ def test_the_summary_names_the_data_the_method_and_the_verdict(odd_bla):
     assert "even lines dB (noise)" in text and "odd lines dB (noise)" in text
     assert text.splitlines()[-1] == odd_bla.verdict
     title, columns, rows, lines = odd_bla.summary_table()
-    assert len(rows) == 2 and all(len(r) == len(columns) for r in rows)
+    # the two bands asked for, then the empty lines above the excitation up to Nyquist
+    assert len(rows) == 3 and all(len(r) == len(columns) for r in rows)
     assert rows[0][0] == f"{odd_bla.bands[0].low:.4g} - {odd_bla.bands[0].high:.4g}"
+    assert rows[2][:3] == ["29.69 - 49.61", "0", "-"]
 
 
 def test_the_json_document_is_plain_and_complete(odd_bla):
@@ -52,7 +54,7 @@ def test_the_json_document_is_plain_and_complete(odd_bla):
     g = np.array(doc["g_real"]) + 1j * np.array(doc["g_imag"])
     np.testing.assert_allclose(g, odd_bla.g)
     assert doc["lines"] == odd_bla.lines.tolist() and doc["periods"] == 2
-    assert doc["verdict"] == odd_bla.verdict and len(doc["bands"]) == 2
+    assert doc["verdict"] == odd_bla.verdict and len(doc["bands"]) == 3
     band = doc["bands"][0]
     assert set(band) >= {"low_hz", "high_hz", "g_db", "noise_db", "distortion_db", "margin_db",
                          "p_value", "detected", "nonexcited"}  # fmt: skip

@@ -17,7 +17,8 @@ compared with its noise variance in the same way, ``F(2LM, 2LM(P-1))``; with one
 a realisation the odd lines an odd multisine leaves empty are compared with the even
 ones instead (``F(2L_oM, 2L_eM)``), which hold noise only when the plant's
 nonlinearity is odd. A band shows distortion when the test's p-value is below ``1 -
-confidence``.
+confidence``; the noise is overstated there when the lower tail of the same test is
+(the total, or the output at the empty lines, significantly *below* the noise).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from blockid.evaluation.spectra import db
 __all__ = ["DEFAULT_BANDS", "band_edges", "parse_bands", "summarised"]
 
 #: Bands of the summary by default: the measured lines in this many bands of equal
-#: numbers of lines.
+#: numbers of lines (and the empty lines below and above them, a band each).
 DEFAULT_BANDS = 4
 
 
@@ -69,20 +70,36 @@ def band_edges(
 ) -> list[tuple[float, float]]:
     """The bands' edges (Hz): ``bands`` of equal numbers of the measured
     ``frequencies`` (each band from its first line to its last, a gap between
-    bands split in the middle), or the edges given, checked: each must hold a measured
-    line or one of the ``empty`` (non-excited) lines."""
+    bands split in the middle), and a band of the ``empty`` (non-excited) lines below
+    the first measured line and one of those above the last, when there are such
+    lines; or the edges given, checked: each must hold a measured line or an empty one.
+
+    A number of bands thus spans every line of the record, from the first to the last
+    below Nyquist: a plant that puts its distortion outside the excited band (the
+    harmonics of a band-limited input above it, the low-frequency products of
+    hysteresis below it) is not missed by default.
+
+    >>> band_edges(np.array([3.0, 4.0, 5.0, 6.0]), 2, empty=np.array([1.0, 2.0, 7.0]))
+    [(1.0, 2.0), (3.0, 4.5), (4.5, 6.0), (7.0, 7.0)]
+    """
     f = np.sort(np.asarray(frequencies, dtype=float))
+    seen = f if empty is None else np.sort(np.concatenate([f, empty]))
     if isinstance(bands, int | np.integer) and not isinstance(bands, bool):
         if bands < 1:
             raise ParameterError(f"bands must be >= 1, got {bands}", parameter="bands")
         chunks = [c for c in np.array_split(f, min(int(bands), f.size)) if c.size]
         cuts = [(a[-1] + b[0]) / 2 for a, b in zip(chunks, chunks[1:], strict=False)]
         edges = [float(f[0]), *map(float, cuts), float(f[-1])]
-        return list(zip(edges, edges[1:], strict=False)) if len(edges) > 2 else [
+        excited = list(zip(edges, edges[1:], strict=False)) if len(edges) > 2 else [
             (edges[0], edges[-1])
         ]  # fmt: skip
+        below, above = seen[seen < f[0]], seen[seen > f[-1]]
+        return [
+            *([(float(below[0]), float(below[-1]))] if below.size else []),
+            *excited,
+            *([(float(above[0]), float(above[-1]))] if above.size else []),
+        ]
     out = []
-    seen = f if empty is None else np.sort(np.concatenate([f, empty]))
     for low, high in bands:
         if not (np.isfinite(low) and np.isfinite(high) and 0 <= low < high):
             raise ParameterError(f"band {low:g}:{high:g} Hz: give 0 <= LOW < HIGH",
@@ -135,6 +152,7 @@ def _nonexcited_stats(
             continue
         level, noise = _mean(ne.level, sel), _mean(ne.noise, sel)
         pv = _f_test(_ratio(level, noise), 2 * n * m, 2 * n * m * (p - 1))
+        low = _f_test(_ratio(noise, level), 2 * n * m * (p - 1), 2 * n * m)
         out[kind] = {
             "lines": n,
             "level_db": db(level),
@@ -142,6 +160,7 @@ def _nonexcited_stats(
             "distortion_db": None if noise is None else db(level - noise),
             "p_value": pv,
             "detected": None if pv is None else pv < alpha,
+            "overstated": None if low is None else low < alpha,
         }
     odd, even = out.get("odd"), out.get("even")
     if p == 1 and odd and even:  # one period: the odd lines against the even ones
@@ -186,9 +205,34 @@ def _where(b: BandSummary) -> str:
     return f"{b.low:.4g}-{b.high:.4g} Hz"
 
 
-def _verdict(bla: BestLinearApproximation, bands: Sequence[BandSummary], alpha: float) -> str:
-    """One line: nonlinear distortion above the noise, and where; or why not known."""
+#: What the verdict reads: each band with the words that name where it is.
+Named = list[tuple[BandSummary, str]]
+
+
+def _left_out(bla: BestLinearApproximation, edges: Sequence[tuple[float, float]]) -> list:
+    """The stretches of neighbouring lines (measured or empty) that no band holds, as
+    edges: what given bands leave out, which the verdict reads all the same."""
+    ne = bla.nonexcited
+    every = bla.frequencies if ne is None else np.concatenate([bla.frequencies, ne.frequencies])
+    every = np.sort(every)
+    held = np.zeros(every.shape, bool)
+    for band in edges:
+        held |= _in(every, band)
+    out, start = [], None
+    for i, inside in enumerate([*held, True]):
+        if not inside and start is None:
+            start = i
+        elif inside and start is not None:
+            out.append((float(every[start]), float(every[i - 1])))
+            start = None
+    return out
+
+
+def _verdict(bla: BestLinearApproximation, named: Named, count: int, alpha: float) -> str:
+    """One line: nonlinear distortion above the noise, and where; or why not known.
+    ``named``: the ``count`` bands of the table, then what they left out."""
     level = f"{1 - alpha:.0%} test"
+    bands = [b for b, _ in named[:count]]
     if bla.method == "welch":
         worst = min(bands, key=lambda b: b.coherence if b.coherence is not None else 1.0)
         share = 1.0 - (worst.coherence or 0.0)
@@ -199,7 +243,7 @@ def _verdict(bla: BestLinearApproximation, bands: Sequence[BandSummary], alpha: 
             "periods and realisations of a multisine to separate them"
         )
     if bla.periods >= 2:
-        return _verdict_with_noise(bla, bands, alpha, level)
+        return _verdict_with_noise(bla, named, count, alpha, level)
     # several realisations of one period: the even lines of an odd excitation hold the
     # noise (and any even distortion), on the axis of G's variance
     measured = [b for b in bands if b.total_db is not None]
@@ -208,23 +252,23 @@ def _verdict(bla: BestLinearApproximation, bands: Sequence[BandSummary], alpha: 
                 "that hold the excited lines")  # fmt: skip
     head = ("one period a realisation: noise and nonlinear distortion are not told apart by "
             "periods (that needs 2 or more); ")  # fmt: skip
-    if not bla.odd_design or not any("even" in b.nonexcited for b in bands):
+    if not bla.odd_design or not any("even" in b.nonexcited for b, _ in named):
         worst = max(measured, key=lambda b: b.total_db - b.g_db)
         return (f"{head}the total variance of G is {worst.g_db - worst.total_db:.1f} dB below "
                 f"|G|² at worst ({_where(worst)})")  # fmt: skip
     found = []  # (dB over the even lines, where)
     m = bla.realisations
-    for b in bands:
+    for b, where in named:
         even, odd = b.nonexcited.get("even"), b.nonexcited.get("odd")
         if even and b.total_db is not None:
             over = b.total_db - even["level_db"]
             pv = _f_test(10 ** (over / 10), 2 * b.lines * (m - 1), 2 * even["lines"] * m)
             if pv is not None and pv < alpha:
                 found.append((over, f"the total variance of G lies {over:.1f} dB above them "
-                                    f"in {_where(b)}"))  # fmt: skip
+                                    f"in {where}"))  # fmt: skip
         if odd and odd.get("against") == "even" and odd["detected"]:
             found.append((odd["over_even_db"], f"the odd non-excited lines lie "
-                          f"{odd['over_even_db']:.1f} dB above them in {_where(b)}"))  # fmt: skip
+                          f"{odd['over_even_db']:.1f} dB above them in {where}"))  # fmt: skip
     if not found:
         return (f"{head}neither the total variance of G nor the odd non-excited lines lie above "
                 f"the even lines (the noise and any even distortion; {level}): no sign of odd "
@@ -239,22 +283,22 @@ _KIND = {"even": "the even lines", "odd": "the odd non-excited lines",
 
 
 def _verdict_with_noise(
-    bla: BestLinearApproximation, bands: Sequence[BandSummary], alpha: float, level: str
+    bla: BestLinearApproximation, named: Named, count: int, alpha: float, level: str
 ) -> str:
     """The verdict when the noise is measured (2 periods or more): the largest margin
     of distortion over noise found, at the excited lines (2 realisations or more) or at
-    the lines the input left empty."""
+    the lines the input left empty, in the bands or in what they left out."""
     found = []  # (margin dB, where)
-    showing = 0  # bands with distortion found
-    for b in bands:
+    showing = 0  # bands of the table with distortion found
+    for i, (b, where) in enumerate(named):
         before = len(found)
         if b.detected:
-            found.append((b.margin_db, _where(b)))
+            found.append((b.margin_db, where))
         for kind, g in b.nonexcited.items():
             if g["detected"] and g["noise_db"] is not None:
                 margin = g["distortion_db"] - g["noise_db"]
-                found.append((margin, f"{_where(b)}, at {_KIND[kind]}"))
-        showing += len(found) > before
+                found.append((margin, f"{where}, at {_KIND[kind]}"))
+        showing += i < count and len(found) > before
     head = ""
     if bla.realisations < 2:
         head = ("one realisation: the distortion at the excited lines needs 2 or more, the "
@@ -264,16 +308,18 @@ def _verdict_with_noise(
     shown = []
     if bla.odd_design:
         for kind in ("even", "odd"):
-            groups = [b.nonexcited[kind] for b in bands if kind in b.nonexcited]
+            groups = [b.nonexcited[kind] for b, _ in named if kind in b.nonexcited]
             seen = [g["distortion_db"] - g["noise_db"] for g in groups if g["detected"]]
             shown.append(f"{kind} lines " + (f"up to {max(seen):+.1f} dB over the noise" if seen
                                              else "at the noise"))  # fmt: skip
     tested = f" ({'; '.join([level, ', '.join(shown)] if shown else [level])})"
-    over = [_where(b) for b in bands if b.overstated]
+    over = [where for b, where in named
+            if b.overstated or any(g.get("overstated") for g in b.nonexcited.values())]  # fmt: skip
     if not found and over:
         return (
             f"{head}no nonlinear distortion above the noise{tested}; but the noise "
-            f"variance lies significantly above the total in {', '.join(over)}, where it is "
+            "variance lies significantly above the total it is part of (of G, or of the "
+            f"output at the empty lines) in {', '.join(over)}, where it is "
             "overstated (noise that passes through the plant's dynamics and does not repeat "
             "leaves transients in every period; longer periods make them smaller) and could "
             "hide distortion of its size"
@@ -282,9 +328,11 @@ def _verdict_with_noise(
         return (f"{head}no nonlinear distortion above the noise in any band{tested}: "
                 "a linear model suffices at this noise level")  # fmt: skip
     margin, where = max(found, key=lambda item: item[0])
-    count = [f"in {showing} of {len(bands)} bands"] if len(bands) > 1 else []
+    counted = [f"in {showing} of {count} bands"] if count > 1 and showing else []
     more = (
-        f" ({'; '.join(count + [', '.join(shown)] if shown else count)})" if count or shown else ""
+        f" ({'; '.join(counted + [', '.join(shown)] if shown else counted)})"
+        if counted or shown
+        else ""
     )
     if margin >= 0:
         return (f"{head}nonlinear distortion dominates the noise by {margin:.1f} dB in {where}"
@@ -302,4 +350,9 @@ def summarised(
     empty = None if bla.nonexcited is None else bla.nonexcited.frequencies
     edges = band_edges(bla.frequencies, bands, empty)
     summaries = tuple(_band(bla, band, alpha) for band in edges)
-    return dataclasses.replace(bla, bands=summaries, verdict=_verdict(bla, summaries, alpha))
+    named = [(b, _where(b)) for b in summaries]
+    for band in _left_out(bla, edges):  # the verdict reads every line
+        named.append((_band(bla, band, alpha), f"{band[0]:.4g}-{band[1]:.4g} Hz (outside the "
+                                               "bands given)"))  # fmt: skip
+    verdict = _verdict(bla, named, len(summaries), alpha)
+    return dataclasses.replace(bla, bands=summaries, verdict=verdict)
