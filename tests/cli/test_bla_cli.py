@@ -9,6 +9,7 @@ import pandas as pd
 from scipy import signal
 from typer.testing import CliRunner
 
+from blockid.blocks.backlash import Backlash
 from blockid.cli.main import app
 
 runner = CliRunner()
@@ -73,3 +74,26 @@ def test_errors_are_one_line_and_name_the_flag(tmp_path):
     assert "confidence must lie between 0 and 1" in r.stderr and "(option --confidence)" in r.stderr
     r = _run("bla", data, *BASE, "--segment", "64", "--period", "256", code=2)
     assert "period and segment do not go together" in r.stderr
+
+
+def test_by_default_distortion_outside_the_excited_band_is_found(tmp_path):
+    """One realisation of a multisine over 5-20 Hz (fs 100 Hz) through a backlash: the
+    default command tests the empty lines below and above the band, drops the first
+    period as the transient, and says a nonlinear model is worth trying."""
+    design = tmp_path / "excitation.csv"
+    _run("design", "multisine", "--fs", "100", "--samples", "1024", "--f-min", "5",
+         "--f-max", "20", "--periods", "4", "--seed", "3", "-o", design)  # fmt: skip
+    frame = pd.read_csv(design)
+    b, a = signal.butter(2, 0.4)
+    play = Backlash(1.0, 0.1, 1.0, 0.1).simulate(frame["u"].to_numpy())
+    noise = 0.01 * np.random.default_rng(0).standard_normal(len(frame))
+    frame["y"] = signal.lfilter(b, a, play) + noise
+    frame.to_csv(tmp_path / "measured.csv", index=False)
+    doc = json.loads(_run("bla", tmp_path / "measured.csv", "-u", "u", "-y", "y",
+                          "--time-column", "t", "--json").stdout)  # fmt: skip
+    assert doc["transient_periods"] == 1 and doc["periods"] == 3
+    below, above = doc["bands"][0], doc["bands"][-1]
+    assert below["lines"] == above["lines"] == 0 and above["high_hz"] == 511 * 100 / 1024
+    assert doc["verdict"].startswith("one realisation: the distortion at the excited lines")
+    assert "nonlinear distortion dominates the noise by" in doc["verdict"]
+    assert "worth trying" in doc["verdict"]

@@ -679,13 +679,18 @@ def _bla_command() -> dict[str, Callable[..., None]]:
         assert "not a whole number of periods of 50" in r.stderr and "(option --period)" in r.stderr
 
     def periods(f, calls):
-        doc = _json(_bla_run(f, "--periods", "3", "--json"))
+        doc = _json(_bla_run(f, "--periods", "3", "--transient-periods", "0", "--json"))
         assert measured(calls)[1]["periods"] == 3 and doc["periods"] == 3
 
     def transient_periods(f, calls):
         doc = _json(_bla_run(f, "--transient-periods", "1", "--json"))
         assert measured(calls)[1]["transient_periods"] == 1
         assert doc["periods"] == 2 and doc["transient_periods"] == 1
+        calls.clear()
+        # 0 keeps the first period, which holds the plant's transient here, and says so
+        doc = _json(_bla_run(f, "--transient-periods", "0", "--json"))
+        assert measured(calls)[1]["transient_periods"] == 0
+        assert doc["periods"] == 3 and "kept as asked" in " ".join(doc["notes"])
         r = _bla_run(f, "--transient-periods", "3", code=2)
         assert "would drop every period" in r.stderr and "--transient-periods" in r.stderr
 

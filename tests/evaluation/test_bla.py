@@ -4,7 +4,8 @@ Every plant is simulated here (:func:`scipy.signal.lfilter`) on multisines of
 :func:`blockid.design.multisine`: a linear plant (the BLA is its frequency response, the
 distortion is nil), Wiener plants with a static cubic (odd) or square (even)
 nonlinearity, a backlash before a low-pass (hysteresis, whose distortion falls outside
-the excited band), and a Wiener-Hammerstein plant whose true BLA and distortion level are computed from many
+the excited band), a slow plant whose transient fills the first period, and a
+Wiener-Hammerstein plant whose true BLA and distortion level are computed from many
 noiseless realisations.
 """
 
@@ -300,6 +301,34 @@ def test_bands_given_that_leave_the_distortion_out_do_not_hide_it():
     assert "worth trying" in bla.verdict
 
 
+# ----------------------------------------------------------------------------- the transient
+def slow(u):
+    """A first-order low-pass of time constant 50 samples: its transient from rest lasts
+    a good part of a 512-sample period."""
+    return signal.lfilter([0.02], [1.0, -0.98], u)
+
+
+def test_the_first_period_holding_the_transient_is_dropped_by_default():
+    sigma = 0.02
+    data, _ = _record(slow, realisations=2, periods=4, sigma=sigma, seed=1)
+    bla = best_linear_approximation(data)
+    assert (bla.periods, bla.transient_periods) == (3, 1)
+    assert bla.notes[0].startswith("the output's first period differs from the mean of the "
+                                   "others")  # fmt: skip
+    assert bla.notes[0].endswith("it holds the plant's transient, dropped (0 transient periods "
+                                 "keeps it)")  # fmt: skip
+    assert bla.output_noise.mean() == pytest.approx(sigma**2, rel=0.1)
+    # kept, the transient counts as noise: here 21 % too much of it
+    kept = best_linear_approximation(data, transient_periods=0)
+    assert (kept.periods, kept.transient_periods) == (4, 0) and "kept as asked" in kept.notes[0]
+    assert kept.output_noise.mean() > 1.15 * sigma**2
+    # a record in steady state from its first sample: nothing is dropped
+    steady = Dataset(("u",), ("y",), 1.0, [Experiment(e.name, e.u[512:], e.y[512:])
+                                           for e in data.experiments])  # fmt: skip
+    assert best_linear_approximation(steady).periods == 3
+    assert not any("first period" in note for note in best_linear_approximation(steady).notes)
+
+
 # ----------------------------------------------------------------------------- the periods
 def test_the_period_is_found_given_or_counted_alike():
     data, _ = _record(linear, realisations=3, periods=4)
@@ -427,6 +456,26 @@ def test_bouc_wen_shows_distortion_far_above_the_noise_at_the_empty_lines():
     assert (bla.realisations, bla.periods, bla.samples) == (1, 4, 8192)
     low = bla.bands[0].nonexcited["non-excited"]
     assert low["detected"] and low["distortion_db"] - low["noise_db"] > 30
+    assert "worth trying" in bla.verdict
+
+
+def test_bouc_wen_by_default_shows_the_distortion_below_the_band():
+    """The command as a new user types it (no sampling time, no options): the bands
+    below and above the excitation are there, the first period is dropped as the
+    transient, and the hysteresis is found below the band."""
+    frame = pd.read_csv(_benchmark("bouc_wen", "bouc_wen_train_multisine_generated.csv"))
+    data = Dataset.from_arrays(frame["u"], frame["y"], ["u"], ["y"])
+    bla = best_linear_approximation(data)
+    assert (bla.periods, bla.transient_periods) == (4, 1)
+    assert "it holds the plant's transient, dropped" in bla.notes[0]
+    below = bla.bands[0]
+    assert below.lines == 0 and below.high < bla.frequencies[0]
+    low = below.nonexcited["non-excited"]
+    assert low["detected"] and low["distortion_db"] - low["noise_db"] > 30
+    assert bla.bands[-1].high == pytest.approx(4095 / 8192)
+    assert "nonlinear distortion dominates the noise by 40.3 dB in 0.0001221-0.00647 Hz" in (
+        bla.verdict
+    )
     assert "worth trying" in bla.verdict
 
 

@@ -8,7 +8,7 @@ import pytest
 from blockid.data import Dataset, Experiment
 from blockid.design import multisine, prbs
 from blockid.errors import DataError, ParameterError
-from blockid.evaluation.periods import find_period, periodic_frames
+from blockid.evaluation.periods import find_period, first_period_differs, periodic_frames
 
 
 @pytest.mark.parametrize("samples", [64, 500, 1023, 4096])
@@ -66,3 +66,32 @@ def test_frames_refuse_what_is_not_whole_periods():
         periodic_frames(data, periods=0)
     with pytest.raises(ParameterError, match="transient_periods must be a whole number"):
         periodic_frames(data, transient_periods=-1)
+
+
+# ----------------------------------------------------------------------------- the transient
+def test_the_first_period_of_a_steady_state_seldom_differs():
+    """Stationary noise on a repeated signal: the test fires in about 1 % of records at
+    0.99 (Bonferroni over its groups of lines; 7 of 1000 with another seed), here in at
+    most 2 % of them."""
+    rng = np.random.default_rng(0)
+    signal = np.tile(np.sin(2 * np.pi * 5 * np.arange(512) / 512), (2, 4, 1))
+    fired = sum(
+        first_period_differs(signal + 0.1 * rng.standard_normal(signal.shape)).differs(0.99)
+        for _ in range(300)
+    )
+    assert fired <= 6
+
+
+def test_a_transient_in_the_first_period_is_found_where_it_rings():
+    """A decaying 40-line oscillation in the first period: found at its lines, however
+    the noise is coloured elsewhere."""
+    rng = np.random.default_rng(1)
+    t = np.arange(1024)
+    noise = np.convolve(rng.standard_normal(4 * 1024 + 50), np.ones(50) / 50, "valid")[:4096]
+    y = (0.01 * noise + 0.001 * rng.standard_normal(4096)).reshape(1, 4, 1024)
+    y[0, 0] += 0.02 * np.exp(-t / 200) * np.sin(2 * np.pi * 40 * t / 1024)
+    first = first_period_differs(y)
+    assert first.differs(0.99) and first.lines[0] <= 40 <= first.lines[1] <= 60
+    assert first.excess_db > 10
+    assert not first_period_differs(y[:, 1:]).differs(0.99)
+    assert first_period_differs(y[:, 2:]) is None  # 2 periods: nothing to hold it against

@@ -72,14 +72,17 @@ def bla(
         shared("periods", "Or: the periods each realisation holds.", show_default=False),
     ] = None,
     transient_periods: Annotated[
-        int,
+        int | None,
         _option(
             "--transient-periods",
             "K",
-            "Periods dropped from the start of each realisation (the plant's transient).",
+            "Periods dropped from the start of each realisation (the plant's transient) "
+            "[default: the first, when it differs clearly more from the others than they "
+            "differ among themselves].",
             min=0,
+            show_default=False,
         ),
-    ] = 0,
+    ] = None,
     method: Annotated[
         str,
         shared(

@@ -31,7 +31,10 @@ and the variance of ``Ĝ_BLA`` from the nonlinear distortion is ``σ²_total - �
 (one realisation's is ``M`` times that). The noise variance needs ``P >= 2``, the total
 ``M >= 2``. Averaging over periods before dividing keeps input noise from biasing
 ``G`` (errors in variables). The first periods of each realisation can be dropped as the
-plant's transient (``transient_periods``).
+plant's transient (``transient_periods``); by default the first is dropped when the
+output's first period differs clearly more from the others than they differ among
+themselves (:func:`~blockid.evaluation.periods.first_period_differs`; 3 periods or
+more).
 
 With an **odd** multisine (odd lines only, some left out: :func:`blockid.design.multisine`
 with ``odd=True``) the lines left empty show the distortion directly: even lines carry
@@ -58,7 +61,7 @@ from blockid.data.dataset import Dataset
 from blockid.errors import DataError, ParameterError
 from blockid.evaluation.bla_bands import DEFAULT_BANDS, summarised
 from blockid.evaluation.bla_result import BestLinearApproximation, NonExcitedLines
-from blockid.evaluation.periods import find_period, periodic_frames
+from blockid.evaluation.periods import find_period, first_period_differs, periodic_frames
 from blockid.evaluation.spectra import CONFIDENCE, check_confidence, powered, signal_columns
 
 __all__ = ["best_linear_approximation", "robust_bla"]
@@ -102,6 +105,24 @@ def _excited(u_mean: np.ndarray, lines: Sequence[int] | None, n: int) -> np.ndar
     return k
 
 
+def _transient(
+    u: np.ndarray, y: np.ndarray, drop: bool, confidence: float, sampling_time: float | None
+) -> tuple[np.ndarray, np.ndarray, str | None]:
+    """The periods without the first when it holds the plant's transient and ``drop``;
+    a note when it does."""
+    first = first_period_differs(y)
+    if first is None or not first.differs(confidence):
+        return u, y, None
+    low, high = (k / (u.shape[2] * (sampling_time or 1.0)) for k in first.lines)
+    p = "p < 1e-6" if first.p_value < 1e-6 else f"p = {first.p_value:.2g}"
+    said = (f"the output's first period differs from the mean of the others {first.excess_db:.1f} "
+            f"dB more than they differ among themselves ({low:.4g}-{high:.4g} Hz, {p}): it "
+            "holds the plant's transient")  # fmt: skip
+    if drop:
+        return u[:, 1:], y[:, 1:], f"{said}, dropped (0 transient periods keeps it)"
+    return u, y, f"{said}, kept as asked; it inflates the noise (1 transient period drops it)"
+
+
 def robust_bla(
     data: Dataset,
     *,
@@ -109,7 +130,7 @@ def robust_bla(
     output: str | None = None,
     period: int | None = None,
     periods: int | None = None,
-    transient_periods: int = 0,
+    transient_periods: int | None = None,
     lines: Sequence[int] | None = None,
     bands: int | Sequence[tuple[float, float]] = DEFAULT_BANDS,
     confidence: float = CONFIDENCE,
@@ -128,13 +149,18 @@ def robust_bla(
         (:func:`~blockid.evaluation.periods.find_period`).
     periods : int, optional
         Or the number of periods a realisation holds.
-    transient_periods : int
-        Periods dropped from the start of each realisation.
+    transient_periods : int, optional
+        Periods dropped from the start of each realisation; default: the first when
+        it differs clearly from the last ones (the plant's transient:
+        :func:`~blockid.evaluation.periods.first_period_differs`), with a note; 0
+        keeps every period (a note says when the first differs).
     lines : sequence of int, optional
         The excited DFT lines of one period; default: the lines where the input has
         power (:func:`~blockid.evaluation.bla_result.powered`).
     bands : int or sequence of (low, high)
-        The summary's bands: a number of bands of equal line counts, or edges in Hz.
+        The summary's bands: a number of bands of equal numbers of excited lines (and
+        the lines the input left empty below and above them, a band each), or edges in
+        Hz (:func:`~blockid.evaluation.bla_bands.band_edges`).
     confidence : float
         Of the bounds and the tests.
     data_label : str, optional
@@ -151,7 +177,12 @@ def robust_bla(
     confidence = check_confidence(confidence)
     i, j = signal_columns(data, input, output)
     u, y, held = periodic_frames(data, input_column=i, output_column=j, period=period,
-                                 periods=periods, transient_periods=transient_periods)  # fmt: skip
+                                 periods=periods,
+                                 transient_periods=transient_periods or 0)  # fmt: skip
+    notes = []
+    if not transient_periods:
+        u, y, note = _transient(u, y, transient_periods is None, confidence, data.sampling_time)
+        notes += [note] if note else []
     m, p, n = u.shape
     if m < 2 and p < 2:
         raise DataError(
@@ -165,7 +196,6 @@ def robust_bla(
     big_y = np.fft.rfft(y, axis=2) / np.sqrt(n)
     u_mean, y_mean = big_u.mean(axis=1), big_y.mean(axis=1)  # (1)
     k = _excited(u_mean, lines, n)
-    notes = []
     disturbed = k[:0]
     odd_k, even_k = k[k % 2 == 1], k[k % 2 == 0]
     if lines is None and even_k.size and odd_k.size >= _ODD_SHARE * k.size and odd_k.size >= 10:
@@ -244,7 +274,7 @@ def best_linear_approximation(
     method: str = "auto",
     period: int | None = None,
     periods: int | None = None,
-    transient_periods: int = 0,
+    transient_periods: int | None = None,
     lines: Sequence[int] | None = None,
     segment: int | None = None,
     bands: int | Sequence[tuple[float, float]] = DEFAULT_BANDS,
@@ -255,8 +285,8 @@ def best_linear_approximation(
     else Welch's estimate (:func:`~blockid.evaluation.frf.welch_bla`).
 
     ``method="auto"`` takes the robust method when a periodic option is given
-    (``period``, ``periods``, ``transient_periods``, ``lines``) or the input of every
-    experiment repeats (:func:`~blockid.evaluation.periods.find_period`), and Welch's
+    (``period``, ``periods``, ``transient_periods`` other than 0, ``lines``) or the input of
+    every experiment repeats (:func:`~blockid.evaluation.periods.find_period`), and Welch's
     otherwise, with a note saying so. ``segment`` (samples of a Welch segment) is
     Welch's only. The other parameters are those of :func:`robust_bla`.
 

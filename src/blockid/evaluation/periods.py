@@ -19,9 +19,43 @@ periods must be in the record for the repeat to be seen.
 :func:`periodic_frames` checks that every experiment (a realisation) holds a whole
 number of periods, the same number in each, drops the transient periods asked for and
 returns the samples as arrays ``(realisations, periods, samples)``.
+
+:func:`first_period_differs` asks whether the first period still holds the plant's
+transient. With ``Y_{m,p}(k)`` the DFT of period ``p`` of realisation ``m`` and
+``Ȳ_m`` the mean of periods 2 to ``P``, in a steady state with stationary noise of
+variance ``σ²_k`` at line ``k``
+
+.. math::
+
+    d_{m,k} = \\frac{|Y_{m,1} - \\bar Y_m|^2}{1 + 1/(P-1)}, \\qquad
+    s_{m,k} = \\frac{1}{P-2} \\sum_{p=2}^{P} |Y_{m,p} - \\bar Y_m|^2
+
+both estimate ``σ²_k``, independently, with 2 and ``2(P-2)`` real degrees of freedom
+(complex Gaussian noise): the first period differs from the others as much as they
+differ among themselves. Over a group ``G`` of ``L`` neighbouring lines,
+
+.. math::
+
+    F_G = \\frac{\\sum_{m, k \\in G} d_{m,k} / \\ell_k}{\\sum_{m, k \\in G} s_{m,k} / \\ell_k}
+    \\sim F\\bigl(2LM,\\ 2LM(P-2)\\bigr),
+
+``ℓ_k`` the noise level of the neighbouring lines (the mean of ``s`` over the ``M``
+realisations and the 8 lines either side, the line itself left out), which weighs the
+lines alike however the noise is coloured. A transient still dying out in the first
+period makes ``F_G`` large where it rings: at few lines (a slow pole: the lowest) or
+many (a resonance). The groups are every 16 neighbouring lines, every 32, and so on up
+to all of them; the p-value of the group where ``F_G`` is most significant is
+multiplied by the number of groups (Bonferroni). In simulation the test fires in about
+1 % of records in steady state at ``confidence`` 0.99 (white noise; periods of 256 to
+8192 samples), in 3 % for noise of time constant 20 samples in periods of 256. Noise
+whose memory is a fair part of the period leaks across the periods' edges into every
+line alike and fires it more often; such noise also overstates the noise variance
+measured between periods, and dropping a period then costs data but biases nothing.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -29,7 +63,14 @@ from blockid.data.dataset import Dataset
 from blockid.errors import DataError, ParameterError
 from blockid.evaluation.spectra import check_finite
 
-__all__ = ["MIN_CORRELATION", "find_period", "periodic_frames"]
+__all__ = [
+    "CLEAR_DB",
+    "MIN_CORRELATION",
+    "FirstPeriod",
+    "find_period",
+    "first_period_differs",
+    "periodic_frames",
+]
 
 #: The normalised autocorrelation a lag must reach to be taken for the period: an input
 #: repeated with a signal-to-noise ratio of 10 dB or better (``1 / (1 + 0.1) = 0.91``).
@@ -187,3 +228,107 @@ def periodic_frames(
     u = np.stack([exp.u[:, input_column] for exp in data.experiments]).reshape(m, total, n)
     y = np.stack([exp.y[:, output_column] for exp in data.experiments]).reshape(m, total, n)
     return u[:, transient_periods:], y[:, transient_periods:], total
+
+
+#: The smallest group of neighbouring lines of the first-period test (then 32, 64, ...).
+_GROUP_LINES = 16
+#: Lines either side whose noise level weighs a line (module docstring, ``ℓ_k``).
+_NEIGHBOURS = 8
+#: The first period must differ from the others by this much more than they differ
+#: among themselves (dB) to count as a transient. Kept, it makes the noise variance
+#: measured over all ``P`` periods ``1 + (F_G - 1) / (P - 1)`` times too large: at
+#: 1 dB, 0.5 dB too large with 3 periods, 0.3 dB with 5.
+CLEAR_DB = 1.0
+
+
+@dataclass(frozen=True)
+class FirstPeriod:
+    """The first period against the others (:func:`first_period_differs`), at the
+    group of lines where it differs most.
+
+    Attributes
+    ----------
+    excess_db : float
+        ``10 log10 F_G`` (module docstring): how much more the first period differs
+        from the mean of the others than they differ among themselves, dB.
+    p_value : float
+        Of ``F_G``, times the number of groups tested (Bonferroni).
+    lines : tuple of int
+        The group's first and last DFT line.
+    """
+
+    excess_db: float
+    p_value: float
+    lines: tuple[int, int]
+
+    def differs(self, confidence: float) -> bool:
+        """Clearly: significant at ``confidence`` and :data:`CLEAR_DB` or more."""
+        return self.p_value < 1.0 - confidence and self.excess_db >= CLEAR_DB
+
+
+#: A group counts as clearly above, for where the transient rings, at this p-value or
+#: below (Bonferroni already applied; well below any confidence asked).
+_WHERE = 1e-3
+
+
+def _groups(count: int) -> list[np.ndarray]:
+    """Groups of 16, 32, ... neighbouring lines of ``count``, up to one of them all."""
+    out, size = [], _GROUP_LINES
+    while True:
+        parts = max(1, count // size)
+        out += np.array_split(np.arange(count), parts)
+        if parts == 1:
+            return out
+        size *= 2
+
+
+def first_period_differs(y: np.ndarray) -> FirstPeriod | None:
+    """Does the first period of ``y`` (cut into periods: ``(realisations, periods,
+    samples)``) still hold the plant's transient? The test of the module docstring over
+    lines 1 to the last below Nyquist: of the groups significant at 0.999 and
+    :data:`CLEAR_DB` or more above, the one of the largest excess (where the transient
+    rings); else the most significant group of those :data:`CLEAR_DB` or more above, or
+    of all; None with fewer than 3 periods.
+
+    >>> rng = np.random.default_rng(0)
+    >>> y = np.tile(np.sin(np.arange(512)), (1, 4, 1)) + 0.01 * rng.standard_normal((1, 4, 512))
+    >>> first_period_differs(y).differs(0.99)
+    False
+    >>> y[0, 0, :20] += np.exp(-np.arange(20.0) / 4)  # a transient dying out in period 1
+    >>> first_period_differs(y).differs(0.99)
+    True
+    """
+    m, p, n = y.shape
+    if p < 3:
+        return None
+    spectra = np.fft.rfft(y, axis=2)[:, :, 1 : (n - 1) // 2 + 1]
+    rest = spectra[:, 1:].mean(axis=1)
+    d = np.abs(spectra[:, 0] - rest) ** 2 / (1.0 + 1.0 / (p - 1))
+    s = np.sum(np.abs(spectra[:, 1:] - rest[:, None]) ** 2, axis=1) / (p - 2)
+    level = s.mean(axis=0)
+    window = np.ones(2 * _NEIGHBOURS + 1)
+    around = np.convolve(level, window, "same") - level  # the line itself left out
+    count = np.convolve(np.ones(level.size), window, "same") - 1
+    weight = np.divide(1.0, around / count, out=np.zeros(level.size), where=around > 0)
+    a, b = d * weight, s * weight
+    from scipy import stats
+
+    groups = _groups(level.size)
+    found = []
+    for group in groups:
+        lines = int(np.count_nonzero(weight[group]))
+        top, bottom = a[:, group].sum(), b[:, group].sum()
+        if not (lines and top > 0 and bottom > 0):
+            continue
+        ratio = top / bottom
+        pv = stats.f.sf(ratio, 2 * lines * m, 2 * lines * m * (p - 2))
+        found.append(FirstPeriod(excess_db=float(10 * np.log10(ratio)),
+                                 p_value=float(min(1.0, len(groups) * pv)),
+                                 lines=(int(group[0]) + 1, int(group[-1]) + 1)))  # fmt: skip
+    if not found:
+        return None
+    above = [f for f in found if f.excess_db >= CLEAR_DB]
+    clear = [f for f in above if f.p_value < _WHERE]
+    if clear:  # where it rings: the largest excess among the groups clearly above
+        return max(clear, key=lambda f: f.excess_db)
+    return min(above or found, key=lambda f: f.p_value)
