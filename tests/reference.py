@@ -478,3 +478,17 @@ def pnlss_jacobian(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J):
             x[i] = xn[i]
             for p in range(P):
                 S[i, p] = Sn[i, p]
+
+
+def fourth_order_arx_halves(n=2000, seed=3):
+    """An ARX plant with four poles (0.9, 0.8, 0.5 +- 0.5j) and white equation noise, so
+    that an ARX model of orders (4, 2, 1) is the right one and one of fewer poles is
+    under-modelled: its record split into estimation and validation halves."""
+    rng = np.random.default_rng(seed)
+    u, e = rng.standard_normal(n), 0.05 * rng.standard_normal(n)
+    a = np.poly([0.9, 0.8, 0.5 + 0.5j, 0.5 - 0.5j]).real  # 1 + a1 q^-1 + ... + a4 q^-4
+    y = np.zeros(n)
+    for t in range(4, n):
+        y[t] = -a[1:] @ y[t - 4 : t][::-1] + u[t - 1] + 0.5 * u[t - 2] + e[t]
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    return data.select(0, n // 2), data.select(n // 2, n)

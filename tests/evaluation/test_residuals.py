@@ -101,3 +101,43 @@ def test_a_model_without_a_noise_model_is_told_apart():
     assert residual_analysis(arx, fresh).noise_model is True
     assert residual_analysis(oe, fresh).noise_model is False
     assert residual_analysis(oe, fresh, "simulation").noise_model is None
+
+
+def test_the_verdict_names_the_test_that_decides():
+    """Right orders pass; a missing pole fails both tests (an ARX has a noise model), a
+    missing delay by the input; an output-error fit of the right orders passes (whiteness
+    is not asked of it: see the next test for the wording)."""
+    train, fresh = _arx_record(seed=0), _arx_record(seed=1)
+    verdicts = {}
+    for name, structure, orders in [
+        ("right", "arx", (2, 2, 1)), ("pole", "arx", (1, 2, 1)),
+        ("delay", "arx", (2, 1, 2)), ("oe", "output-error", (2, 2, 1)),
+    ]:  # fmt: skip
+        model = fit_model(
+            train, structure, **dict(zip(("na", "nb", "nk"), orders, strict=True))
+        ).model
+        out = residual_analysis(model, fresh)
+        verdicts[name] = (out.passed, out.verdict(), out.to_dict()["verdict"])
+    assert verdicts["right"][:2] == (True, "passes: white and independent of the inputs at 99%")
+    assert verdicts["pole"][0] is False and "nor is the residual white" in verdicts["pole"][1]
+    assert verdicts["delay"][0] is False and "correlates with past u" in verdicts["delay"][1]
+    assert verdicts["oe"][0] is True and verdicts["oe"][1].startswith("passes")
+    assert all(v[1] == v[2] for v in verdicts.values())
+
+
+def test_a_coloured_residual_without_a_noise_model_passes_and_says_why():
+    """An output-error plant (white noise on the output): the output-error model's
+    one-step residual is that noise through its A(q), coloured but independent of the
+    input, which passes a model fitted without a noise model."""
+    from scipy.signal import lfilter
+
+    def record(seed):
+        rng = np.random.default_rng(seed)
+        u = rng.standard_normal(3000)
+        y = lfilter([0.0, *B], [1.0, *A], u) + 0.3 * rng.standard_normal(3000)
+        return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+    oe = fit_model(record(0), "output-error", na=2, nb=2, nk=1).model
+    out = residual_analysis(oe, record(1))
+    assert out.noise_model is False and not out.whiteness["y"]["white"]
+    assert out.passed and out.verdict().startswith("passes: independent of the inputs; not white")

@@ -214,6 +214,9 @@ def compare(
                 soft_wrap=True,
                 markup=False,
             )
+        if m.residuals is not None:
+            line = f"{m.structure}: residual tests {m.residuals.verdict()}"
+            stdout.print(line, soft_wrap=True, markup=False)
 
 
 def _names(text: str) -> list[str]:

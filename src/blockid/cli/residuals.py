@@ -100,6 +100,7 @@ def residuals(
             "independent" if t["independent"] else "NOT independent",
         )  # fmt: skip
     stdout.print(table)
+    stdout.print(f"verdict: the model {analysis.verdict()}", soft_wrap=True, markup=False)
     feedback = [f"{u} -> {y}" for (u, y), t in analysis.independence.items()
                 if t["outside_negative"]]  # fmt: skip
     if feedback:

@@ -44,7 +44,7 @@ import numpy as np
 from blockid.data.dataset import Dataset
 from blockid.errors import DataError, ParameterError
 
-__all__ = ["ResidualAnalysis", "residual_analysis"]
+__all__ = ["ResidualAnalysis", "residual_analysis", "residual_check"]
 
 #: Lags tested by default (``resid``'s 25).
 MAX_LAG = 25
@@ -96,13 +96,56 @@ class ResidualAnalysis:
     confidence: float
     noise_model: bool | None = None
 
+    @property
+    def passed(self) -> bool:
+        """Whether the model passes: its residual independent of every input and, when
+        it was fitted with a noise model (one-step mode), white."""
+        independent = all(t["independent"] for t in self.independence.values())
+        white = all(t["white"] for t in self.whiteness.values())
+        return independent and (white or self.noise_model is not True)
+
+    def verdict(self) -> str:
+        """One line: pass or fail, the test that decides and what it means."""
+        level = f"{self.confidence:.0%}"
+        dependent = [(k, t) for k, t in self.independence.items() if not t["independent"]]
+        coloured = [(k, t) for k, t in self.whiteness.items() if not t["white"]]
+        if dependent:
+            (u, y), t = min(dependent, key=lambda kt: kt[1]["p_value"])
+            line = (
+                f"fails: the residual of {y} correlates with past {u} (p = {t['p_value']:.2g}, "
+                f"{t['outside']} lag(s) outside the {level} bound): the model misses input "
+                "dynamics or a nonlinearity; try more poles, a longer delay range or a "
+                "nonlinear structure"
+            )
+            if len(dependent) > 1:
+                line += f" ({len(dependent)} pairs)"
+            if coloured and self.noise_model is True:
+                line += "; nor is the residual white"
+            return line
+        if coloured and self.noise_model is True:
+            y, t = min(coloured, key=lambda kt: kt[1]["p_value"])
+            return (
+                f"fails: the residual of {y} is not white (Ljung-Box Q = {t['statistic']:.3g}, "
+                f"p = {t['p_value']:.2g}) though independent of the inputs: the model misses "
+                "noise dynamics; try more poles or a noise model"
+            )
+        if coloured:
+            return (
+                "passes: independent of the inputs; not white, which a model without a "
+                "noise model (fitted by simulation error) is not made to be"
+            )
+        return f"passes: white and independent of the inputs at {level}"
+
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON types; pairs as ``"input->output"``."""
+        """Plain JSON types; pairs as ``"input->output"``; with the one-line
+        ``verdict`` and whether the model ``passed``."""
 
         def pair(k: tuple[str, str]) -> str:
             return f"{k[0]}->{k[1]}"
 
         return {
+            "verdict": self.verdict(),
+            "passed": self.passed,
             "mode": self.mode,
             "n_samples": self.n_samples,
             "confidence": self.confidence,
@@ -309,3 +352,19 @@ def residual_analysis(
         independence=indep,
         confidence=float(confidence),
     )
+
+
+def residual_check(model: Any, data: Dataset) -> tuple[ResidualAnalysis | None, str | None]:
+    """The residual analysis ``compare`` and the report give every model on the
+    validation data: of the one-step prediction (``resid``'s default), of the free run
+    for a model that cannot predict one step ahead; None and the reason when neither can
+    be analysed (too few samples, a diverging output)."""
+    from blockid.errors import BlockidError
+
+    try:
+        return residual_analysis(model, data, "one-step"), None
+    except BlockidError:
+        try:
+            return residual_analysis(model, data, "simulation"), None
+        except BlockidError as exc:
+            return None, str(exc)

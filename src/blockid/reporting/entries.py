@@ -25,6 +25,7 @@ class Entry:
     on: str = "validation"
     notes: list[str] = field(default_factory=list)
     row: str | None = None  # the class of its rows in the comparison ("baseline")
+    residuals: Any = None  # compare's residual analysis on the validation data, if made
 
     @property
     def model(self) -> Any:

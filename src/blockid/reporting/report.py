@@ -8,7 +8,8 @@ references to anything outside the file, so it opens anywhere without a network.
 Sections: data overview (signals, ranges, sampling time, sample counts, the records with
 the estimation and validation ranges shaded); comparison (free-run and one-step metrics
 of every model on the validation data, failures with their reasons); measured against
-simulated output and its residual for each model; the identified nonlinear blocks, with
+simulated output and its residual for each model; the residual tests (whiteness,
+independence of the inputs, a verdict) of each model; the identified nonlinear blocks, with
 95 % bands when the fit carries parameter standard errors; parameter trajectories of the
 recursive estimators; and the provenance (command, SHA-256 of the data files, versions,
 date). Every caption says on which data and range a curve is, and whether it is a
@@ -39,6 +40,7 @@ from blockid.reporting.model_sections import (
     parameters_section,
 )
 from blockid.reporting.provenance import Provenance
+from blockid.reporting.residual_section import residuals_section
 from blockid.reporting.search import LinearBaseline, baseline_entry, linear_baseline, search_section
 
 __all__ = ["build_report", "write_report"]
@@ -72,6 +74,7 @@ def _entries(compare: Any, identify: Any, baseline: LinearBaseline | None) -> li
                 m.one_step,
                 m.error,
                 m.one_step_error,
+                residuals=m.residuals,
             )
         )
     return out
@@ -436,6 +439,7 @@ def build_report(
         sections += [
             _comparison(entries, outputs, where),
             _outputs(entries, ranges, draws),
+            residuals_section(entries),
             parameters_section(entries),
             linear_section(entries),
             blocks_section(entries, estimation, est_text, draws),
@@ -448,6 +452,7 @@ def build_report(
     nav += [
         ("comparison", "Comparison of the models"),
         ("outputs", "Measured and simulated output"),
+        ("residuals", "Residual tests"),
         ("parameters", "Parameters"),
         ("linear", "Linear dynamics"),
         ("blocks", "Identified nonlinearities"),

@@ -8,6 +8,7 @@ from typing import Any
 
 from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError
+from blockid.evaluation.residuals import ResidualAnalysis, residual_check
 from blockid.evaluation.validate import ModelOutput, score_model
 from blockid.fitting.dispatch import DEFAULT_METHOD, METHODS, accepted_options, fit_model
 from blockid.fitting.registry import compared_by_default
@@ -18,7 +19,10 @@ __all__ = ["ModelScore", "CompareResult", "compare_structures"]
 
 @dataclass
 class ModelScore:
-    """One identified structure and its validation scores (or why it failed)."""
+    """One identified structure and its validation scores (or why it failed), and the
+    residual tests of its one-step prediction on the validation data
+    (:func:`~blockid.evaluation.residuals.residual_check`; ``residuals_error`` says why
+    there are none)."""
 
     structure: str
     method: str
@@ -27,6 +31,8 @@ class ModelScore:
     one_step: ModelOutput | None
     error: str | None = None
     one_step_error: str | None = None
+    residuals: ResidualAnalysis | None = None
+    residuals_error: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"structure": self.structure, "method": self.method}
@@ -39,6 +45,10 @@ class ModelScore:
         out["one_step"] = None if self.one_step is None else self.one_step.metrics
         if self.one_step_error:
             out["one_step_error"] = self.one_step_error
+        if self.residuals is not None:
+            out["residuals"] = self.residuals.to_dict()
+        elif self.residuals_error:
+            out["residuals_error"] = self.residuals_error
         out["parameters"] = getattr(self.fit.model, "parameters", None) or (
             self.fit.model.to_dict().get("parameters")
         )
@@ -80,7 +90,9 @@ def compare_structures(
     ``method="key-term-rls"`` compares paper B's four models fitted its way. Options
     (orders ``na, nb, nk, r1, r2`` and method settings) are passed to every structure
     that uses them. A structure whose estimator fails is kept in the result with its
-    error message rather than dropped. ``structures`` default by the data's shape
+    error message rather than dropped. Each model's residual on ``validation`` is
+    tested for whiteness and independence of the inputs, with a one-line verdict
+    (``ModelScore.residuals``). ``structures`` default by the data's shape
     (:func:`~blockid.fitting.registry.compared_by_default`): paper B's four on one input
     and one output, else ARX and the linear and polynomial state space.
     """
@@ -97,7 +109,10 @@ def compare_structures(
             result.models.append(ModelScore(structure, m, None, None, None, error=str(exc)))
             continue
         sim, one, one_err = score_model(fit.model, validation)
-        result.models.append(ModelScore(structure, fit.method, fit, sim, one, None, one_err))
+        residuals, why = residual_check(fit.model, validation)
+        result.models.append(
+            ModelScore(structure, fit.method, fit, sim, one, None, one_err, residuals, why)
+        )
     return result
 
 
