@@ -187,9 +187,10 @@ def test_report_of_an_identify_result(hammerstein):
     assert "<td>unstable</td>" in html
     assert "effort quick" in html and "The time limit cut the search" in html
     assert "free-run simulation on the validation range 1100:2200" in html
-    # data, BLA, output, residual tests, linear dynamics, blocks (one model and no ARX in
-    # the search: no bar chart, no search figure, no linear baseline)
-    assert len(IMG.findall(html)) == 6
+    # data, BLA, the model against the BLA, output, residual tests, linear dynamics,
+    # blocks (one model and no ARX in the search: no bar chart, no search figure, no
+    # linear baseline)
+    assert len(IMG.findall(html)) == 7
     assert "Linear baseline: none, the search scored no ARX model" in html
     apart = build_report(identify=identified, estimation=est, validation=val)  # no record
     assert "Measured estimation data" in apart and "Measured validation data" in apart

@@ -4,17 +4,22 @@ distortion stands above the noise (:func:`~blockid.evaluation.bla.best_linear_ap
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 from blockid.data.dataset import Dataset
 from blockid.errors import BlockidError
 from blockid.plotting.html import encode_png
+from blockid.reporting.entries import Entry
 from blockid.reporting.html import figure, paragraph, section, table
 
 __all__ = ["bla_section"]
 
 
-def bla_section(estimation: Dataset, where: str) -> str:
+def bla_section(estimation: Dataset, where: str, entries: Sequence[Entry] = ()) -> str:
     """The measured BLA of ``estimation`` (described by ``where``, e.g. "estimation
-    range 0:1100"): its verdict, notes, band table and figure; with several inputs or
+    range 0:1100"): its verdict, notes, band table and figure, and each model of
+    ``entries`` checked against it (:func:`_models_part`); with several inputs or
     outputs, or data it cannot be measured on, one paragraph saying why."""
     parts = [
         paragraph(
@@ -65,4 +70,64 @@ def bla_section(estimation: Dataset, where: str) -> str:
             f"distortion levels, measured on the {where}; no model involved.",
         )
     )
+    parts += _models_part(bla, entries, where)
     return section("bla", "Best linear approximation", parts)
+
+
+def _models_part(bla: Any, entries: Sequence[Entry], where: str) -> list[str]:
+    """Each model's linear frequency response against the BLA and its bound: a table
+    (the gain a block model's response is scaled by, the lines within the bound, the
+    mean squared distance over the BLA's variance) and a figure
+    (:mod:`blockid.plotting.bla_models`); the models not compared, and why."""
+    from blockid.plotting.bla_models import model_response, plot_bla_models
+
+    found = [model_response(e.label, e.model, bla) for e in entries if e.model is not None]
+    responses = [r for r in found if not isinstance(r, str)]
+    skipped = [r for r in found if isinstance(r, str)]
+    if not responses:
+        return (
+            [paragraph("Models not compared with the BLA: " + "; ".join(skipped))]
+            if skipped
+            else []
+        )
+    level = f"{bla.confidence:.0%}"
+    rows = [
+        [r.label, "-" if r.gain is None else f"{r.gain:.4g}",
+         "-" if r.within is None else f"{100 * r.within:.0f} %",
+         "-" if r.ratio is None else f"{r.ratio:.3g}"]
+        for r in responses
+    ]  # fmt: skip
+    parts = [
+        paragraph(
+            "Each model's linear frequency response against the BLA: a linear model's as "
+            "it is, a block-oriented model's linear blocks (their product) scaled by the "
+            "real gain that fits them best to the BLA, since a static block's gain cannot "
+            "be told from the linear block's. A model whose response leaves the BLA's "
+            f"{level} bound at many lines, or whose mean squared distance is many times "
+            "the BLA's variance (about 1 when they agree), has linear dynamics the "
+            "measurement does not support."
+        ),
+        table(
+            [
+                "model",
+                "gain (scaled)",
+                f"lines within the {level} bound",
+                "mean |G - model|² / var G",
+            ],
+            rows,
+        ),  # fmt: skip
+    ]
+    if skipped:
+        parts.append(paragraph("Not compared: " + "; ".join(skipped)))
+    parts.append(
+        figure(
+            encode_png(plot_bla_models(bla, responses)),  # closes it
+            "models' linear responses against the BLA",
+            f"Top: the BLA measured on the {where} (dots) with its {level} bound (shaded) "
+            "and each model's linear response (lines; a block model's scaled by the gain "
+            "in its label). Bottom: each model's distance from the BLA, |G - model|, "
+            "against the bound (grey line): below it, the model agrees with the "
+            "measurement at that line.",
+        )
+    )
+    return parts

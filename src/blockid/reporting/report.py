@@ -433,7 +433,7 @@ def build_report(
 
     with matplotlib.rc_context({"font.size": 8}):
         sections = [_overview(data, estimation, validation, ranges)]
-        sections.append(bla_section(estimation, f"estimation data ({est_text})"))
+        sections.append(bla_section(estimation, f"estimation data ({est_text})", entries))
         if identify is not None:
             sections.append(search_section(identify, baseline))
         sections += [
