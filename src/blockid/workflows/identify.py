@@ -121,6 +121,7 @@ from blockid.defaults import TIE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.trust import Trust, assess
 from blockid.fitting.registry import STRUCTURES, searched_structures
+from blockid.workflows.distortion import distortion_record
 from blockid.workflows.effort import (
     EFFORTS,
     LONG_RECORD,
@@ -863,6 +864,7 @@ def identify(
         except (BlockidError, ImportError) as exc:
             notes.append(f"orders test skipped: {exc}")
 
+    distortion = distortion_record(data, notes)  # periodic data: the BLA's distortion
     horizon: dict[str, Any] | None = None
     warm: list[dict[str, Any]] = []
     fit, selected = None, None
@@ -957,6 +959,7 @@ def identify(
         "beyond_linear": earned,
         "long_horizon": horizon,
         "warm_starts": warm,
+        "distortion": distortion,
     }
     return IdentifyResult(
         selected=selected,
