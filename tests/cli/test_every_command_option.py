@@ -720,6 +720,18 @@ def _bla_command() -> dict[str, Callable[..., None]]:
         assert measured(calls)[1]["confidence"] == 0.9 and doc["confidence"] == 0.9
         assert "confidence must lie between" in _bla_run(f, "--confidence", "9", code=2).stderr
 
+    def fit(f, calls):
+        """The plant is z^-1 (1 + 0.4 z^-1) / (1 - 1.2 z^-1 + 0.35 z^-2): found back."""
+        doc = _json(_bla_run(f, "--fit", "2,2,1", "--json"))["fit"]
+        assert (doc["na"], doc["nb"], doc["nk"]) == (2, 2, 1) and doc["stable"]
+        got, truth = np.r_[doc["a"], doc["b"]], np.array([-1.2, 0.35, 1.0, 0.4])
+        assert np.all(np.abs(got - truth) < 4 * np.array(list(doc["standard_errors"].values())))
+        text = _bla_run(f, "--fit", "2,2,1").stdout
+        assert "fitted to the BLA" in text and "a_1" in text and "about 1: the orders fit" in text
+        assert _json(_bla_run(f, "--json")).get("fit") is None
+        r = _bla_run(f, "--fit", "2", code=2)
+        assert "--fit '2': give NA,NB or NA,NB,NK" in r.stderr
+
     def rng(f, calls):
         _json(_run("bla", f.csv, "-u", "u", "-y", "y", "--range", "0:200", "--json"))
         assert measured(calls)[0].n_samples == 200
@@ -770,7 +782,7 @@ def _bla_command() -> dict[str, Callable[..., None]]:
     return {
         "inputs": inputs, "outputs": outputs, "period": period, "periods": periods,
         "transient_periods": transient_periods, "method": method, "segment": segment,
-        "bands": bands, "confidence": confidence, "rng": rng, "plot": plot, "out": out,
+        "bands": bands, "confidence": confidence, "fit": fit, "rng": rng, "plot": plot, "out": out,
         "ts": ts, "time_column": time_column, "experiment_column": experiment_column,
         "force": force, "json_out": json_out,
     }  # fmt: skip

@@ -78,7 +78,7 @@ def test_a_plant_measured_by_its_bla():
     err = np.r_[fit.a, fit.b] - np.r_[a[1:], b]
     assert np.all(np.abs(err) < 3.3 * fit.standard_errors), (err, fit.standard_errors)
     assert np.max(np.abs(err)) < 5e-3
-    assert fit.cost_ratio < 1.5
+    assert 0.7 < fit.cost_ratio < 1.4  # weighted by variances of 6 realisations: 1.25 corrected
     under = fit_bla(bla, na=1, nb=1, nk=0)  # too few poles: the cost says so
     assert under.cost_ratio > 10
 

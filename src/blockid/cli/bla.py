@@ -114,6 +114,17 @@ def bla(
     confidence: Annotated[
         float, shared("confidence", "Of the bounds and the tests (between 0 and 1).")
     ] = 0.99,
+    fit: Annotated[
+        str | None,
+        _option(
+            "--fit",
+            "NA,NB[,NK]",
+            "Also fit a transfer function z^-NK B/A (NA poles, NB numerator coefficients, "
+            "NK delay, default 0) to the BLA, weighted by its variance; printed, and in "
+            "--json / -o.",
+            show_default=False,
+        ),
+    ] = None,
     rng: Annotated[str | None, shared("range", "Samples to use (default: all).")] = None,
     plot: Annotated[
         Path | None,
@@ -143,6 +154,7 @@ def bla(
     input, output = inputs[0], outputs[0]
     if method not in METHODS:
         raise ParameterError(f"--method {method!r}: choose {', '.join(METHODS)}")
+    orders = None if fit is None else _orders(fit)
     check_arguments(data_paths, ranges={"--range": rng})
     refuse_to_overwrite(out, force)
     from blockid.evaluation.bla import best_linear_approximation
@@ -165,6 +177,12 @@ def bla(
 
         figure = bla_figure(result, plot, overwrite=force)
     doc = result.to_dict()
+    fitted = None
+    if orders is not None:
+        from blockid.fitting.frequency import fit_bla
+
+        fitted = _flagged(fit_bla, result, *orders)
+        doc["fit"] = fitted.to_dict()
     if out is not None:
         import json
 
@@ -177,6 +195,8 @@ def bla(
                     "out": None if out is None else str(out)})  # fmt: skip
         return
     _print(result)
+    if fitted is not None:
+        _print_fit(fitted)
     if figure is not None:
         stdout.print(f"figure written to {figure}", markup=False)
     if out is not None:
@@ -207,3 +227,48 @@ def _print(result: Any) -> None:
     stdout.print(table)
     for line in text:
         stdout.print(line, markup=False)
+
+
+def _orders(text: str) -> tuple[int, int, int]:
+    """``NA,NB[,NK]`` of ``--fit``."""
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) not in (2, 3) or not all(p.isdigit() for p in parts):
+        raise ParameterError(
+            f"--fit {text!r}: give NA,NB or NA,NB,NK (poles, numerator coefficients, "
+            "delay; whole numbers), e.g. --fit 2,3",
+            parameter="fit",
+        )
+    na, nb, *rest = (int(p) for p in parts)
+    if nb < 1:
+        raise ParameterError(f"--fit {text!r}: NB must be 1 or more", parameter="fit")
+    return na, nb, rest[0] if rest else 0
+
+
+def _print_fit(fit: Any) -> None:
+    """The fitted coefficients with their standard errors, the cost check, the poles."""
+    from rich.table import Table
+
+    table = Table(
+        title=f"transfer function z^-{fit.nk} B/A fitted to the BLA ({fit.lines} lines, "
+        "weighted by 1/var G)",
+        title_justify="left",
+    )
+    for column in ("coefficient", "value", "standard error"):
+        table.add_column(column, justify="left" if column == "coefficient" else "right")
+    values = [*fit.a, *fit.b]
+    for name, value, se in zip(fit.names(), values, fit.standard_errors, strict=True):
+        table.add_row(name, f"{value:.6g}", f"{se:.3g}")
+    stdout.print(table)
+    ratio = fit.cost_ratio
+    reading = (
+        "well above 1: the orders miss dynamics the BLA shows"
+        if ratio > 2.0
+        else "about 1: the orders fit the BLA within its uncertainty"
+    )
+    stable = "stable" if fit.to_dict()["stable"] else "UNSTABLE"
+    largest = max(abs(fit.poles), default=0.0)
+    stdout.print(
+        f"weighted cost over its expected value for a right model: {ratio:.3g} ({reading}); "
+        f"poles {stable}, largest |p| = {largest:.4g}",
+        markup=False,
+    )

@@ -28,8 +28,11 @@ minimising the weighted least-squares cost (Pintelon & Schoukens 2012, ch. 9)
 **Uncertainty.** With circular complex errors of variance ``σ²_k`` each real and
 imaginary part of ``(G - Ĝ)/σ_k`` has variance 1/2, so ``cov θ = (JᵀJ)⁻¹ / 2``, ``J`` the
 Jacobian of the stacked weighted residual. ``V`` at the minimum is about ``F - n_θ / 2``
-(``F`` lines) when the model is right and the variances are: its ratio to that is
-reported (well above 1: model errors above the noise, more poles or zeros wanted).
+(``F`` lines) when the model is right and the variances are known; weighted by
+variances *estimated* with ``d`` degrees of freedom each (a BLA of ``M`` realisations:
+``d = 2(M - 1)``) it is ``d / (d - 2)`` times that, since ``E[1/σ̂²] = d / (d - 2) /
+σ²`` (1.25 for 6 realisations). The ratio of ``V`` to its expected value is reported:
+about 1 for a right model, well above 1 when the orders miss dynamics the data show.
 
 The result is an :class:`~blockid.models.OutputError` model, ``B/A`` from the input
 (no noise model), which ``blockid simulate`` runs like any other.
@@ -69,6 +72,8 @@ class FrequencyFit:
         ``F``, the lines fitted.
     sampling_time : float
     input_name, output_name : str
+    variance_dof : float, optional
+        Degrees of freedom of each line's estimated variance (None: known variances).
     """
 
     a: np.ndarray
@@ -80,6 +85,7 @@ class FrequencyFit:
     sampling_time: float
     input_name: str = "u"
     output_name: str = "y"
+    variance_dof: float | None = None
 
     @property
     def standard_errors(self) -> np.ndarray:
@@ -88,8 +94,12 @@ class FrequencyFit:
 
     @property
     def cost_ratio(self) -> float:
-        """``V`` over its expected value ``F - n_θ/2`` for a right model: about 1."""
-        return float(self.cost / max(self.lines - (self.a.size + self.b.size) / 2.0, 1.0))
+        """``V`` over its expected value for a right model (module docstring): about 1."""
+        expected = max(self.lines - (self.a.size + self.b.size) / 2.0, 1.0)
+        d = self.variance_dof
+        if d is not None and d > 2:
+            expected *= d / (d - 2.0)
+        return float(self.cost / expected)
 
     @property
     def poles(self) -> np.ndarray:
@@ -144,9 +154,11 @@ def fit_frequency_response(
     sampling_time: float = 1.0,
     input_name: str = "u",
     output_name: str = "y",
+    variance_dof: float | None = None,
 ) -> FrequencyFit:
     """Fit ``z^-nk B/A`` (``na`` poles, ``nb`` numerator coefficients) to ``g`` measured
-    at ``frequencies`` (Hz) with variances ``variance`` (module docstring).
+    at ``frequencies`` (Hz) with variances ``variance`` (module docstring; estimated
+    with ``variance_dof`` degrees of freedom each, None: known).
 
     Raises
     ------
@@ -216,6 +228,7 @@ def fit_frequency_response(
         a=theta[:na].copy(), b=theta[na:].copy(), nk=int(nk), covariance=covariance,
         cost=float(np.sum(residual(theta) ** 2)), lines=int(f.size),
         sampling_time=float(sampling_time), input_name=input_name, output_name=output_name,
+        variance_dof=variance_dof,
     )  # fmt: skip
 
 
@@ -236,7 +249,13 @@ def fit_bla(bla: Any, na: int, nb: int, nk: int = 0) -> FrequencyFit:
             "the BLA has no variance to weigh its lines by (one realisation of one "
             "period): measure 2 or more periods or realisations"
         )
+    if bla.method == "welch":
+        dof = 2.0 * (bla.segments - 1.0) if bla.segments else None
+    elif bla.var_total is not None:  # between realisations
+        dof = 2.0 * (bla.realisations - 1)
+    else:  # between the periods of each realisation
+        dof = 2.0 * bla.realisations * (bla.periods - 1)
     return fit_frequency_response(
         bla.frequencies, bla.g, std**2, na, nb, nk, sampling_time=bla.sampling_time,
-        input_name=bla.input_name, output_name=bla.output_name,
+        input_name=bla.input_name, output_name=bla.output_name, variance_dof=dof,
     )  # fmt: skip
