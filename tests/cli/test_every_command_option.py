@@ -498,6 +498,9 @@ def compare_json(f, calls):
     assert "free-run simulation on the validation range" in plain
     doc = _json(_compare(f, "--json"))
     assert [m["structure"] for m in doc["models"]] == ["arx"]
+    tests = doc["models"][0]["residuals"]  # the residual tests of every model
+    assert f"arx: residual tests {tests['verdict']}" in " ".join(plain.split())
+    assert set(tests["whiteness"]) == {"y"} and set(tests["independence"]) == {"u->y"}
 
 
 # ----------------------------------------------------------------------------- fit-network
