@@ -474,7 +474,10 @@ class _Search:
     ) -> list[list[FoldScore] | None]:
         """Successive halving in one round: every candidate fitted and scored on the
         first fold; the best ``1 / effort.race`` of them (at least ``RACE_MIN``, ties by
-        label) on the other folds as well. Each fold's fit is the one the full stage
+        label) on the other folds as well, and with them every candidate within the
+        search's ``tie`` of the best first fold (one fold does not tell near-ties apart,
+        and among them the simplest is chosen) and every linear one (the comparators of
+        the rule that keeps a model beyond linear). Each fold's fit is the one the full stage
         would make, so a candidate that carries on gets the very score it would have
         had; one that fails the first fold is rejected with its reason, as before; the
         others are left out, recorded in :attr:`raced` with their first fold's error.
@@ -486,7 +489,15 @@ class _Search:
         ok = [j for j, f in enumerate(first) if f is not None and not f[0].reason]
         ok.sort(key=lambda j: (first[j][0].relative, candidates[j].label))  # type: ignore[index]
         keep = max(RACE_MIN, math.ceil(len(candidates) / self.effort.race))
-        kept, dropped = ok[:keep], ok[keep:]
+        best = first[ok[0]][0].relative if ok else math.inf  # type: ignore[index]
+        kept = [
+            j
+            for rank, j in enumerate(ok)
+            if rank < keep
+            or first[j][0].relative <= best * (1.0 + self.tie)  # type: ignore[index]
+            or STRUCTURES[candidates[j].structure].linear  # the linear rule's comparators
+        ]
+        dropped = [j for j in ok if j not in kept]
         rest = self._fold_scores(stage, [candidates[j] for j in kept], rest_plan, limit, capped)
         second = self.stages.pop()
         out: list[list[FoldScore] | None] = [
