@@ -6,6 +6,9 @@ self-contained Python module.
 * :func:`to_scipy` / :func:`to_control` — the same as ``scipy.signal.dlti`` /
   ``control.TransferFunction`` (python-control is optional: a clear error when it is
   not installed);
+* :func:`to_control` of a state-space model or a multivariable ARX model — one
+  ``control.StateSpace`` from physical input deviations to physical output deviations
+  (:func:`state_space_matrices`: the matrices and the operating point they deviate from);
 * :func:`to_python_module` — the source of a module that needs NumPy only, with the
   model's parameters embedded and ``simulate(u, y0=None)`` reproducing
   ``model.simulate(u, y_initial=y0[:max_lag])`` to rounding, for ARX (MIMO), every chain of
@@ -52,6 +55,7 @@ __all__ = [
     "EXPORTABLE_KINDS",
     "FORMATS",
     "export_text",
+    "state_space_matrices",
     "to_control",
     "to_python_module",
     "to_scipy",
@@ -175,8 +179,145 @@ def to_scipy(model: Any, index: int | None = None) -> Any:
     return signal.dlti(tf["num"], tf["den"], dt=tf["dt"] if tf["dt"] else True)
 
 
+def _refuse_nonlinear(model: Any) -> None:
+    """Refuse a polynomial state-space model whose ``A, B, C, D`` are not its
+    linearisation at an equilibrium (see :func:`state_space_matrices`)."""
+    constant = ~model.exponents.any(axis=1)  # the monomial 1
+    if np.any(model.E[:, constant]) or np.any(model.F[:, constant]):
+        raise ParameterError(
+            "the polynomial state-space model has constant terms, so x = 0 is not at rest and "
+            "A, B, C, D are not its linearisation at an operating point; export the tangent at "
+            "x = 0 anyway with to_control(model.linear_part()), or the whole model with "
+            "to_python_module (blockid export --to python)"
+        )
+    if np.any(model.lower > 0) or np.any(model.upper < 0):
+        raise ParameterError(
+            "the polynomial state-space model clips its monomials' arguments to a range without "
+            "0, so A, B, C, D are not its slope at rest; export them anyway with "
+            "to_control(model.linear_part()), or the whole model with to_python_module"
+        )
+
+
+def _arx_matrices(model: Any) -> tuple[np.ndarray, ...]:
+    """A non-minimal realisation of an ARX model (module docstring)."""
+    lags_a, lags_b = model.lag_arrays()
+    ny, nu = lags_b.shape[:2]
+    nonzero_a = np.flatnonzero(np.any(lags_a, axis=(0, 1)))
+    nonzero_b = np.flatnonzero(np.any(lags_b, axis=(0, 1)))
+    La = int(nonzero_a[-1]) if nonzero_a.size else 0
+    Lb = int(nonzero_b[-1]) if nonzero_b.size else 0
+    n = ny * La + nu * Lb
+    C = np.zeros((ny, n))
+    for lag in range(1, La + 1):
+        C[:, (lag - 1) * ny : lag * ny] = -lags_a[:, :, lag]
+    for lag in range(1, Lb + 1):
+        C[:, ny * La + (lag - 1) * nu : ny * La + lag * nu] = lags_b[:, :, lag]
+    D = lags_b[:, :, 0].copy()
+    A, B = np.zeros((n, n)), np.zeros((n, nu))
+    if La:  # y(k) enters the first block of past outputs, the others move one lag on
+        A[:ny] = C
+        B[:ny] = D
+        A[ny : ny * La, : ny * (La - 1)] = np.eye(ny * (La - 1))
+    if Lb:  # the same for the past inputs
+        B[ny * La : ny * La + nu] = np.eye(nu)
+        start = ny * La
+        A[start + nu :, start : start + nu * (Lb - 1)] = np.eye(nu * (Lb - 1))
+    states = [f"{y}(k-{lag})" for lag in range(1, La + 1) for y in model.outputs]
+    states += [f"{u}(k-{lag})" for lag in range(1, Lb + 1) for u in model.inputs]
+    return A, B, C, D, states
+
+
+def state_space_matrices(model: Any) -> dict[str, Any]:
+    """``A, B, C, D`` from physical input deviations to physical output deviations, and
+    the operating point they deviate from (what :func:`to_control` exports).
+
+    .. math::
+
+        x(k+1) = A x(k) + B (u(k) - u_0), \\qquad y(k) = y_0 + C x(k) + D (u(k) - u_0)
+
+    * A linear state-space model (normalised signals,
+      :mod:`blockid.models.state_space`): ``A``, ``B S_u^{-1}``, ``S_y C``,
+      ``S_y D S_u^{-1}`` with ``S_u``, ``S_y`` the diagonal input and output scales and
+      ``u_0``, ``y_0`` the offsets. The state is the model's own, so ``x(0)`` from
+      :meth:`~blockid.models.state_space.PolynomialStateSpace.initial_state` carries
+      over. The predictor gain ``K`` is left out: this is the simulation model.
+    * A polynomial state-space model only where ``A, B, C, D`` are its linearisation at
+      rest: no constant term and a clipping range around 0, so that ``x = 0`` at
+      ``u = u_0`` is an equilibrium at which every monomial (degree 2 and more) has value
+      and slope 0; otherwise refused.
+    * An ARX model (any number of inputs and outputs): a non-minimal realisation whose
+      state holds the past outputs and inputs (deviations), ``y(k-1) .. y(k-n_a)``,
+      ``u(k-1) .. u(k-n_b)``; the state 0 is the model at rest at its operating point,
+      where its simulation without ``y_initial`` starts.
+
+    Returns ``{"A", "B", "C", "D", "states", "input_offset", "output_offset"}`` (arrays;
+    ``states``: names). A block state-space model is refused: its blocks are not linear.
+
+    Examples
+    --------
+    >>> from blockid.models import StateSpace
+    >>> m = StateSpace(["u"], ["y"], A=[[0.5]], B=[[1.0]], C=[[1.0]], D=[[0.0]],
+    ...                input_scale=2.0, output_offset=10.0, output_scale=3.0)
+    >>> ss = state_space_matrices(m)
+    >>> ss["B"].tolist(), ss["C"].tolist(), ss["output_offset"].tolist()
+    ([[0.5]], [[3.0]], [10.0])
+    """
+    from blockid.models.block_state_space import BlockStateSpace
+    from blockid.models.state_space import PolynomialStateSpace
+
+    if isinstance(model, BlockStateSpace):
+        raise ParameterError(
+            "a block state-space model has static blocks around its linear core, so it has "
+            "no state space of its own; export the core (normalised units, from the input "
+            "blocks' outputs to the output blocks' arguments) with to_control("
+            "model.linear_part()), or the whole model with to_python_module"
+        )
+    if isinstance(model, PolynomialStateSpace):
+        if model.n_monomials:
+            _refuse_nonlinear(model)
+        su, sy = model.input_scale, model.output_scale
+        A, B = model.A.copy(), model.B / su[None, :]
+        C, D = sy[:, None] * model.C, sy[:, None] * model.D / su[None, :]
+        states = [f"x{i + 1}" for i in range(model.nx)]
+    elif hasattr(model, "lag_arrays"):  # ARX
+        A, B, C, D, states = _arx_matrices(model)
+    else:
+        raise ParameterError(
+            f"a {type(model).__name__} has no state-space export; use to_control(model) for "
+            "its linear block's transfer function, or to_python_module"
+        )
+    return {
+        "A": A, "B": B, "C": C, "D": D, "states": states,
+        "input_offset": np.asarray(model.input_offset, dtype=float).copy(),
+        "output_offset": np.asarray(model.output_offset, dtype=float).copy(),
+    }  # fmt: skip
+
+
 def to_control(model: Any, index: int | None = None) -> Any:
-    """A linear block as ``control.TransferFunction`` (python-control, optional)."""
+    """The model's linear dynamics in python-control (optional).
+
+    * A state-space model (linear, or polynomial where that is its linearisation at
+      rest) or an ARX model of several inputs or outputs, without ``index``: one
+      ``control.StateSpace`` from the physical input deviations ``u - u_0`` to the
+      physical output deviations ``y - y_0`` (:func:`state_space_matrices`; the offsets
+      ``u_0``, ``y_0`` are ``model.input_offset``, ``model.output_offset``), with
+      ``dt`` the sampling time (``True`` without one) and the model's signal names.
+      ``y_0 + control.forced_response(sys, inputs=(u - u_0).T).outputs.T`` equals
+      ``model.simulate(u)``; with ``initial_state=model.initial_state(u, y_meas)`` it
+      equals ``model.simulate(u, y_meas)`` beyond the ``max_lag`` outputs that copies.
+    * A linear block, a chain, a feedback model, a single-input single-output ARX
+      model, or a state-space model's input-output pair ``index`` (the order of
+      :func:`transfer_functions`): ``control.TransferFunction``.
+
+    Examples
+    --------
+    >>> from blockid.models import StateSpace
+    >>> m = StateSpace(["u"], ["y"], A=[[0.5]], B=[[1.0]], C=[[1.0]], D=[[0.0]],
+    ...                output_offset=10.0, sampling_time=0.1)
+    >>> sys = to_control(m)
+    >>> sys.input_labels, sys.output_labels, sys.dt
+    (['u'], ['y'], 0.1)
+    """
     try:
         import control
     except ImportError:
@@ -184,6 +325,21 @@ def to_control(model: Any, index: int | None = None) -> Any:
             "python-control is not installed; install it (pip install control) to export "
             "to python-control, or use to_scipy / the transfer_functions lists"
         ) from None
+    from blockid.models.block_state_space import BlockStateSpace
+    from blockid.models.state_space import PolynomialStateSpace
+
+    multivariable = len(getattr(model, "inputs", ())) > 1 or len(getattr(model, "outputs", ())) > 1
+    if index is None and (
+        isinstance(model, PolynomialStateSpace | BlockStateSpace)
+        or (hasattr(model, "lag_arrays") and multivariable)
+    ):
+        ss = state_space_matrices(model)
+        dt = getattr(model, "sampling_time", None)
+        return control.ss(
+            ss["A"], ss["B"], ss["C"], ss["D"], dt if dt else True,
+            inputs=list(model.inputs), outputs=list(model.outputs), states=ss["states"],
+            name=model.structure,
+        )  # fmt: skip
     tf = _one(model, index)
     return control.tf(tf["num"], tf["den"], tf["dt"] if tf["dt"] else True)
 
