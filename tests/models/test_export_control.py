@@ -140,3 +140,28 @@ def test_refusals_name_what_to_do():
     assert to_control(blocks.linear_part()).input_labels == ["w u1", "w u2"]
     with pytest.raises(ParameterError, match="has no state-space export"):
         state_space_matrices(LinearBlock(1, 1, 1, a=[-0.5], b=[1.0]))
+
+
+def test_each_pair_of_the_state_space_is_the_transfer_function_index_gives(fitted):
+    from blockid.models.export import transfer_functions
+
+    model = fitted[0]
+    sys = to_control(model)
+    for k, tf in enumerate(transfer_functions(model)):
+        i, j = model.outputs.index(tf["output"]), model.inputs.index(tf["input"])
+        pair = to_control(model, index=k)
+        for z in (1.0, 1j, np.exp(0.3j)):  # the same function of z
+            np.testing.assert_allclose(pair(z), sys(z)[i, j], rtol=1e-9)
+
+
+def test_the_example_in_docs_export_runs_as_printed(capsys):
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "export.md").read_text(encoding="utf-8")
+    blocks = [b.split("```")[0] for b in text.split("```python\n")[1:]]
+    code = next(b for b in blocks if "state_space_matrices" in b)
+    exec(code, {})
+    printed = capsys.readouterr().out.splitlines()
+    shown = [line[2:] for line in code.splitlines() if line.startswith("# ")]
+    assert printed[:2] == shown[1:3]  # the names, dt and the offsets exactly
+    assert float(printed[2]) < 1e-9 and float(printed[3]) < 1e-9
