@@ -180,5 +180,6 @@ def test_export_messages_are_exact():
         transfer_functions(model)
     assert str(info.value) == (
         "a transfer function here is single-input single-output; the ARX model has "
-        "2 input(s) and 1 output(s): export it as a Python module instead"
+        "2 input(s) and 1 output(s): export it as a Python module, or as one state space "
+        "with to_control(model)"
     )

@@ -127,7 +127,7 @@ def transfer_functions(model: Any) -> list[dict[str, Any]]:
             raise ParameterError(
                 f"a transfer function here is single-input single-output; the ARX model has "
                 f"{len(model.inputs)} input(s) and {len(model.outputs)} output(s): export it "
-                "as a Python module instead"
+                "as a Python module, or as one state space with to_control(model)"
             )
         yi, ui = model.outputs[0], model.inputs[0]
         from blockid.blocks.linear import LinearBlock
