@@ -199,7 +199,9 @@ def _refuse_nonlinear(model: Any) -> None:
 
 
 def _arx_matrices(model: Any) -> tuple[np.ndarray, ...]:
-    """A non-minimal realisation of an ARX model (module docstring)."""
+    """A non-minimal realisation of an ARX model (:func:`state_space_matrices`): the state
+    ``x(k) = [y(k-1); ..; y(k-La); u(k-1); ..; u(k-Lb)]`` (deviations from the offsets),
+    ``y(k) = -sum_l A_l y(k-l) + B_0 u(k) + sum_l B_l u(k-l) = C x(k) + D u(k)``."""
     lags_a, lags_b = model.lag_arrays()
     ny, nu = lags_b.shape[:2]
     nonzero_a = np.flatnonzero(np.any(lags_a, axis=(0, 1)))
