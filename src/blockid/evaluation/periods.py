@@ -142,8 +142,9 @@ def _period_of(data: Dataset, column: int, period: int | None, periods: int | No
         if lengths[0] % periods:
             raise DataError(
                 f"experiment '{data.experiments[0].name}' holds {lengths[0]} samples, not a "
-                f"whole number of {periods} periods; give the period in samples (period) or "
-                "cut the record to whole periods",
+                f"whole number of {periods} periods; give the period in samples or cut the "
+                "record to whole periods",
+                parameter="period",
             )
         return lengths[0] // int(periods)
     found = []
@@ -197,6 +198,12 @@ def periodic_frames(
     """
     check_finite(data, input_column, output_column)
     n = _period_of(data, input_column, period, periods)
+    if n < 3:  # lines 1 .. (n - 1) // 2 lie between 0 Hz and Nyquist: none below 3
+        raise ParameterError(
+            f"a period of {n} samples holds no frequency line between 0 Hz and the Nyquist "
+            "frequency: a BLA needs periods of 3 samples or more (64 or more are usual)",
+            parameter="periods" if period is None and periods is not None else "period",
+        )
     held = []
     for exp in data.experiments:
         if exp.n_samples % n:
@@ -299,7 +306,7 @@ def first_period_differs(y: np.ndarray) -> FirstPeriod | None:
     True
     """
     m, p, n = y.shape
-    if p < 3:
+    if p < 3 or n < 3:  # no line between 0 Hz and Nyquist below 3 samples a period
         return None
     spectra = np.fft.rfft(y, axis=2)[:, :, 1 : (n - 1) // 2 + 1]
     rest = spectra[:, 1:].mean(axis=1)
@@ -307,9 +314,11 @@ def first_period_differs(y: np.ndarray) -> FirstPeriod | None:
     s = np.sum(np.abs(spectra[:, 1:] - rest[:, None]) ** 2, axis=1) / (p - 2)
     level = s.mean(axis=0)
     window = np.ones(2 * _NEIGHBOURS + 1)
-    around = np.convolve(level, window, "same") - level  # the line itself left out
-    count = np.convolve(np.ones(level.size), window, "same") - 1
-    weight = np.divide(1.0, around / count, out=np.zeros(level.size), where=around > 0)
+    # "full" cut to the lines: "same" returns the window's length for fewer lines
+    inside = slice(_NEIGHBOURS, _NEIGHBOURS + level.size)
+    around = np.convolve(level, window)[inside] - level  # the line itself left out
+    count = np.convolve(np.ones(level.size), window)[inside] - 1
+    weight = np.divide(count, around, out=np.zeros(level.size), where=around > 0)  # 1 / ℓ_k
     a, b = d * weight, s * weight
     from scipy import stats
 
