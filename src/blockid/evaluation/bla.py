@@ -305,7 +305,13 @@ def best_linear_approximation(
     periodic = {"period": period, "periods": periods, "lines": lines,
                 "transient_periods": transient_periods or None}  # fmt: skip
     given = [name for name, value in periodic.items() if value is not None]
-    if method == "welch" and given or segment is not None and (method == "robust" or given):
+    if method == "welch" and given:
+        raise ParameterError(
+            f"{', '.join(given)} and method welch do not go together: the periodic options "
+            "are the robust method's; leave them out, or use method robust",
+            parameter=given[0],
+        )
+    if segment is not None and (method == "robust" or given):
         raise ParameterError(
             f"{', '.join(given) or 'method robust'} and segment do not go together: the "
             "periodic options are the robust method's, segment the Welch estimate's",
@@ -321,6 +327,15 @@ def best_linear_approximation(
                     "estimate, which cannot tell noise from distortion")  # fmt: skip
         else:
             period = found.pop()
+            for exp in data.experiments:
+                if exp.n_samples % period:
+                    raise DataError(
+                        f"the input repeats every {period} samples (found from it), but "
+                        f"experiment '{exp.name}' holds {exp.n_samples}, not a whole number of "
+                        "periods: cut each record to whole periods, give the period, or use "
+                        "method 'welch' (the non-periodic estimate)",
+                        parameter="method",
+                    )
     if method == "welch" or segment is not None:
         from blockid.evaluation.frf import welch_bla
 

@@ -112,6 +112,14 @@ def band_edges(
                 parameter="bands",
             )
         out.append((float(low), float(high)))
+    ordered = sorted(out)
+    for (low_a, high_a), (low_b, high_b) in zip(ordered, ordered[1:], strict=False):
+        if low_b < high_a:  # a line in both would be counted twice, in the verdict too
+            raise ParameterError(
+                f"bands {low_a:g}:{high_a:g} and {low_b:g}:{high_b:g} Hz overlap; give bands "
+                f"that share at most an edge (e.g. {low_a:g}:{low_b:g},{low_b:g}:{high_b:g})",
+                parameter="bands",
+            )
     return out
 
 
@@ -292,10 +300,10 @@ def _verdict_with_noise(
     showing = 0  # bands of the table with distortion found
     for i, (b, where) in enumerate(named):
         before = len(found)
-        if b.detected:
+        if b.detected and b.margin_db is not None:  # detected at a distortion <= 0: noise
             found.append((b.margin_db, where))
         for kind, g in b.nonexcited.items():
-            if g["detected"] and g["noise_db"] is not None:
+            if g["detected"] and g["distortion_db"] is not None:
                 margin = g["distortion_db"] - g["noise_db"]
                 found.append((margin, f"{where}, at {_KIND[kind]}"))
         showing += i < count and len(found) > before
@@ -309,7 +317,8 @@ def _verdict_with_noise(
     if bla.odd_design:
         for kind in ("even", "odd"):
             groups = [b.nonexcited[kind] for b, _ in named if kind in b.nonexcited]
-            seen = [g["distortion_db"] - g["noise_db"] for g in groups if g["detected"]]
+            seen = [g["distortion_db"] - g["noise_db"] for g in groups
+                    if g["detected"] and g["distortion_db"] is not None]  # fmt: skip
             shown.append(f"{kind} lines " + (f"up to {max(seen):+.1f} dB over the noise" if seen
                                              else "at the noise"))  # fmt: skip
     tested = f" ({'; '.join([level, ', '.join(shown)] if shown else [level])})"
