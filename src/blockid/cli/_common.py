@@ -173,6 +173,11 @@ def check_writable(out: Path) -> None:
     import os
 
     folder = out.parent if str(out.parent) else Path(".")
+    if folder.exists() and not folder.is_dir():
+        raise ParameterError(
+            f"cannot write {out}: {folder} is a file, not a folder; choose another path "
+            "(nothing was computed)"
+        )
     if not folder.is_dir():
         raise ParameterError(
             f"cannot write {out}: folder {folder} does not exist; create it or choose "
@@ -185,15 +190,16 @@ def check_writable(out: Path) -> None:
         )
 
 
-def refuse_model_name(out: Path | None) -> None:
-    """Stop before any work when ``-o`` would write a model file (JSON) under another
-    kind's name (``m.csv``: a later reader would take it for a table)."""
+def refuse_model_name(out: Path | None, what: str = "a model file is") -> None:
+    """Stop before any work when ``-o`` would write a model file (JSON; or ``what``
+    else) under another kind's name (``m.csv``: a later reader would take it for a
+    table, and ``--force`` would replace the data read)."""
     from blockid.data.files import is_stream
 
     if out is None or is_stream(out) or out.suffix.lower() in ("", ".json"):
         return
     raise ParameterError(
-        f"{out}: a model file is JSON, not {out.suffix}; name it {out.with_suffix('.json')}",
+        f"{out}: {what} JSON, not {out.suffix}; name it {out.with_suffix('.json')}",
         parameter="out",
     )
 
@@ -236,9 +242,15 @@ def metrics_table(title: str, rows: list[tuple[str, dict[str, dict[str, float]]]
                 f"{metrics['rmse'][out]:.4g}",
                 f"{metrics['mae'][out]:.4g}",
                 f"{metrics['max_abs_error'][out]:.4g}",
-                f"{metrics['fit_percent'][out]:.2f}",
+                _fit(metrics["fit_percent"][out]),
             )
     return table
+
+
+def _fit(value: float | None) -> str:
+    """A fit in percent, or "-" where it is undefined (a constant output: NaN, null in
+    JSON, and a warning that says so)."""
+    return "-" if value is None or value != value else f"{value:.2f}"
 
 
 #: Parameter tables of more values than this are summarised in one line on the terminal

@@ -14,6 +14,7 @@ from blockid.cli._common import (
     cli_errors,
     print_json,
     refuse_figures,
+    refuse_model_name,
     refuse_to_overwrite,
     stdout,
 )
@@ -156,6 +157,7 @@ def bla(
         raise ParameterError(f"--method {method!r}: choose {', '.join(METHODS)}")
     orders = None if fit is None else _orders(fit)
     check_arguments(data_paths, ranges={"--range": rng})
+    refuse_model_name(out, "the results are")
     refuse_to_overwrite(out, force)
     from blockid.evaluation.bla import best_linear_approximation
     from blockid.evaluation.bla_bands import parse_bands
@@ -181,7 +183,10 @@ def bla(
     if orders is not None:
         from blockid.fitting.frequency import fit_bla
 
-        fitted = _flagged(fit_bla, result, *orders)
+        try:
+            fitted = fit_bla(result, *orders)
+        except BlockidError as exc:  # orders the measured lines cannot carry
+            raise type(exc)(f"{exc} (option --fit)") from None
         doc["fit"] = fitted.to_dict()
     if out is not None:
         import json
