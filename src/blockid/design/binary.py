@@ -37,6 +37,7 @@ from blockid.design.checks import (
     check_levels,
     check_positive,
     check_seed,
+    check_size,
     check_whole_bits,
 )
 from blockid.design.excitation import Excitation, design_rng
@@ -145,6 +146,7 @@ def prbs(
     low, high = check_levels(levels)
     periods = check_count("periods", periods)
     sampling_time = check_positive("sampling_time", sampling_time, " s")
+    check_size({"order": 2**order - 1, "clock": clock, "periods": periods})
     bits = np.repeat(msequence(order), clock)
     period = np.where(bits == 1, high, low)
     settings = {
@@ -188,6 +190,7 @@ def random_binary(
     low, high = check_levels(levels)
     periods = check_count("periods", periods)
     realisations = check_count("realisations", realisations)
+    check_size({"samples": samples, "periods": periods, "realisations": realisations})
     seed = check_seed(seed)
     sampling_time = check_positive("sampling_time", sampling_time, " s")
     bits = np.stack(

@@ -17,13 +17,17 @@ __all__ = [
     "COUNTS",
     "DEFAULTS",
     "KINDS",
+    "MAGNITUDE",
+    "MAX_SAMPLES",
     "PARAMETERS",
     "band_lines",
     "check_design",
     "check_count",
     "check_levels",
+    "check_magnitude",
     "check_positive",
     "check_seed",
+    "check_size",
     "check_whole_bits",
     "odd_band_lines",
 ]
@@ -73,12 +77,22 @@ COUNTS: dict[str, tuple[int, int | None, str]] = {
     "periods": (1, None, "periods of each realisation"),
     "realisations": (1, None, "independent realisations"),
     "group": (2, None, "consecutive odd lines of which one is left out"),
-    "crest_iterations": (0, None, "clipping iterations of the crest-factor optimisation"),
+    # the crest factor changes little after a few hundred (CLIP_QUANTILE's note in
+    # blockid.design.multisines); the bound keeps the work finite
+    "crest_iterations": (0, 10_000, "clipping iterations of the crest-factor optimisation"),
     "clock": (1, None, "samples each bit is held"),
     # 2^24 - 1 = 16.8 million samples a period is already longer than a CSV file holds
     # comfortably; the primitive polynomials of blockid.design.binary cover 2..24
     "order": (2, 24, "stages of the shift register, a period of 2^order - 1 bits"),
 }
+
+#: The most samples a design may hold, all periods of all realisations (800 MB as
+#: float64, some 2 GB as CSV): more is refused before anything is allocated.
+MAX_SAMPLES = 10**8
+
+#: The magnitudes a signal's values (``rms``, ``levels``) may take: their squares, of
+#: which the RMS value and the crest factor are made, stay normal float64 numbers.
+MAGNITUDE = (1e-150, 1e150)
 
 
 def check_design(kind: str, given: dict[str, Any]) -> None:
@@ -115,7 +129,15 @@ def check_design(kind: str, given: dict[str, Any]) -> None:
     if "levels" in given:
         check_levels(given["levels"])
     if "rms" in given:
-        check_positive("rms", given["rms"])
+        check_magnitude("rms", check_positive("rms", given["rms"]))
+    periods = given.get("periods", DEFAULTS["periods"])
+    if kind == "prbs":
+        check_size({"order": 2 ** given["order"] - 1, "clock": given.get("clock", 1),
+                    "periods": periods})  # fmt: skip
+    else:
+        realisations = given.get("realisations", DEFAULTS["realisations"])
+        check_size({"samples": given["samples"], "periods": periods,
+                    "realisations": realisations})  # fmt: skip
     sampling_time = given.get("sampling_time", DEFAULTS["sampling_time"])
     check_positive("sampling_time", sampling_time, " s")
     band = (given.get("samples"), sampling_time, given.get("f_min"), given.get("f_max"))
@@ -125,6 +147,38 @@ def check_design(kind: str, given: dict[str, Any]) -> None:
         odd_band_lines(*band)
     if kind == "random-binary":
         check_whole_bits(given["samples"], given.get("clock", DEFAULTS["clock"]))
+
+
+def check_size(factors: dict[str, int]) -> None:
+    """Refuse a design of more than :data:`MAX_SAMPLES` samples, the product of
+    ``factors`` (parameter -> the samples it multiplies by), naming the largest.
+
+    >>> check_size({"samples": 10**6, "periods": 1000, "realisations": 1})
+    Traceback (most recent call last):
+    ...
+    blockid.errors.ParameterError: the design would hold 1e+09 samples (samples 1000000 x ...
+    """
+    total = math.prod(int(v) for v in factors.values())
+    if total > MAX_SAMPLES:
+        worst = max(factors, key=lambda name: factors[name])
+        shown = " x ".join(f"{name} {value}" for name, value in factors.items())
+        raise ParameterError(
+            f"the design would hold {total:.3g} samples ({shown}), more than the "
+            f"{MAX_SAMPLES:.0e} a design may hold (800 MB in memory); lower {worst}",
+            parameter=worst,
+        )
+
+
+def check_magnitude(name: str, value: float) -> float:
+    """``value`` (> 0) within :data:`MAGNITUDE`, or a ParameterError naming ``name``."""
+    low, high = MAGNITUDE
+    if not low <= value <= high:
+        raise ParameterError(
+            f"{name} = {value:g} lies outside {low:g}..{high:g}: the squares of the samples "
+            "would overflow or vanish; rescale the signal",
+            parameter=name,
+        )
+    return value
 
 
 def check_whole_bits(samples: int, clock: int) -> None:
@@ -198,6 +252,9 @@ def check_levels(levels: Any) -> tuple[float, float]:
             f"levels must be two finite numbers LOW,HIGH with LOW < HIGH, got {low:g},{high:g}",
             parameter="levels",
         )
+    largest = max(abs(low), abs(high))
+    if largest > MAGNITUDE[1] or largest < MAGNITUDE[0]:
+        check_magnitude("levels", largest)
     return low, high
 
 

@@ -34,8 +34,10 @@ from blockid.design.checks import (
     DEFAULTS,
     band_lines,
     check_count,
+    check_magnitude,
     check_positive,
     check_seed,
+    check_size,
     odd_band_lines,
 )
 from blockid.design.excitation import Excitation, crest_factor, design_rng
@@ -130,9 +132,10 @@ def multisine(
     """
     samples = check_count("samples", samples)
     sampling_time = check_positive("sampling_time", sampling_time, " s")
-    rms = check_positive("rms", rms)
+    rms = check_magnitude("rms", check_positive("rms", rms))
     periods = check_count("periods", periods)
     realisations = check_count("realisations", realisations)
+    check_size({"samples": samples, "periods": periods, "realisations": realisations})
     crest_iterations = check_count("crest_iterations", crest_iterations)
     seed = check_seed(seed)
     lines, left_out = multisine_lines(samples, sampling_time, f_min, f_max, odd, group, seed)
