@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -54,7 +55,7 @@ def residuals(
     """Test the residual of MODEL on DATA: its autocorrelation (whiteness, Ljung-Box)
     and its cross-correlation with each input (independence), with confidence bounds.
     Use data the model was not fitted on."""
-    from blockid.errors import ParameterError
+    from blockid.errors import BlockidError, ParameterError
 
     if mode not in ("one-step", "simulation"):
         raise ParameterError(f"--mode {mode!r}: choose one-step or simulation", parameter="mode")
@@ -65,12 +66,24 @@ def residuals(
 
     refuse_figures(plot, [RESIDUAL_FIGURE], force)
     model = load_model(model_path)
+    if ts is not None and model.sampling_time and not math.isclose(ts, model.sampling_time):
+        raise ParameterError(
+            f"--ts {ts:g} differs from the sampling time of {model_path}, "
+            f"{model.sampling_time:g} s: the model runs at the rate it was fitted at; resample "
+            "the data to it, or leave --ts out"
+        )
     data = load_data(
         data_paths, list(model.inputs), list(model.outputs),
         ts if ts is not None else model.sampling_time, time_column, experiment_column,
         rng, "--range",
     )  # fmt: skip
-    analysis = residual_analysis(model, data, mode, max_lag=lags, confidence=confidence)
+    try:
+        analysis = residual_analysis(model, data, mode, max_lag=lags, confidence=confidence)
+    except BlockidError as exc:
+        flag = {"max_lag": "--lags", "confidence": "--confidence"}.get(exc.parameter or "")
+        if flag is None:
+            raise
+        raise type(exc)(f"{exc} (option {flag})") from None
     where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
     figure = None
     if plot is not None:

@@ -277,7 +277,8 @@ def residual_analysis(
     if n < 2 * max_lag + 10:
         raise DataError(
             f"{n} residual samples are too few for lags up to {max_lag}: give at least "
-            f"{2 * max_lag + 10}, or a smaller max_lag"
+            f"{2 * max_lag + 10}, or a smaller max_lag",
+            parameter="max_lag",
         )
     z = float(stats.norm.ppf(0.5 + confidence / 2.0))
     lags = np.arange(max_lag + 1)
