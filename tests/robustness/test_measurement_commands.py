@@ -425,6 +425,18 @@ REFUSED = [
         _write("bad.csv", "u,y\n" + "".join(f"{np.sin(k)!r},{np.cos(k)!r}\n" for k in range(100))),
     ),  # fmt: skip
     Case(
+        "simulate other sampling time",
+        ["simulate", "model_ts.json", "bad.csv", "--ts", "0.1"],
+        ["0.05", "--ts"],
+        _write("bad.csv", "u,y\n1,2\n2,3\n1,1\n3,1\n"),
+    ),  # fmt: skip
+    Case(
+        "predict horizon other sampling time",
+        ["predict", "model_ts.json", "bad.csv", "--ts", "0.1", "--horizon", "2"],
+        ["0.05", "--ts"],
+        _write("bad.csv", "u,y\n1,2\n2,3\n1,1\n3,1\n"),
+    ),  # fmt: skip
+    Case(
         "residuals time column of another step",
         ["residuals", "model_ts.json", "bad.csv", "--time-column", "t"],
         ["0.05", "0.1"],

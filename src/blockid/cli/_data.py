@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["check_arguments", "load_data", "select_range"]
+__all__ = ["check_arguments", "load_data", "model_rate", "select_range"]
 
 
 def check_arguments(
@@ -82,3 +82,22 @@ def select_range(data: Any, rng: str | None, what: str) -> Any:
         return data
     start, stop = parse_range(rng, what)
     return data.select(start, stop, what=what)
+
+
+def model_rate(model: Any, ts: float | None, model_path: Path) -> float | None:
+    """The sampling time to read data at for ``model``: ``--ts`` or the model's own; a
+    ``--ts`` other than a model's sampling time is refused (the model runs at the rate
+    it was fitted at, and would be scored at another without a word)."""
+    import math
+
+    from blockid.errors import ParameterError
+
+    if ts is None or not model.sampling_time:
+        return ts if ts is not None else model.sampling_time
+    if not math.isclose(ts, model.sampling_time):
+        raise ParameterError(
+            f"--ts {ts:g} differs from the sampling time of {model_path}, "
+            f"{model.sampling_time:g} s: the model runs at the rate it was fitted at; resample "
+            "the data to it, or leave --ts out"
+        )
+    return ts

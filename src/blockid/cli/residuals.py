@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from blockid.cli._common import cli_errors, print_json, refuse_figures, stdout
-from blockid.cli._data import check_arguments, load_data
+from blockid.cli._data import check_arguments, load_data, model_rate
 from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
@@ -66,15 +65,9 @@ def residuals(
 
     refuse_figures(plot, [RESIDUAL_FIGURE], force)
     model = load_model(model_path)
-    if ts is not None and model.sampling_time and not math.isclose(ts, model.sampling_time):
-        raise ParameterError(
-            f"--ts {ts:g} differs from the sampling time of {model_path}, "
-            f"{model.sampling_time:g} s: the model runs at the rate it was fitted at; resample "
-            "the data to it, or leave --ts out"
-        )
     data = load_data(
         data_paths, list(model.inputs), list(model.outputs),
-        ts if ts is not None else model.sampling_time, time_column, experiment_column,
+        model_rate(model, ts, model_path), time_column, experiment_column,
         rng, "--range",
     )  # fmt: skip
     try:

@@ -17,7 +17,7 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
-from blockid.cli._data import check_arguments, load_data
+from blockid.cli._data import check_arguments, load_data, model_rate
 from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
@@ -130,7 +130,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             data_paths,
             list(model.inputs),
             list(model.outputs),
-            ts if ts is not None else model.sampling_time,  # --ts 0 is refused, not dropped
+            model_rate(model, ts, model_path),  # --ts 0 is refused, not dropped
             time_column,
             experiment_column,
             rng,
