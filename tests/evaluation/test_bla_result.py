@@ -82,3 +82,28 @@ def test_levels_and_excited_lines():
     power = np.r_[np.zeros(5), np.ones(10), 0.02, 0.005]
     assert powered(power).tolist() == [False] * 5 + [True] * 11 + [False]
     assert not powered(np.zeros(4)).any()
+
+
+def test_frequencies_are_named_in_cycles_per_sample_without_a_sampling_time():
+    """Without a sampling time the frequencies are cycles per sample, and every label
+    (the band column, the verdict, the figure's axis, the JSON) says so; with one, Hz."""
+    import matplotlib.pyplot as plt
+
+    from blockid.data import Dataset
+    from blockid.design import multisine
+    from blockid.evaluation.bla import best_linear_approximation
+
+    u = multisine(256, f_max=0.2, periods=3, seed=2).signals[0]
+    y = u + 0.2 * u**3 + 1e-3 * np.random.default_rng(0).standard_normal(u.size)
+    bare = best_linear_approximation(Dataset.from_arrays(u, y), transient_periods=1)
+    assert bare.unit == "cycles/sample" and bare.to_dict()["unit"] == "cycles/sample"
+    assert bare.summary_table()[1][0] == "band (cycles/sample)"
+    assert " Hz" not in bare.verdict and "cycles/sample" in bare.verdict
+    fig = bare.plot()
+    assert fig.axes[-1].get_xlabel() == "frequency (cycles/sample)"
+    plt.close(fig)
+    timed = best_linear_approximation(
+        Dataset.from_arrays(u, y, sampling_time=0.001), transient_periods=1
+    )
+    assert timed.unit == "Hz" and timed.summary_table()[1][0] == "band (Hz)"
+    assert " Hz" in timed.verdict

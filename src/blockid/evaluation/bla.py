@@ -115,8 +115,9 @@ def _transient(
         return u, y, None
     low, high = (k / (u.shape[2] * (sampling_time or 1.0)) for k in first.lines)
     p = "p < 1e-6" if first.p_value < 1e-6 else f"p = {first.p_value:.2g}"
+    unit = "Hz" if sampling_time else "cycles/sample"
     said = (f"the output's first period differs from the mean of the others {first.excess_db:.1f} "
-            f"dB more than they differ among themselves ({low:.4g}-{high:.4g} Hz, {p}): it "
+            f"dB more than they differ among themselves ({low:.4g}-{high:.4g} {unit}, {p}): it "
             "holds the plant's transient")  # fmt: skip
     if drop:
         return u[:, 1:], y[:, 1:], f"{said}, dropped (0 transient periods keeps it)"
@@ -200,7 +201,9 @@ def robust_bla(
     odd_k, even_k = k[k % 2 == 1], k[k % 2 == 0]
     if lines is None and even_k.size and odd_k.size >= _ODD_SHARE * k.size and odd_k.size >= 10:
         shown = ", ".join(
-            f"{j} ({j / (n * (data.sampling_time or 1.0)):.4g} Hz)" for j in even_k[:5]
+            f"{j} ({j / (n * (data.sampling_time or 1.0)):.4g} "
+            f"{'Hz' if data.sampling_time else 'cycles/sample'})"
+            for j in even_k[:5]
         )
         notes.append(f"{even_k.size} even line(s) with input power left out of an odd "
                      f"excitation, taken for a disturbance (mains?): {shown}")  # fmt: skip
@@ -262,6 +265,7 @@ def robust_bla(
         verdict="", lines=k, output_noise=output_noise, nonexcited=nonexcited,
         odd_design=odd, input_name=data.inputs[i], output_name=data.outputs[j],
         data_label=data_label or data.source or "data", notes=tuple(notes),
+        unit="Hz" if data.sampling_time else "cycles/sample",
     )  # fmt: skip
     return summarised(bla, bands)
 

@@ -209,8 +209,8 @@ def _band(bla: BestLinearApproximation, band: tuple[float, float], alpha: float)
     )
 
 
-def _where(b: BandSummary) -> str:
-    return f"{b.low:.4g}-{b.high:.4g} Hz"
+def _where(b: BandSummary, unit: str = "Hz") -> str:
+    return f"{b.low:.4g}-{b.high:.4g} {unit}"
 
 
 #: What the verdict reads: each band with the words that name where it is.
@@ -246,8 +246,8 @@ def _verdict(bla: BestLinearApproximation, named: Named, count: int, alpha: floa
         share = 1.0 - (worst.coherence or 0.0)
         return (
             f"non-periodic data: noise and nonlinear distortion are not told apart; the "
-            f"coherence is lowest in {_where(worst)} (mean {worst.coherence:.3f}: {share:.0%} "
-            "of the output power there is noise or distortion); measure with several "
+            f"coherence is lowest in {_where(worst, bla.unit)} (mean {worst.coherence:.3f}: "
+            f"{share:.0%} of the output power there is noise or distortion); measure with several "
             "periods and realisations of a multisine to separate them"
         )
     if bla.periods >= 2:
@@ -263,7 +263,7 @@ def _verdict(bla: BestLinearApproximation, named: Named, count: int, alpha: floa
     if not bla.odd_design or not any("even" in b.nonexcited for b, _ in named):
         worst = max(measured, key=lambda b: b.total_db - b.g_db)
         return (f"{head}the total variance of G is {worst.g_db - worst.total_db:.1f} dB below "
-                f"|G|² at worst ({_where(worst)})")  # fmt: skip
+                f"|G|² at worst ({_where(worst, bla.unit)})")  # fmt: skip
     found = []  # (dB over the even lines, where)
     m = bla.realisations
     for b, where in named:
@@ -359,9 +359,9 @@ def summarised(
     empty = None if bla.nonexcited is None else bla.nonexcited.frequencies
     edges = band_edges(bla.frequencies, bands, empty)
     summaries = tuple(_band(bla, band, alpha) for band in edges)
-    named = [(b, _where(b)) for b in summaries]
+    named = [(b, _where(b, bla.unit)) for b in summaries]
     for band in _left_out(bla, edges):  # the verdict reads every line
-        named.append((_band(bla, band, alpha), f"{band[0]:.4g}-{band[1]:.4g} Hz (outside the "
-                                               "bands given)"))  # fmt: skip
+        named.append((_band(bla, band, alpha), f"{band[0]:.4g}-{band[1]:.4g} {bla.unit} "
+                                               "(outside the bands given)"))  # fmt: skip
     verdict = _verdict(bla, named, len(summaries), alpha)
     return dataclasses.replace(bla, bands=summaries, verdict=verdict)

@@ -223,6 +223,8 @@ class BestLinearApproximation:
     output_name: str = "y"
     data_label: str = "data"
     notes: tuple[str, ...] = ()
+    #: of ``frequencies``: "Hz", or "cycles/sample" when the data gave no sampling time
+    unit: str = "Hz"
 
     # ------------------------------------------------------------------ derived
     @property
@@ -255,7 +257,7 @@ class BestLinearApproximation:
     def summary_table(self) -> tuple[str, list[str], list[list[str]], list[str]]:
         """A title, the columns and rows of the band table, and lines of text (notes,
         the verdict): what ``blockid bla`` prints."""
-        columns = ["band (Hz)", "lines", "|G| dB"]
+        columns = [f"band ({self.unit})", "lines", "|G| dB"]
         if self.method == "welch":
             columns += ["coherence", "std of G dB"]
         else:
@@ -319,6 +321,7 @@ class BestLinearApproximation:
             "output": self.output_name,
             "data": self.data_label,
             "sampling_time": self.sampling_time,
+            "unit": self.unit,
             "realisations": self.realisations,
             "periods": self.periods,
             "transient_periods": self.transient_periods,

@@ -155,5 +155,6 @@ def welch_bla(
         data_label=data_label or data.source or "data",
         notes=() if data.sampling_time else ("sampling time unknown: frequencies in cycles "
                                              "per sample",),
+        unit="Hz" if data.sampling_time else "cycles/sample",
     )  # fmt: skip
     return summarised(bla, bands)

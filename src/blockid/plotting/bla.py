@@ -72,7 +72,7 @@ def plot_bla(bla: Any) -> Any:
         ax2.set_ylim(0, 1.02)
         ax2.set_ylabel("coherence γ²")
         ax2.grid(alpha=0.3)
-    axes[-1][0].set_xlabel("frequency (Hz)")
+    axes[-1][0].set_xlabel(f"frequency ({bla.unit})")
     fig.tight_layout()
     return fig
 
