@@ -62,7 +62,13 @@ from blockid.errors import DataError, ParameterError
 from blockid.evaluation.bla_bands import DEFAULT_BANDS, summarised
 from blockid.evaluation.bla_result import BestLinearApproximation, NonExcitedLines
 from blockid.evaluation.periods import find_period, first_period_differs, periodic_frames
-from blockid.evaluation.spectra import CONFIDENCE, check_confidence, powered, signal_columns
+from blockid.evaluation.spectra import (
+    CONFIDENCE,
+    check_confidence,
+    frequency_unit,
+    powered,
+    signal_columns,
+)
 
 __all__ = ["best_linear_approximation", "robust_bla"]
 
@@ -115,7 +121,7 @@ def _transient(
         return u, y, None
     low, high = (k / (u.shape[2] * (sampling_time or 1.0)) for k in first.lines)
     p = "p < 1e-6" if first.p_value < 1e-6 else f"p = {first.p_value:.2g}"
-    unit = "Hz" if sampling_time else "cycles/sample"
+    unit = frequency_unit(sampling_time)
     said = (f"the output's first period differs from the mean of the others {first.excess_db:.1f} "
             f"dB more than they differ among themselves ({low:.4g}-{high:.4g} {unit}, {p}): it "
             "holds the plant's transient")  # fmt: skip
@@ -202,7 +208,7 @@ def robust_bla(
     if lines is None and even_k.size and odd_k.size >= _ODD_SHARE * k.size and odd_k.size >= 10:
         shown = ", ".join(
             f"{j} ({j / (n * (data.sampling_time or 1.0)):.4g} "
-            f"{'Hz' if data.sampling_time else 'cycles/sample'})"
+            f"{frequency_unit(data.sampling_time)})"
             for j in even_k[:5]
         )
         notes.append(f"{even_k.size} even line(s) with input power left out of an odd "
@@ -265,7 +271,7 @@ def robust_bla(
         verdict="", lines=k, output_noise=output_noise, nonexcited=nonexcited,
         odd_design=odd, input_name=data.inputs[i], output_name=data.outputs[j],
         data_label=data_label or data.source or "data", notes=tuple(notes),
-        unit="Hz" if data.sampling_time else "cycles/sample",
+        unit=frequency_unit(data.sampling_time),
     )  # fmt: skip
     return summarised(bla, bands)
 

@@ -44,6 +44,7 @@ from blockid.evaluation.spectra import (
     CONFIDENCE,
     check_confidence,
     check_finite,
+    frequency_unit,
     powered,
     signal_columns,
 )
@@ -155,6 +156,6 @@ def welch_bla(
         data_label=data_label or data.source or "data",
         notes=() if data.sampling_time else ("sampling time unknown: frequencies in cycles "
                                              "per sample",),
-        unit="Hz" if data.sampling_time else "cycles/sample",
+        unit=frequency_unit(data.sampling_time),
     )  # fmt: skip
     return summarised(bla, bands)

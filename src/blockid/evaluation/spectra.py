@@ -22,6 +22,7 @@ __all__ = [
     "check_confidence",
     "check_finite",
     "db",
+    "frequency_unit",
     "powered",
     "signal_columns",
 ]
@@ -103,3 +104,9 @@ def powered(power: np.ndarray, floor: float = EXCITED_FLOOR) -> np.ndarray:
         return np.zeros(power.shape, bool)
     typical = np.median(power[power >= top / 100])
     return power >= floor * typical
+
+
+def frequency_unit(sampling_time: float | None) -> str:
+    """The unit of the frequencies a record gives: Hz with a sampling time, cycles per
+    sample without one (the frequencies are then computed with a sampling time of 1)."""
+    return "Hz" if sampling_time else "cycles/sample"

@@ -497,7 +497,8 @@ class _Search:
             or first[j][0].relative <= best * (1.0 + self.tie)  # type: ignore[index]
             or STRUCTURES[candidates[j].structure].linear  # the linear rule's comparators
         ]
-        dropped = [j for j in ok if j not in kept]
+        carried = set(kept)
+        dropped = [j for j in ok if j not in carried]
         rest = self._fold_scores(stage, [candidates[j] for j in kept], rest_plan, limit, capped)
         second = self.stages.pop()
         out: list[list[FoldScore] | None] = [
