@@ -579,6 +579,55 @@ class BlockStateSpace(ForwardSensitivities, Model):
                 x = A @ x + B @ v + e
         return X, P, Q, z, x
 
+    def step(self, x: Any, un: Any) -> tuple[np.ndarray, np.ndarray]:
+        """One sample on normalised signals: ``x(k+1)`` and ``y_n(k)`` from ``x(k)`` and
+        ``u_n(k)`` (:meth:`run` over one sample)."""
+        un = np.asarray(un, dtype=float).reshape(1, len(self.inputs))
+        yn, _, x_next = self.run(un, np.asarray(x, dtype=float).reshape(self.nx))
+        return x_next, yn[0]
+
+    def _slopes(
+        self, blocks: Sequence[StaticBlock | None], s: np.ndarray, seen: np.ndarray
+    ) -> np.ndarray:
+        """Each channel's slope at its argument ``s`` (1 without a block): the block's
+        ``derivative``, at the end of the range ``seen`` beyond which it follows its
+        tangent (:meth:`_apply`)."""
+        out = np.ones(len(blocks))
+        for i, b in enumerate(blocks):
+            if b is not None:
+                at = self._at(b, np.asarray(s[i : i + 1], dtype=float), seen[i])
+                out[i] = float(np.asarray(b.derivative(at), dtype=float).reshape(-1)[0])
+        return out
+
+    def step_jacobians(self, x: Any, un: Any) -> tuple[np.ndarray, ...]:
+        """The one-step map's derivatives at ``(x, u_n)`` (normalised signals) by the
+        chain rule through the blocks' slopes ``N'`` (diagonal, :meth:`_slopes`):
+
+        .. math::
+
+            \\partial x^+/\\partial x = A + B_q N_q' C_p, \\quad
+            \\partial x^+/\\partial u_n = (B + B_q N_q' D_p) N_u', \\quad
+            \\partial y_n/\\partial x = N_y' (C + D_q N_q' C_p), \\quad
+            \\partial y_n/\\partial u_n = N_y' (D + D_q N_q' D_p) N_u'
+
+        (``p = C_p x + D_p w`` the loop blocks' arguments; no loop blocks: ``N_q' = 0``)."""
+        x = np.asarray(x, dtype=float).reshape(self.nx)
+        un = np.asarray(un, dtype=float).reshape(1, len(self.inputs))
+        w = self.block_inputs(un)[0]
+        slope_in = self._slopes(self.input_blocks, un[0], self.input_range)
+        A, B, C, D = self.A, self.B, self.C, self.D
+        if self.loop_blocks:
+            p = self.Cp @ x + self.Dp @ w
+            slope_q = self._slopes(self.loop_blocks, p, self.loop_range)
+            A = A + self.Bq @ (slope_q[:, None] * self.Cp)
+            B = B + self.Bq @ (slope_q[:, None] * self.Dp)
+            C = C + self.Dq @ (slope_q[:, None] * self.Cp)
+            D = D + self.Dq @ (slope_q[:, None] * self.Dp)
+        _, z, _ = self.run(un, x)
+        slope_out = self._slopes(self.output_blocks, z[0], self.output_range)
+        B, D = B * slope_in[None, :], D * slope_in[None, :]
+        return A, B, slope_out[:, None] * C, slope_out[:, None] * D
+
     # ------------------------------------------------------------------ derivatives
     def jacobian_piece(
         self, un: np.ndarray, x: np.ndarray, S: np.ndarray, X: np.ndarray

@@ -9,6 +9,8 @@ self-contained Python module.
 * :func:`to_control` of a state-space model or a multivariable ARX model — one
   ``control.StateSpace`` from physical input deviations to physical output deviations
   (:func:`state_space_matrices`: the matrices and the operating point they deviate from);
+  a polynomial or block state space linearised at its equilibrium for a constant input
+  (:func:`linearise`, from :mod:`blockid.models.linearise`);
 * :func:`to_python_module` — the source of a module that needs NumPy only, with the
   model's parameters embedded and ``simulate(u, y0=None)`` reproducing
   ``model.simulate(u, y_initial=y0[:max_lag])`` to rounding, for ARX (MIMO), every chain of
@@ -50,11 +52,13 @@ import numpy as np
 
 from blockid.blocks.base import StaticBlock
 from blockid.errors import BlockidError, ParameterError
+from blockid.models.linearise import linearise
 
 __all__ = [
     "EXPORTABLE_KINDS",
     "FORMATS",
     "export_text",
+    "linearise",
     "state_space_matrices",
     "to_control",
     "to_python_module",
@@ -179,25 +183,6 @@ def to_scipy(model: Any, index: int | None = None) -> Any:
     return signal.dlti(tf["num"], tf["den"], dt=tf["dt"] if tf["dt"] else True)
 
 
-def _refuse_nonlinear(model: Any) -> None:
-    """Refuse a polynomial state-space model whose ``A, B, C, D`` are not its
-    linearisation at an equilibrium (see :func:`state_space_matrices`)."""
-    constant = ~model.exponents.any(axis=1)  # the monomial 1
-    if np.any(model.E[:, constant]) or np.any(model.F[:, constant]):
-        raise ParameterError(
-            "the polynomial state-space model has constant terms, so x = 0 is not at rest and "
-            "A, B, C, D are not its linearisation at an operating point; export the tangent at "
-            "x = 0 anyway with to_control(model.linear_part()), or the whole model with "
-            "to_python_module (blockid export --to python)"
-        )
-    if np.any(model.lower > 0) or np.any(model.upper < 0):
-        raise ParameterError(
-            "the polynomial state-space model clips its monomials' arguments to a range without "
-            "0, so A, B, C, D are not its slope at rest; export them anyway with "
-            "to_control(model.linear_part()), or the whole model with to_python_module"
-        )
-
-
 def _arx_matrices(model: Any) -> tuple[np.ndarray, ...]:
     """A non-minimal realisation of an ARX model (:func:`state_space_matrices`): the state
     ``x(k) = [y(k-1); ..; y(k-La); u(k-1); ..; u(k-Lb)]`` (deviations from the offsets),
@@ -229,7 +214,7 @@ def _arx_matrices(model: Any) -> tuple[np.ndarray, ...]:
     return A, B, C, D, states
 
 
-def state_space_matrices(model: Any) -> dict[str, Any]:
+def state_space_matrices(model: Any, operating_point: Any = None) -> dict[str, Any]:
     """``A, B, C, D`` from physical input deviations to physical output deviations, and
     the operating point they deviate from (what :func:`to_control` exports).
 
@@ -242,18 +227,23 @@ def state_space_matrices(model: Any) -> dict[str, Any]:
       ``S_y D S_u^{-1}`` with ``S_u``, ``S_y`` the diagonal input and output scales and
       ``u_0``, ``y_0`` the offsets. The state is the model's own, so ``x(0)`` from
       :meth:`~blockid.models.state_space.PolynomialStateSpace.initial_state` carries
-      over. The predictor gain ``K`` is left out: this is the simulation model.
-    * A polynomial state-space model only where ``A, B, C, D`` are its linearisation at
-      rest: no constant term and a clipping range around 0, so that ``x = 0`` at
-      ``u = u_0`` is an equilibrium at which every monomial (degree 2 and more) has value
-      and slope 0; otherwise refused.
+      over. The predictor gain ``K`` is left out: this is the simulation model. With an
+      ``operating_point`` the same matrices about the equilibrium there (as below).
+    * A polynomial or block state-space model: the model linearised at its equilibrium
+      for the constant input ``u_0 = operating_point`` (default the input offset, the
+      middle of the estimation data), :func:`linearise`; ``y_0``
+      is the equilibrium's output and the state the deviation ``x - x^*`` from the
+      equilibrium state (``"equilibrium_state"``). Refused, naming why, where there is no
+      stable equilibrium or the monomials' arguments are clipped there.
     * An ARX model (any number of inputs and outputs): a non-minimal realisation whose
       state holds the past outputs and inputs (deviations), ``y(k-1) .. y(k-n_a)``,
       ``u(k-1) .. u(k-n_b)``; the state 0 is the model at rest at its operating point,
-      where its simulation without ``y_initial`` starts.
+      where its simulation without ``y_initial`` starts (no ``operating_point``: an ARX
+      model's matrices are the same at every point).
 
-    Returns ``{"A", "B", "C", "D", "states", "input_offset", "output_offset"}`` (arrays;
-    ``states``: names). A block state-space model is refused: its blocks are not linear.
+    Returns ``{"A", "B", "C", "D", "states", "input_offset", "output_offset",
+    "equilibrium_state"}`` (arrays; ``states``: names; a linearisation adds
+    ``"spectral_radius"``).
 
     Examples
     --------
@@ -267,16 +257,18 @@ def state_space_matrices(model: Any) -> dict[str, Any]:
     from blockid.models.block_state_space import BlockStateSpace
     from blockid.models.state_space import PolynomialStateSpace
 
-    if isinstance(model, BlockStateSpace):
+    if isinstance(model, BlockStateSpace) or (
+        isinstance(model, PolynomialStateSpace)
+        and (model.n_monomials or operating_point is not None)
+    ):
+        return linearise(model, operating_point)
+    if operating_point is not None:
         raise ParameterError(
-            "a block state-space model has static blocks around its linear core, so it has "
-            "no state space of its own; export the core (normalised units, from the input "
-            "blocks' outputs to the output blocks' arguments) with to_control("
-            "model.linear_part()), or the whole model with to_python_module"
+            f"a {type(model).__name__} is linear in deviations from its offsets: its "
+            "matrices do not depend on an operating point; leave operating_point out",
+            parameter="operating_point",
         )
     if isinstance(model, PolynomialStateSpace):
-        if model.n_monomials:
-            _refuse_nonlinear(model)
         su, sy = model.input_scale, model.output_scale
         A, B = model.A.copy(), model.B / su[None, :]
         C, D = sy[:, None] * model.C, sy[:, None] * model.D / su[None, :]
@@ -292,24 +284,29 @@ def state_space_matrices(model: Any) -> dict[str, Any]:
         "A": A, "B": B, "C": C, "D": D, "states": states,
         "input_offset": np.asarray(model.input_offset, dtype=float).copy(),
         "output_offset": np.asarray(model.output_offset, dtype=float).copy(),
+        "equilibrium_state": np.zeros(A.shape[0]),
     }  # fmt: skip
 
 
-def to_control(model: Any, index: int | None = None) -> Any:
+def to_control(model: Any, index: int | None = None, operating_point: Any = None) -> Any:
     """The model's linear dynamics in python-control (optional).
 
-    * A state-space model (linear, or polynomial where that is its linearisation at
-      rest) or an ARX model of several inputs or outputs, without ``index``: one
-      ``control.StateSpace`` from the physical input deviations ``u - u_0`` to the
-      physical output deviations ``y - y_0`` (:func:`state_space_matrices`; the offsets
-      ``u_0``, ``y_0`` are ``model.input_offset``, ``model.output_offset``), with
-      ``dt`` the sampling time (``True`` without one) and the model's signal names.
+    * A state-space model or an ARX model of several inputs or outputs, without
+      ``index``: one ``control.StateSpace`` from the physical input deviations
+      ``u - u_0`` to the physical output deviations ``y - y_0``
+      (:func:`state_space_matrices`), with ``dt`` the sampling time (``True`` without
+      one) and the model's signal names. For a linear model ``u_0``, ``y_0`` are
+      ``model.input_offset``, ``model.output_offset``:
       ``y_0 + control.forced_response(sys, inputs=(u - u_0).T).outputs.T`` equals
       ``model.simulate(u)``; with ``initial_state=model.initial_state(u, y_meas)`` it
       equals ``model.simulate(u, y_meas)`` beyond the ``max_lag`` outputs that copies.
+      A polynomial or block state space is linearised at its equilibrium for the
+      constant input ``u_0 = operating_point`` (one value, or one per input; default
+      the input offset) and ``y_0`` is the output there: the small-signal model
+      (:func:`linearise`).
     * A linear block, a chain, a feedback model, a single-input single-output ARX
       model, or a state-space model's input-output pair ``index`` (the order of
-      :func:`transfer_functions`): ``control.TransferFunction``.
+      :func:`transfer_functions`): ``control.TransferFunction`` (no ``operating_point``).
 
     Examples
     --------
@@ -335,13 +332,19 @@ def to_control(model: Any, index: int | None = None) -> Any:
         isinstance(model, PolynomialStateSpace | BlockStateSpace)
         or (hasattr(model, "lag_arrays") and multivariable)
     ):
-        ss = state_space_matrices(model)
+        ss = state_space_matrices(model, operating_point)
         dt = getattr(model, "sampling_time", None)
         return control.ss(
             ss["A"], ss["B"], ss["C"], ss["D"], dt if dt else True,
             inputs=list(model.inputs), outputs=list(model.outputs), states=ss["states"],
             name=model.structure,
         )  # fmt: skip
+    if operating_point is not None:
+        raise ParameterError(
+            "a transfer function holds the linear dynamics only, with no operating point; "
+            "leave operating_point out, or export a state-space model whole (index=None)",
+            parameter="operating_point",
+        )
     tf = _one(model, index)
     return control.tf(tf["num"], tf["den"], tf["dt"] if tf["dt"] else True)
 

@@ -46,7 +46,13 @@ from blockid.models.base import Model, excursion
 #: Samples per piece of the Jacobian walks (:meth:`PolynomialStateSpace.information`).
 JACOBIAN_CHUNK = 4096
 
-__all__ = ["ForwardSensitivities", "PolynomialStateSpace", "StateSpace", "monomial_exponents"]
+__all__ = [
+    "ForwardSensitivities",
+    "PolynomialStateSpace",
+    "StateSpace",
+    "monomial_exponents",
+    "monomial_slopes",
+]
 
 #: Gauss-Newton iterations of the initial-state estimate.
 INITIAL_ITERATIONS = 20
@@ -85,6 +91,28 @@ def monomial_exponents(
                 row[i] += 1
             rows.append(row)
     return np.array(rows, dtype=np.int64).reshape(-1, nx + nu)
+
+
+def monomial_slopes(z: Any, exponents: Any, lower: Any, upper: Any) -> np.ndarray:
+    """``∂ζ/∂z`` (nm, nx + nu) at one point ``z``: the slope of each monomial of the
+    clipped coordinates, ``p_i clip(z_i)^(p_i - 1) Π_{t≠i} clip(z_t)^(p_t)``, zero in a
+    coordinate clipped or on its bound (the kernels' convention,
+    :func:`~blockid._kernels.state_space.pnlss_local_jacobians`).
+
+    >>> monomial_slopes([2.0, 3.0], [[0, 0], [2, 0], [1, 1]], [-9, -9], [9, 9]).tolist()
+    [[0.0, 0.0], [4.0, 0.0], [3.0, 2.0]]
+    """
+    z = np.asarray(z, dtype=float)
+    expo = np.asarray(exponents, dtype=np.int64).reshape(-1, z.size)
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    clipped = np.clip(z, lo, hi)
+    powers = clipped[None, :] ** expo  # (nm, nz): clip(z_t)^(p_t), 1 where p_t = 0
+    slopes = np.zeros(expo.shape, dtype=float)
+    for i in np.flatnonzero((lo < z) & (z < hi)):
+        p = expo[:, i]
+        others = np.prod(np.delete(powers, i, axis=1), axis=1)
+        slopes[:, i] = np.where(p > 0, p * clipped[i] ** np.maximum(p - 1, 0) * others, 0.0)
+    return slopes
 
 
 def _matrix(value: Any, shape: tuple[int, int], name: str) -> np.ndarray:
@@ -545,6 +573,26 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         with np.errstate(all="ignore"):
             pnlss_simulate(*self._arrays(), np.repeat(np.atleast_2d(un0), samples, 0), x, y)
         return x if np.all(np.isfinite(x)) else np.zeros(self.nx)
+
+    def step(self, x: Any, un: Any) -> tuple[np.ndarray, np.ndarray]:
+        """One sample on normalised signals: ``x(k+1)`` and ``y_n(k)`` from ``x(k)`` and
+        ``u_n(k)`` (the simulation's own arithmetic)."""
+        x = np.array(x, dtype=float).reshape(self.nx)
+        y = np.zeros((1, len(self.outputs)))
+        un = np.asarray(un, dtype=float).reshape(1, self.B.shape[1])
+        with np.errstate(all="ignore"):
+            pnlss_simulate(*self._arrays(), writable(un), x, y)
+        return x, y[0]
+
+    def step_jacobians(self, x: Any, un: Any) -> tuple[np.ndarray, ...]:
+        """The one-step map's derivatives at ``(x, u_n)`` (normalised signals):
+        ``∂x(k+1)/∂x = A + E ∂ζ/∂x``, ``∂x(k+1)/∂u_n = B + E ∂ζ/∂u``,
+        ``∂y_n/∂x = C + F ∂ζ/∂x``, ``∂y_n/∂u_n = D + F ∂ζ/∂u`` (:func:`monomial_slopes`)."""
+        z = np.r_[np.asarray(x, dtype=float).reshape(-1), np.asarray(un, dtype=float).reshape(-1)]
+        slopes = monomial_slopes(z, self.exponents, self.lower, self.upper)
+        dx, du = slopes[:, : self.nx], slopes[:, self.nx :]
+        return (self.A + self.E @ dx, self.B + self.E @ du, self.C + self.F @ dx,
+                self.D + self.F @ du)  # fmt: skip
 
     # ------------------------------------------------------------------ derivatives
     def _sensitivity_start(
