@@ -57,6 +57,36 @@ def fit_one(bench: Any, nx: int | None) -> dict[str, Any]:
     }  # fmt: skip
 
 
+def degree2_scores(bench: Any, orders: list[int], nfev: int = 30) -> dict[int, float]:
+    """The free-run error (RMSE over the output's spread) on each held-back half of the
+    estimation data of a degree-2 model of each order (``order_by_validation``'s two
+    folds and scoring, at most ``nfev`` simulations per fit): the rule tried and not
+    taken in ``docs/orders.md``."""
+    import numpy as np
+
+    from blockid.data.folds import fold_plan, materialise
+    from blockid.fitting.state_space import fit_polynomial_state_space
+
+    data = bench.estimation
+    plan = fold_plan(data, 2, min_samples=60)
+    spread = np.maximum(np.vstack([e.y for e in data.experiments]).std(axis=0), 1e-300)
+    scores = {}
+    for n in orders:
+        squares, count = 0.0, 0
+        for fold in plan.folds:
+            train, test = materialise(data, fold.train), materialise(data, fold.test)
+            model = fit_polynomial_state_space(train, nx=n, degree=2, max_nfev=nfev).model
+            for e in test.experiments:
+                start = min(50, e.n_samples // 4)
+                with np.errstate(all="ignore"):
+                    sim = model.simulate(e.u, e.y[:start])
+                err = ((e.y[start:] - sim[start:]) / spread).ravel()
+                squares, count = squares + float(err @ err), count + err.size
+        scores[n] = float(np.sqrt(squares / max(count, 1)))
+        print(bench.name if hasattr(bench, "name") else "", n, round(scores[n], 5), flush=True)
+    return scores
+
+
 def _table(name: str, runs: list[dict[str, Any]], unit: str, title: str) -> list[str]:
     default = next(r for r in runs if not r["given"])
     given = [r for r in runs if r["given"]]
@@ -123,6 +153,9 @@ def main() -> int:
     p.add_argument("--only", nargs="+", choices=SETS, default=list(SETS))
     p.add_argument("--orders", nargs="*", type=int, default=list(ORDERS),
                    help="the given orders to fit (none: the default's fit alone)")  # fmt: skip
+    p.add_argument("--degree2", action="store_true",
+                   help="only the degree-2 models' held-back scores of each order (a rule "
+                        "tried and not taken: docs/orders.md)")  # fmt: skip
     p.add_argument("--write-docs", action="store_true")
     p.add_argument("--docs-only", action="store_true")
     args = p.parse_args()
@@ -136,6 +169,10 @@ def main() -> int:
             continue
         titles[name] = (bench.unit, bench.title)
         if args.docs_only:
+            continue
+        if args.degree2:
+            scores = degree2_scores(bench, args.orders)
+            (RESULTS / f"{name}_degree2.json").write_text(json.dumps(scores, indent=1))
             continue
         for nx in [None, *args.orders]:
             f = RESULTS / f"{name}_{'default' if nx is None else nx}.json"
