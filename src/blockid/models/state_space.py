@@ -403,8 +403,10 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         return self.nx
 
     def poles(self) -> np.ndarray:
-        """Eigenvalues of ``A`` (the poles of the model linearised at the operating point,
-        where the monomials of degree 2 and more have zero slope)."""
+        """Eigenvalues of ``A``: the poles of the linear part, those of the model
+        linearised at ``x = 0, u_n = 0`` (where the monomials of degree 2 and more have
+        zero slope). With a constant monomial the model rests elsewhere; its poles at an
+        equilibrium are those of :func:`blockid.models.linearise.linearise`."""
         return np.linalg.eigvals(self.A)
 
     def is_stable(self, margin: float = 0.0) -> bool:
