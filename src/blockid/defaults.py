@@ -20,6 +20,7 @@ __all__ = [
     "PNLSS_NFEV",
     "RECURSIVE",
     "STATE_SPACE_NFEV",
+    "STATE_SPACE_TAIL",
     "TAIL_FRACTION",
     "TIE",
     "TOLERANCE",
@@ -47,6 +48,12 @@ PATIENCE = 5
 #: converges (the Silverbox: 342) (``PNLSS_NFEV``).
 STATE_SPACE_NFEV = 100
 PNLSS_NFEV = 500
+#: Early stopping of the state-space refinements (linear, block and polynomial): the
+#: last ``STATE_SPACE_TAIL`` of each experiment held back; a linear or block model's
+#: refinement stops after ``PATIENCE`` iterates without a better tail, a polynomial
+#: model's never (its refinement crawls through plateaus), and one whose tails never
+#: stopped improving is finished on all the data (``docs/models.md``).
+STATE_SPACE_TAIL = 0.2
 
 #: Forgetting factor of recursive least squares (1: none; a schedule may be given).
 FORGETTING = 1.0

@@ -417,3 +417,91 @@ def test_the_subspace_estimate_keeps_the_stability_margin():
     assert margin == 0.0005
     (pole,) = np.linalg.eigvals(subspace(data, nx=1).model.A)
     assert 1.0 - 3 * margin < abs(pole) < 1.0 - margin  # reflected: inside the margin
+
+
+# ----------------------------------------------------------------------------- early stopping
+def _free_run_error(model, plant, n=3000, seed=99):
+    """RMSE of ``model``'s free run against the noise-free plant on a fresh record."""
+    u = _record(plant, n, seed=seed).experiments[0].u
+    return float(np.sqrt(np.mean((model.simulate(u) - plant.simulate(u)) ** 2)))
+
+
+def test_a_record_long_for_its_unknowns_holds_nothing_back():
+    """2 000 samples for 9 unknowns (over 100 per unknown): the refinement is the one
+    to convergence on everything, bit for bit, and says why."""
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 2000, seed=4, snr_db=40)
+    default = fit_state_space(data, nx=2)
+    whole = fit_state_space(data, nx=2, tail_fraction=0.0)
+    assert default.settings["refinement"]["tail_fraction"] == 0.0
+    assert "nothing held back" in default.settings["refinement"]["early_stopping_off"]
+    np.testing.assert_array_equal(default.model.free_parameters(), whole.model.free_parameters())
+
+
+def test_where_the_tails_get_worse_the_head_fit_s_best_iterate_is_returned():
+    """Six states for a two-state plant on 400 samples at 6 dB. The refinement with a
+    held-back tail is the refinement of the head alone (the same iterates, bit for
+    bit); where the tail error rose again it returns the iterate
+    whose free run simulated the tail best: one of the head fit's iterates (each the
+    result of a head fit stopped at that many simulations), the best of them all."""
+    from blockid.data.folds import Segment, materialise
+    from blockid.fitting.state_space import refine_state_space
+
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 400, seed=5, snr_db=6)
+    start = subspace(data, nx=6).model
+    start = start.replace(B=0.7 * start.B)  # a start the refinement first improves
+    e = data.experiments[0]
+    x0 = [start.initial_state(e.u, e.y[:24])]
+    tailed, info = refine_state_space(
+        start, data, initial_states=x0, tail_fraction=0.25, patience=None, feedthrough=False
+    )
+    assert info["tail_mse"] < info["initial_tail_mse"]
+    head = materialise(data, [Segment(0, 0, 300)])
+    iterates = [
+        refine_state_space(start, head, initial_states=x0, feedthrough=False, max_nfev=k)[0]
+        for k in range(1, info["function_evaluations"] + 1)
+    ]
+
+    def tail_error(model):
+        return float(np.mean((model.simulate(e.u, e.y[:24])[300:] - e.y[300:]) ** 2))
+
+    same = [m for m in iterates if np.array_equal(m.free_parameters(), tailed.free_parameters())]
+    assert same, "the tailed refinement returned no iterate of the head's refinement"
+    assert tail_error(tailed) < tail_error(iterates[-1])
+
+
+def test_early_stopping_keeps_an_over_sized_model_from_fitting_the_noise():
+    """Eight states for a two-state plant on 400 samples at 6 dB: refined to
+    convergence it simulates the noise-free plant worse than the early-stopped fit."""
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 400, seed=5, snr_db=6)
+    full = fit_state_space(data, nx=8, tail_fraction=0.0)
+    stopped = fit_state_space(data, nx=8, tail_fraction=0.25)
+    info = stopped.settings["refinement"]
+    assert info["tail_mse"] < info["initial_tail_mse"] or "warnings" in stopped.settings
+    assert _free_run_error(stopped.model, plant) < 0.8 * _free_run_error(full.model, plant)
+
+
+def test_a_refinement_that_helps_no_tail_returns_its_start_and_says_so():
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 400, seed=5, snr_db=6)
+    fit = fit_state_space(data, nx=8, tail_fraction=0.25, patience=1)
+    sub = fit_state_space(data, nx=8, refine=False)
+    if fit.settings["refinement"]["early_stopping"]:
+        assert "early stopping" in fit.settings["stop_reason"]
+    if any("kept the start" in w for w in fit.settings.get("warnings", [])):
+        np.testing.assert_allclose(fit.model.A, sub.model.A)
+    else:
+        pytest.fail("this record's refinement lowers no tail error; the start should be kept")
+
+
+def test_experiments_too_short_for_a_head_hold_nothing_back():
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 110, seed=6, snr_db=30)
+    fit = fit_state_space(data, nx=2, tail_fraction=0.2)
+    assert "tail_fraction" not in fit.settings["refinement"]
+    np.testing.assert_array_equal(
+        fit.model.free_parameters(),
+        fit_state_space(data, nx=2, tail_fraction=0.0).model.free_parameters(),
+    )

@@ -32,7 +32,14 @@ from blockid._kernels import writable
 from blockid._kernels.state_space import channel_response
 from blockid.blocks.base import Block, StaticBlock, block_template, channel_specs
 from blockid.data.dataset import Dataset
-from blockid.defaults import MAX_ORDER, STATE_SPACE_NFEV, TOLERANCE, WEIGHTING
+from blockid.defaults import (
+    MAX_ORDER,
+    PATIENCE,
+    STATE_SPACE_NFEV,
+    STATE_SPACE_TAIL,
+    TOLERANCE,
+    WEIGHTING,
+)
 from blockid.errors import ParameterError
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space import (
@@ -324,6 +331,8 @@ def fit_block_state_space(
     weighting: str = WEIGHTING,
     feedthrough: bool = False,
     max_nfev: int = STATE_SPACE_NFEV,
+    tail_fraction: float = STATE_SPACE_TAIL,
+    patience: int = PATIENCE,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
@@ -347,8 +356,9 @@ def fit_block_state_space(
         three kinds.
     nx, max_order, horizon, weighting, feedthrough
         Of the linear start (:func:`~blockid.fitting.state_space.fit_state_space`).
-    max_nfev, ftol, xtol, gtol
-        Of each refinement (the linear start's and the block model's).
+    max_nfev, tail_fraction, patience, ftol, xtol, gtol
+        Of each refinement (the linear start's and the block model's; early stopping
+        on a held-back tail: :func:`~blockid.fitting.state_space.refine_state_space`).
 
     Returns
     -------
@@ -384,7 +394,8 @@ def fit_block_state_space(
     t0 = time.perf_counter()
     linear = fit_state_space(
         data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
-        feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
+        feedthrough=feedthrough, max_nfev=max_nfev, tail_fraction=tail_fraction,
+        patience=patience, ftol=ftol, xtol=xtol, gtol=gtol,
     )  # fmt: skip
     lin = linear.model
     un = [lin.normalised_input(e.u) for e in data.experiments]
@@ -410,7 +421,7 @@ def fit_block_state_space(
         template = _loop_start(template, data, x0s, feedthrough)
     model, info = refine_state_space(
         template, data, initial_states=x0s, feedthrough=feedthrough, max_nfev=max_nfev,
-        ftol=ftol, xtol=xtol, gtol=gtol,
+        tail_fraction=tail_fraction, patience=patience, ftol=ftol, xtol=xtol, gtol=gtol,
     )  # fmt: skip
     model = with_block_ranges(model, data)
     method = f"subspace+block-state-space ({model.kind})"
@@ -425,6 +436,9 @@ def fit_block_state_space(
         "refinement": info,
         "linear_simulation_metrics": linear.estimation_metrics,
     }
+    notes = [*linear.settings.get("warnings", []), *info.get("warnings", [])]
+    if notes:
+        settings["warnings"] = notes
     return FitResult(
         model=model,
         method=method,

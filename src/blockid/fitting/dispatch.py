@@ -139,11 +139,20 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
             f"refine_from continues a simulation-error fit; {structure} is fitted by {method}",
             parameter="structure",
         )
-    tolerances = {k: options[k] for k in ("max_nfev", "ftol", "xtol", "gtol") if k in options}
+    tolerances = {
+        k: options[k]
+        for k in ("max_nfev", "tail_fraction", "patience", "ftol", "xtol", "gtol")
+        if k in options
+    }
     if options.get("rung_nfev") is not None:  # a climbed fit: its top degree's limit
         tolerances["max_nfev"] = options["rung_nfev"]
-    if not decl.block_oriented:  # the state-space structures
+    if not decl.block_oriented:  # the state-space structures, with the fits' defaults
+        from blockid.defaults import PATIENCE, STATE_SPACE_TAIL
         from blockid.fitting.block_state_space import with_block_ranges
+
+        tolerances.setdefault("tail_fraction", STATE_SPACE_TAIL)
+        polynomial = getattr(model, "n_monomials", 0) > 0
+        tolerances.setdefault("patience", None if polynomial else PATIENCE)
         from blockid.fitting.state_space import (
             _check,
             _solver_settings,
@@ -166,6 +175,7 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
             settings={
                 **_solver_settings(info, int(tolerances.get("max_nfev", 100))),
                 "refinement": info,
+                **({"warnings": info["warnings"]} if info.get("warnings") else {}),
             },
             estimation_metrics=_check(fitted, data, how),
             n_samples=int(sum(e.n_samples for e in data.experiments)),
@@ -173,8 +183,7 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
             metrics_mode="simulation",
         )
     else:
-        extra = {k: options[k] for k in ("tail_fraction", "patience") if k in options}
-        result = refine(model, data, **tolerances, **extra)
+        result = refine(model, data, **tolerances)
     result = replace(result, settings={**result.settings, "initial": "given model"})
     return _finish(result, data, structure, False)
 

@@ -18,7 +18,28 @@ from typing import Any, Protocol
 
 import numpy as np
 
-__all__ = ["Problem", "levenberg_marquardt"]
+__all__ = ["EarlyStop", "Problem", "levenberg_marquardt", "note_tail"]
+
+
+class EarlyStop(Exception):
+    """Raised by a problem's early-stopping monitor (:func:`note_tail`) to end the
+    solver; the caller catches it and takes the tracker's ``best_theta``."""
+
+
+def note_tail(tracker: Any, tail: float, theta: np.ndarray) -> None:
+    """Early stopping's book-keeping at an accepted iterate ``theta`` whose held-back
+    tail error is ``tail``: the tracker's ``tail`` list, ``best_tail``/``best_theta``
+    and ``since_best``; raises :class:`EarlyStop` (``triggered`` set) after
+    ``tracker.patience`` iterates without a better tail."""
+    tracker.tail.append(tail)
+    if tail < tracker.best_tail:
+        tracker.best_tail, tracker.best_theta = tail, theta.copy()
+        tracker.since_best = 0
+        return
+    tracker.since_best += 1
+    if tracker.since_best >= tracker.patience:
+        tracker.triggered = True
+        raise EarlyStop
 
 
 class Problem(Protocol):

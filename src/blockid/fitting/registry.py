@@ -670,7 +670,7 @@ def _key_term(blocks: tuple[str, ...]) -> Method:
 
 _CHECK = ("convergence_check", "max_mse_ratio")
 _STATE_SPACE = ("nx", "max_order", "horizon", "weighting", "feedthrough", "standard_errors")
-_REFINEMENT = ("max_nfev", "ftol", "xtol", "gtol")
+_REFINEMENT = ("max_nfev", "tail_fraction", "patience", "ftol", "xtol", "gtol")
 
 #: The structures, in the order the command line lists them.
 STRUCTURES: dict[str, Structure] = {

@@ -80,7 +80,7 @@ from blockid.defaults import DEGREE, MAX_NFEV, PATIENCE, TAIL_FRACTION, TOLERANC
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.fitting.checks import check_model, margin_for, simulation_mse, stability_margin
 from blockid.fitting.initial import initial_estimate, resolve_structure
-from blockid.fitting.levenberg_marquardt import levenberg_marquardt
+from blockid.fitting.levenberg_marquardt import EarlyStop, levenberg_marquardt, note_tail
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
@@ -153,10 +153,6 @@ class _Tracker:
     cost: list[float] = field(default_factory=list)
     tail: list[float] = field(default_factory=list)
     accepted: np.ndarray | None = None  # the last accepted iterate
-
-
-class _EarlyStop(Exception):
-    """Raised inside the Jacobian callback to end the solver (caught in :func:`refine`)."""
 
 
 class _Problem:
@@ -263,7 +259,8 @@ class _Problem:
 
     def _monitor(self, theta: np.ndarray, model: BlockModel) -> None:
         """Book-keeping at an accepted iterate: the fitted MSE, and the tail error for
-        early stopping (raises :class:`_EarlyStop` when it has not improved)."""
+        early stopping (:func:`~blockid.fitting.levenberg_marquardt.note_tail` raises
+        ``EarlyStop`` when it has not improved)."""
         tracker = self.tracker
         tracker.njev += 1
         tracker.accepted = theta.copy()
@@ -272,15 +269,7 @@ class _Problem:
             tracker.cost.append(float(np.mean(last_r**2)))
         if self.has_tail:
             tail = self.tail_mse(model)
-            tracker.tail.append(tail)
-            if tail < tracker.best_tail:
-                tracker.best_tail, tracker.best_theta = tail, theta.copy()
-                tracker.since_best = 0
-            else:
-                tracker.since_best += 1
-                if tracker.since_best >= tracker.patience:
-                    tracker.triggered = True
-                    raise _EarlyStop
+            note_tail(tracker, tail, theta)
 
     def tail_mse(self, model: BlockModel) -> float:
         """Free-run MSE on the held-out tails (each experiment simulated from its start)."""
@@ -525,7 +514,7 @@ def refine(
                 )
                 theta = sol.x
                 stop_reason = "max_nfev reached" if sol.status == 0 else sol.message
-    except _EarlyStop:
+    except EarlyStop:
         stop_reason = f"early stopping: no better tail error in {patience} accepted iteration(s)"
     if problem.has_tail and tracker.best_theta is not None:
         theta = tracker.best_theta

@@ -76,11 +76,20 @@ import numpy as np
 from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_simulate
 from blockid.data.dataset import Dataset
-from blockid.defaults import MAX_ORDER, PNLSS_NFEV, STATE_SPACE_NFEV, TIE, TOLERANCE, WEIGHTING
+from blockid.defaults import (
+    MAX_ORDER,
+    PATIENCE,
+    PNLSS_NFEV,
+    STATE_SPACE_NFEV,
+    STATE_SPACE_TAIL,
+    TIE,
+    TOLERANCE,
+    WEIGHTING,
+)
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.checks import margin_for, stability_margin
-from blockid.fitting.levenberg_marquardt import levenberg_marquardt
+from blockid.fitting.levenberg_marquardt import EarlyStop, levenberg_marquardt, note_tail
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.threads import NormalSums, kernel_threads, threads_for_fit
@@ -383,6 +392,22 @@ class _Tracker:
     nfev: int = 0
     njev: int = 0
     cost: list[float] = field(default_factory=list)
+    # early stopping on the held-back tails (``refine_state_space``'s ``tail_fraction``)
+    patience: int = 0
+    tail: list[float] = field(default_factory=list)
+    best_tail: float = np.inf
+    best_theta: np.ndarray | None = None
+    since_best: int = 0
+    triggered: bool = False
+
+
+@dataclass(frozen=True)
+class _Tail:
+    """An experiment's whole normalised record and where its fitted head ends."""
+
+    u: np.ndarray
+    y: np.ndarray
+    n_fit: int
 
 
 class _Problem:
@@ -391,9 +416,12 @@ class _Problem:
     over the model's free parameters (its ``parameter_mask``: ``D`` held at zero
     without a feedthrough) and every experiment's initial state."""
 
-    def __init__(self, template: Any, sig: _Signals, feedthrough: bool):
+    def __init__(
+        self, template: Any, sig: _Signals, feedthrough: bool, tails: list[_Tail] | None = None
+    ):
         self.template = template
         self.sig = sig
+        self.tails = tails or []
         self.margin = margin_for(max(len(u) for u in sig.u))
         full = template.free_parameters()
         self.free = template.parameter_mask(feedthrough)
@@ -442,6 +470,7 @@ class _Problem:
         that can walks only the columns it fits."""
         model, x0s = self.split(theta)
         assert model is not None, "the Jacobian is taken at accepted iterates only"
+        self.monitor(theta, model, x0s)
         n_exp, nm, nx = len(self.sig.u), self.n_model, self.nx
         kept = np.r_[np.flatnonzero(self.free), self.full.size + np.arange(nx)]
         threads = threads_for_fit()
@@ -472,6 +501,27 @@ class _Problem:
         self.tracker.cost.append(sums.cost / self.size)
         return H, g
 
+    def tail_mse(self, model: Any, x0s: list[np.ndarray]) -> float:
+        """Free-run MSE (normalised) on the held-back tails, each experiment simulated
+        whole from its fitted initial state (the tail starts from the model's own)."""
+        errs = []
+        for tail, x0 in zip(self.tails, x0s, strict=True):
+            if tail.n_fit < tail.y.shape[0]:
+                with np.errstate(all="ignore"):
+                    out = model.run(tail.u, x0)[0]
+                errs.append((tail.y[tail.n_fit :] - out[tail.n_fit :]).reshape(-1))
+        err = np.concatenate(errs)
+        return float(np.mean(err**2)) if np.all(np.isfinite(err)) else np.inf
+
+    def monitor(self, theta: np.ndarray, model: Any, x0s: list[np.ndarray]) -> None:
+        """Early stopping at an accepted iterate: the tails' error, the best iterate,
+        and :class:`~blockid.fitting.levenberg_marquardt.EarlyStop` after ``patience``
+        iterates without a better one."""
+        tracker = self.tracker
+        if not self.tails:
+            return
+        note_tail(tracker, self.tail_mse(model, x0s), theta)
+
 
 def refine_state_space(
     model: Any,
@@ -480,6 +530,8 @@ def refine_state_space(
     initial_states: list[np.ndarray] | None = None,
     feedthrough: bool = True,
     max_nfev: int = STATE_SPACE_NFEV,
+    tail_fraction: float = 0.0,
+    patience: int | None = PATIENCE,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
@@ -488,15 +540,41 @@ def refine_state_space(
     ``feedthrough``) and every experiment's initial state on the free-run simulation
     error (module docstring); returns the model and what the solver did. ``model`` is a
     (polynomial) state-space model or a block state-space model
-    (:mod:`blockid.fitting.block_state_space`), within its ``parameter_bounds``."""
+    (:mod:`blockid.fitting.block_state_space`), within its ``parameter_bounds``.
+
+    ``tail_fraction`` > 0: early stopping, as the chains' refinement
+    (:mod:`blockid.fitting.simulation_error`), on a record of fewer than
+    ``TAIL_SAMPLES_PER_PARAMETER`` output samples per refined unknown (a longer one is
+    fitted whole: ``info["tail_fraction"]`` is 0). The last ``tail_fraction`` of every
+    experiment long enough (a head of at least ``MIN_HEAD`` samples) is held back; the
+    solver fits the heads, and at every accepted iterate each experiment is simulated
+    whole from its fitted initial state and the error on its tail recorded. The iterate
+    with the smallest tail error is returned, the start included (a refinement that
+    lowers the error on the heads and raises it on the tails returns its start, and a
+    warning says so); the solver stops after ``patience`` accepted iterates without a
+    better tail (None: never).
+    """
+    u_all = [np.ascontiguousarray(model.normalised_input(e.u)) for e in data.experiments]
+    y_all = [np.ascontiguousarray(model.normalised_output(e.y)) for e in data.experiments]
+    n_unknowns = int(model.parameter_mask(feedthrough).sum()) + model.nx * len(u_all)
+    long_record = sum(y.size for y in y_all) >= TAIL_SAMPLES_PER_PARAMETER * n_unknowns
+    if long_record and tail_fraction > 0:
+        tail_fraction = 0.0  # long enough not to fit the noise: nothing held back
+    heads = [_head(u.shape[0], tail_fraction) for u in u_all]
+    tails = (
+        [_Tail(u, y, n) for u, y, n in zip(u_all, y_all, heads, strict=True)]
+        if any(n < u.shape[0] for u, n in zip(u_all, heads, strict=True))
+        else None
+    )
     sig = _Signals(
-        [np.ascontiguousarray(model.normalised_input(e.u)) for e in data.experiments],
-        [np.ascontiguousarray(model.normalised_output(e.y)) for e in data.experiments],
+        [np.ascontiguousarray(u[:n]) for u, n in zip(u_all, heads, strict=True)],
+        [np.ascontiguousarray(y[:n]) for y, n in zip(y_all, heads, strict=True)],
         model.input_offset, model.input_scale, model.output_offset, model.output_scale,
     )  # fmt: skip
     if initial_states is None:
         initial_states = [model.initial_state(e.u, e.y[: 4 * model.nx]) for e in data.experiments]
-    problem = _Problem(model, sig, feedthrough)
+    problem = _Problem(model, sig, feedthrough, tails)
+    problem.tracker.patience = np.inf if patience is None else int(patience)
     theta0 = np.concatenate([model.free_parameters()[problem.free], *initial_states])
     r0 = problem.residuals(theta0)
     if r0 is problem.penalty:
@@ -509,22 +587,72 @@ def refine_state_space(
     low, high = model.parameter_bounds()  # a block's (a state-space block model)
     bounds[0][: problem.n_model] = low[problem.free]
     bounds[1][: problem.n_model] = high[problem.free]
-    theta, reason = levenberg_marquardt(
-        problem, theta0, bounds, max_nfev, ftol, xtol, gtol, null_space=NULL_SPACE
-    )
+    tracker = problem.tracker
+    try:
+        theta, reason = levenberg_marquardt(
+            problem, theta0, bounds, max_nfev, ftol, xtol, gtol, null_space=NULL_SPACE
+        )
+    except EarlyStop:
+        theta = tracker.best_theta
+        reason = f"early stopping: no better tail error in {patience} accepted iteration(s)"
+    if tails is not None and not tracker.triggered:
+        last, x0s = problem.split(theta)  # the solver's last iterate is not yet monitored
+        if last is not None and problem.tail_mse(last, x0s) < tracker.best_tail:
+            tracker.best_tail, tracker.best_theta = problem.tail_mse(last, x0s), theta.copy()
+        if tracker.best_theta is not None:
+            theta = tracker.best_theta
     fitted, _ = problem.split(theta)
     if fitted is None:  # pragma: no cover - the solver keeps accepted iterates only
         fitted = model
     r = problem.residuals(theta)
     info = {
         "stop_reason": reason,
-        "iterations": problem.tracker.njev - 1,
-        "function_evaluations": problem.tracker.nfev,
+        "patience": patience,
+        "iterations": tracker.njev - 1,
+        "function_evaluations": tracker.nfev,
         "initial_normalised_mse": float(np.mean(r0**2)),
         "final_normalised_mse": float(np.mean(r**2)),
         "seconds": time.perf_counter() - t0,
     }
+    if long_record:
+        info["tail_fraction"] = 0.0
+        info["early_stopping_off"] = (
+            f"{TAIL_SAMPLES_PER_PARAMETER} or more output samples per refined unknown "
+            f"({n_unknowns}): nothing held back"
+        )
+    if tails is not None:
+        info.update({
+            "tail_fraction": float(tail_fraction),
+            "early_stopping": tracker.triggered,
+            "initial_tail_mse": tracker.tail[0] if tracker.tail else None,
+            "tail_mse": float(tracker.best_tail),
+        })  # fmt: skip
+        if tracker.tail and np.array_equal(theta, theta0):
+            info["warnings"] = [
+                "early stopping kept the start: no iterate of the refinement lowered the "
+                f"free-run error on the held-back tails ({tail_fraction:g} of each "
+                "experiment) below the start's, so the model is its start (for a linear "
+                "state space: the subspace estimate; for a polynomial or block state "
+                "space: its linear start with the nonlinear terms at their start); with more "
+                "data, or tail_fraction=0 (--tail-fraction 0), the refinement runs to "
+                "convergence"
+            ]
     return fitted, info
+
+
+#: Early stopping holds back no tail of an experiment whose head would be shorter.
+MIN_HEAD = 100
+#: Early stopping holds back nothing from a record of at least this many output samples
+#: per refined unknown (parameters and initial states): there the refinement's excess
+#: error from fitting the noise is of the order of 1 % (a least-squares fit's ``P / N``),
+#: below what a fifth of the record held back costs (``docs/models.md``).
+TAIL_SAMPLES_PER_PARAMETER = 100
+
+
+def _head(n: int, tail_fraction: float) -> int:
+    """Samples of an experiment of ``n`` fitted with ``tail_fraction`` held back."""
+    head = n - int(round(tail_fraction * n))
+    return head if head >= MIN_HEAD and head < n else n
 
 
 def _solver_settings(info: dict[str, Any], max_nfev: int) -> dict[str, Any]:
@@ -532,8 +660,13 @@ def _solver_settings(info: dict[str, Any], max_nfev: int) -> dict[str, Any]:
     simulation-error fit."""
     return {
         "max_nfev": int(max_nfev),
+        "tail_fraction": info.get("tail_fraction", 0.0),
+        "patience": info.get("patience"),
         "iterations": info["iterations"],
         "function_evaluations": info["function_evaluations"],
+        "initial_tail_mse": info.get("initial_tail_mse"),
+        "tail_mse": info.get("tail_mse"),
+        "early_stopping": bool(info.get("early_stopping", False)),
         "stop_reason": info["stop_reason"],
     }
 
@@ -576,13 +709,17 @@ def fit_state_space(
     feedthrough: bool = False,
     refine: bool = True,
     max_nfev: int = STATE_SPACE_NFEV,
+    tail_fraction: float = STATE_SPACE_TAIL,
+    patience: int = PATIENCE,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
 ) -> FitResult:
     """Linear state-space model: subspace estimate, then (``refine``) output error.
 
-    Parameters are those of :func:`subspace` and of :func:`refine_state_space`.
+    Parameters are those of :func:`subspace` and of :func:`refine_state_space`
+    (``tail_fraction``, ``patience``: early stopping on a held-back tail of each
+    experiment, by default 20 % and 5 iterates).
 
     Returns
     -------
@@ -622,10 +759,13 @@ def fit_state_space(
     if refine:
         model, info = refine_state_space(
             model, data, initial_states=sub.initial_states, feedthrough=feedthrough,
-            max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
+            max_nfev=max_nfev, tail_fraction=tail_fraction, patience=patience, ftol=ftol,
+            xtol=xtol, gtol=gtol,
         )  # fmt: skip
         settings.update(_solver_settings(info, max_nfev))
         settings["refinement"] = info
+        if info.get("warnings"):
+            settings["warnings"] = list(info["warnings"])
         method = "subspace+simulation-error"
     metrics = _check(model, data, method)
     return FitResult(
@@ -729,6 +869,8 @@ def fit_polynomial_state_space(
     start_degree: int | None = None,
     rung_nfev: int | None = None,
     max_nfev: int = PNLSS_NFEV,
+    tail_fraction: float = STATE_SPACE_TAIL,
+    patience: int | None = None,
     ftol: float = TOLERANCE,
     xtol: float = TOLERANCE,
     gtol: float = TOLERANCE,
@@ -758,6 +900,16 @@ def fit_polynomial_state_space(
     rung_nfev : int, optional
         Limit on the simulations of each degree above ``start_degree`` (default
         ``max_nfev``): a rung of many more parameters that starts near its optimum.
+    tail_fraction : float
+        Held back at the end of each experiment for early stopping (every refinement:
+        the order's, the linear start's, each degree's; :func:`refine_state_space`);
+        0 fits everything to convergence.
+    patience : int, optional
+        Of the nonlinear refinement: accepted iterates without a better tail error
+        before it stops. Default None, never: the refinement crawls through plateaus
+        where the tail does not improve for tens of iterations (the Silverbox: about
+        90) before it finds the nonlinearity; the iterate with the best tail is
+        returned all the same. The linear start stops after ``PATIENCE``.
     max_nfev, ftol, xtol, gtol
         Of each refinement (the linear start's and each degree's). The nonlinear
         refinement crawls along curved valleys for a few hundred evaluations before it
@@ -777,11 +929,13 @@ def fit_polynomial_state_space(
     if nx is None:
         nx, order_scores = order_by_validation(
             data, max_order, horizon=horizon, weighting=weighting, feedthrough=feedthrough,
-            max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
+            max_nfev=max_nfev, tail_fraction=tail_fraction, patience=PATIENCE, ftol=ftol,
+            xtol=xtol, gtol=gtol,
         )  # fmt: skip
     linear = fit_state_space(
         data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
-        feedthrough=feedthrough, max_nfev=max_nfev, ftol=ftol, xtol=xtol, gtol=gtol,
+        feedthrough=feedthrough, max_nfev=max_nfev, tail_fraction=tail_fraction,
+        patience=PATIENCE, ftol=ftol, xtol=xtol, gtol=gtol,
     )  # fmt: skip
     if order_scores:
         linear = replace(linear, settings={
@@ -819,8 +973,8 @@ def fit_polynomial_state_space(
             expo = monomial_exponents(n, len(data.inputs), d, monomials, constant=True)
             model = model.with_monomials(expo)
         model, info = refine_state_space(
-            model, data, feedthrough=feedthrough, max_nfev=limit, ftol=ftol, xtol=xtol,
-            gtol=gtol,
+            model, data, feedthrough=feedthrough, max_nfev=limit,
+            tail_fraction=tail_fraction, patience=patience, ftol=ftol, xtol=xtol, gtol=gtol,
         )  # fmt: skip
         rungs.append({"degree": d, **_solver_settings(info, limit)})
     model = with_observed_range(model, data)
@@ -839,6 +993,9 @@ def fit_polynomial_state_space(
         "refinement": info,
         "linear_simulation_metrics": linear.estimation_metrics,
     }
+    notes = [*linear.settings.get("warnings", []), *info.get("warnings", [])]
+    if notes:
+        settings["warnings"] = notes
     return FitResult(
         model=model,
         method=method,
