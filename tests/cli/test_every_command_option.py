@@ -896,8 +896,16 @@ def _model_command(command: str) -> dict[str, Callable[..., None]]:
         assert "y_pred" in pd.read_csv(path).columns
         assert "--horizon" in run(f, "--horizon", "0", code=2).stderr
 
+    def quiet(f, calls):
+        path = f.path("quiet.csv")
+        for flag in ("-q", "--quiet"):
+            r = run(f, flag, "-o", path, "--force")
+            assert r.stdout == "" and len(pd.read_csv(path)) == N
+        assert _json(run(f, "-q", "--json"))["metrics"] == _json(run(f, "--json"))["metrics"]
+
     return {
         "band": band,
+        "quiet": quiet,
         "horizon": horizon,
         "initial_samples": initial_samples,
         "rng": range_,

@@ -195,6 +195,20 @@ def test_usage_errors_are_one_line_and_exit_2(csv, args, expected):
     assert "Traceback" not in r.output
 
 
+@pytest.mark.parametrize(
+    ("flag", "suggested"),
+    [("--bogus", None), ("--estimaton", "--estimation"), ("--strucure", "--structure")],
+)
+def test_an_unknown_flag_suggests_only_flags_close_to_it(csv, flag, suggested):
+    r = runner.invoke(app, ["fit", str(csv), "-u", "u", "-y", "y", flag])
+    assert r.exit_code == 2
+    line = r.stderr.strip()
+    if suggested is None:
+        assert "mean" not in line and "Possible" not in line, line
+    else:
+        assert f"(did you mean {suggested}?)" in line, line
+
+
 # ------------------------------------------------------------ choosing the blocks
 LINEAR = {"na": 2, "nb": 2, "nk": 1, "a": [-1.2, 0.5], "b": [1.0, 0.4]}
 ORDERS = ["--na", "2", "--nb", "2", "--nk", "1", "--json"]

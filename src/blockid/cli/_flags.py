@@ -104,7 +104,8 @@ Quiet = Annotated[
     shared(
         "quiet",
         "No progress on stderr (there is none when stderr is not a terminal, nor with --json); "
-        "fit: no parameter table either.",
+        "fit: no parameter table either; simulate, predict: nothing on stdout (files and "
+        "warnings as without it).",
     ),
 ]
 Seed = Annotated[

@@ -90,7 +90,7 @@ class _OneLineErrors(TyperGroup):
             ctx = getattr(exc, "ctx", None)
             if ctx is not None:
                 hint = f" (see '{ctx.command_path} -h')"
-            message = " ".join(exc.format_message().split())
+            message = " ".join(_message(exc).split())
             print(f"error: {message}{hint}", file=sys.stderr)
             sys.exit(exc.exit_code)
         except typer.Abort:
@@ -105,6 +105,23 @@ class _OneLineErrors(TyperGroup):
         if not standalone_mode:
             return rv
         sys.exit(rv if isinstance(rv, int) else 0)
+
+
+#: How alike an unknown flag and a real one must be for the error to suggest it (the
+#: ratio of :func:`difflib.get_close_matches`; click's 0.6 offered ``--out`` for
+#: ``--bogus``).
+SUGGEST = 0.75
+
+
+def _message(exc: Any) -> str:
+    """The error's message; an unknown flag suggests only flags close to it."""
+    if isinstance(exc, click_exceptions.NoSuchOption):
+        from difflib import get_close_matches
+
+        close = get_close_matches(exc.option_name, exc.possibilities or [], 3, SUGGEST)
+        hint = f" (did you mean {' or '.join(sorted(close))}?)" if close else ""
+        return f"No such option: {exc.option_name}{hint}"
+    return str(exc.format_message())
 
 
 app = typer.Typer(

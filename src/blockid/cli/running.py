@@ -23,6 +23,7 @@ from blockid.cli._flags import (
     ExperimentColumn,
     Force,
     Json,
+    Quiet,
     SamplingTime,
     TimeColumn,
     shared,
@@ -97,6 +98,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         ] = None,
         force: Force = False,
         json_out: Json = False,
+        quiet: Quiet = False,
     ) -> None:
         from blockid.errors import ParameterError
 
@@ -186,6 +188,8 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
                 }
                 doc["band"] = {"level": band, "mean_width": width}
             print_json(doc)
+            return
+        if quiet:  # the files written and the warnings above say what happened
             return
         title = f"{_LABELS[mode]} on {where}"
         if horizon is not None and horizon > 1:
