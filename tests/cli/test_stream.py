@@ -186,6 +186,23 @@ def test_default_method_is_the_structures_recursive_one():
     assert _lines(r.stdout)[-1]["n_samples"] == 50
 
 
+@pytest.mark.parametrize("delimiter", [";", "\t"])
+def test_a_semicolon_or_tab_stream_in_windows_1252_reads_as_fit_reads_its_file(delimiter):
+    """A spreadsheet's export (``;`` or tabs, Latin-1 names): the same estimate as the
+    comma-separated UTF-8 stream of the same numbers."""
+    text = _arx_csv(200)
+    plain = runner.invoke(app, ["stream", *ARX_ARGS], input=text)
+    body = text.replace("u", "débit_u").replace(",", delimiter)
+    other = runner.invoke(
+        app,
+        ["stream", *[("débit_u" if a == "u" else a) for a in ARX_ARGS]],
+        input=body.encode("cp1252"),
+    )
+    assert plain.exit_code == 0 and other.exit_code == 0, other.output
+    a, b = _lines(plain.stdout)[-1]["parameters"], _lines(other.stdout)[-1]["parameters"]
+    assert a["y"]["a"] == b["y"]["a"] and a["y"]["b"]["u"] == b["y"]["b"]["débit_u"]
+
+
 def test_json_lines_input():
     rows = [line.split(",") for line in _arx_csv(200).splitlines()[1:]]
     jsonl = "".join(

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import inspect
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -28,6 +29,21 @@ from blockid.errors import BlockidError
 from blockid.workflows.stream_guard import THRESHOLD
 
 __all__ = ["stream"]
+
+
+def _text_lines(stream: Any) -> Iterator[str]:
+    """The lines of standard input as they come, each decoded as UTF-8 or, where it is
+    not, as Windows-1252 (a spreadsheet's Latin-1 export: ``fit`` reads a file so)."""
+    raw = getattr(stream, "buffer", None)
+    if raw is None:  # already text (a test's stand-in)
+        yield from stream
+        return
+    for line in raw:
+        try:
+            yield line.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            yield line.decode("cp1252", errors="replace")
+
 
 #: This command's flags of the library parameters (for the one-line errors).
 _FLAGS = {
@@ -214,7 +230,7 @@ def stream(
     settings = given(options)
     scales = {"input_scale": input_scale, "output_scale": output_scale}
     session = StreamSession(
-        sys.stdin, structure, inputs, outputs, method=method,
+        _text_lines(sys.stdin), structure, inputs, outputs, method=method,
         options={**settings, **{k: v for k, v in scales.items() if v is not None}},
         initial=initial, fmt=fmt, every=every, stop_on_error=stop_on_error,
         checkpoint=checkpoint, resume=resume, guard=outlier_threshold if guard else None,

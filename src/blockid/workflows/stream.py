@@ -49,6 +49,7 @@ simulating the whole record, which a stream does not keep).
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 import math
 from collections.abc import Iterable, Iterator, Sequence
@@ -157,8 +158,34 @@ def _values(texts: list[Any], names: Sequence[str], where: str) -> tuple[tuple, 
     raise AssertionError  # pragma: no cover - one of them failed above
 
 
+#: The delimiters a stream's header line is read with, the first that names the columns.
+DELIMITERS = (",", ";", "\t", "|")
+
+
+def _delimited(lines: Iterable[str], names: Sequence[str]) -> tuple[Iterator[str], str]:
+    """The lines again and their delimiter: the first of :data:`DELIMITERS` that splits
+    the first non-blank line (the header) into fields naming every column of ``names``
+    (as ``fit`` sniffs a file's), else the one splitting it most, else a comma."""
+    it = iter(lines)
+    skipped: list[str] = []
+    for line in it:
+        skipped.append(line)
+        if line.strip():
+            break
+    header = skipped[-1] if skipped else ""
+    found = ","
+    fields = {d: [f.strip().strip('"') for f in header.split(d)] for d in DELIMITERS}
+    naming = [d for d in DELIMITERS if all(n in fields[d] for n in names)]
+    if naming:
+        found = naming[0]
+    elif header.strip():
+        found = max(DELIMITERS, key=lambda d: (len(fields[d]), -DELIMITERS.index(d)))
+    return itertools.chain(skipped, it), found
+
+
 def _csv_rows(lines: Iterable[str], inputs: Sequence[str], outputs: Sequence[str]) -> Iterator[Row]:
-    reader = csv.reader(lines)
+    lines, delimiter = _delimited(lines, [*inputs, *outputs])
+    reader = csv.reader(lines, delimiter=delimiter)
     header: list[str] | None = None
     for fields in reader:
         if not fields or (len(fields) == 1 and not fields[0].strip()):
@@ -225,8 +252,9 @@ def read_samples(
 ) -> Iterator[Row]:
     """The data rows of a text stream, one :class:`Row` per line, read as they come.
 
-    ``fmt`` is ``"csv"`` (a header line naming the columns, comma separated, quoting
-    as the ``csv`` module reads it) or ``"jsonl"`` (one object per line; other keys
+    ``fmt`` is ``"csv"`` (a header line naming the columns, separated by commas,
+    semicolons, tabs or bars: the header says which, quoting as the ``csv`` module
+    reads it) or ``"jsonl"`` (one object per line; other keys
     are ignored). Blank lines are skipped. A header without the named columns raises
     :class:`~blockid.errors.DataError`; a bad row is a :class:`Row` with ``problem``.
 
