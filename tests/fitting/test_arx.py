@@ -246,3 +246,15 @@ def test_the_aw_rls_takes_the_initial_covariance_it_is_given():
     b_learned = np.asarray(learned.model.b["y"]["u"])
     b_held = np.asarray(held.model.b["y"]["u"])
     assert np.abs(b_held - 0.01).max() < 0.005 and np.abs(b_learned - 1.0).max() < 0.05
+
+
+def test_a_rank_deficient_fit_names_a_glitch_by_its_row():
+    """One input sample of 1e12 among values near 1: the rank error says which row."""
+    from blockid.errors import EstimationError
+
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(400)
+    y = np.convolve(u, [0.0, 1.0, 0.5])[:400] + 0.01 * rng.standard_normal(400)
+    u[123] = 1e12
+    with pytest.raises(EstimationError, match=r"input 'u1' is 1e\+12 at row 123 \(0-based\)"):
+        fit_arx(Dataset.from_arrays(u, y), na=2, nb=2, nk=1)

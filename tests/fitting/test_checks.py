@@ -5,6 +5,7 @@ measured output's range, blocks that have degenerated."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from blockid.blocks import DeadZone
 from blockid.data import Dataset
@@ -73,3 +74,27 @@ def test_a_degenerate_block_is_named_with_its_place():
     sound = Hammerstein("u", "y", input_block=DeadZone(-0.5, 0.5), na=1, nb=1, nk=1)
     assert degenerate_block_notes(sound.replace(ranges={"u": [-2.0, 3.0]})) == []
     assert degenerate_block_notes(sound) == []  # no recorded range: nothing to judge on
+
+
+# ----------------------------------------------------------------------------- constant inputs
+def test_a_constant_input_is_refused_by_name_before_any_fit():
+    from blockid.errors import DataError
+    from blockid.fitting import fit_model
+    from blockid.workflows.identify import identify
+
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal(300)
+    data = Dataset.from_arrays(np.ones(300), y, ["valve"], ["flow"])
+    for attempt in (lambda: fit_model(data, "arx"), lambda: identify(data, effort="quick")):
+        with pytest.raises(
+            DataError,
+            match=r"input 'valve' is constant over the estimation data \(1 at every sample\)",
+        ):
+            attempt()
+    two = Dataset.from_arrays(np.c_[rng.standard_normal(300), np.full(300, 2.5)], y,
+                              ["u", "bias"], ["flow"])  # fmt: skip
+    with pytest.raises(
+        DataError, match=r"'bias' is constant .* \(2.5 at every sample\).*leave it out"
+    ):
+        fit_model(two, "arx")
+    fit_model(Dataset.from_arrays(rng.standard_normal(300), y, ["valve"], ["flow"]), "arx")

@@ -665,7 +665,7 @@ CASES = [
             "1",
             "--json",
         ],
-        ["input 'u' is constant over the estimation data", "u at lag 2"],
+        ["input 'u' is constant over the estimation data", "(0.5 at every sample)"],
         lambda d: _csv(
             d / "bad.csv",
             "t,u,y",

@@ -259,30 +259,60 @@ def _rank_deficient(exc: EstimationError, model: ARX, i: int, data: Dataset) -> 
     ]  # the columns of ARX.regressors, in order
     shown = ", ".join(f"{lags[k][0]} at lag {lags[k][1]}" for k in columns if k < len(lags))
     shown = shown or "some regressors"
-    constant = []
-    for kind, signals, orders in (
-        ("input", model.inputs, model.nb[i]),
-        ("output", model.outputs, model.na[i]),
-    ):
-        for j, signal in enumerate(signals):
-            if orders[j] == 0:
-                continue
-            values = np.concatenate(data.signal(signal))
-            if np.ptp(values) == 0.0:
-                constant.append(
-                    f"{kind} {signal!r} is constant over the estimation data "
-                    f"({values[0]:.6g} at every sample)"
-                )
+    constant = [
+        f"{kind} {signal!r} is constant over the estimation data ({values[0]:.6g} at every sample)"
+        for kind, signal, values in _regressed(model, i, data)
+        if np.ptp(values) == 0.0
+    ]
+    glitches = _glitches(model, i, data)
     why = (
         "; ".join(constant) + ": a constant signal tells nothing about the dynamics and its "
         "lags repeat one another; use data in which it varies"
         if constant
+        else "; ".join(glitches) + ": one sample that size swamps every other in the "
+        "normal equations; remove or correct that row"
+        if glitches
         else "the data do not excite the model enough, or the orders are too high"
     )
     return EstimationError(
         f"output {yi!r}: least squares is rank deficient: the regressors {shown} are "
         f"(nearly) linear combinations of the others; {why}"
     )
+
+
+#: A sample this many median absolute deviations from its signal's median is a glitch.
+GLITCH = 1e6
+
+
+def _glitches(model: ARX, i: int, data: Dataset) -> list[str]:
+    """The regressed signals of output ``i`` with a sample :data:`GLITCH` or more median
+    absolute deviations from their median (a 1e12 among values near 1), each named with
+    its row in the estimation data."""
+    found = []
+    for kind, signal, values in _regressed(model, i, data):
+        with np.errstate(all="ignore"):
+            deviation = np.abs(values - np.median(values))
+            typical = float(np.median(deviation))
+        if typical > 0 and np.all(np.isfinite(deviation)):
+            k = int(np.argmax(deviation))
+            if deviation[k] >= GLITCH * typical:
+                found.append(
+                    f"{kind} {signal!r} is {values[k]:.6g} at row {k} (0-based) of the "
+                    f"estimation data, {deviation[k] / typical:.2g} times its median deviation"
+                )
+    return found
+
+
+def _regressed(model: ARX, i: int, data: Dataset) -> Iterator[tuple[str, str, np.ndarray]]:
+    """``(kind, name, values over the data)`` of each signal in output ``i``'s
+    regressors (an order above zero)."""
+    for kind, signals, orders in (
+        ("input", model.inputs, model.nb[i]),
+        ("output", model.outputs, model.na[i]),
+    ):
+        for j, signal in enumerate(signals):
+            if orders[j] > 0:
+                yield kind, signal, np.concatenate(data.signal(signal))
 
 
 def fit_arx(

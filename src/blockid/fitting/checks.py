@@ -50,12 +50,13 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset
-from blockid.errors import EstimationError
+from blockid.errors import DataError, EstimationError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.arx import least_squares
 from blockid.models.arx import ARX
 
 __all__ = [
+    "refuse_constant_inputs",
     "LINEARITY_TOLERANCE",
     "STABILITY_MARGIN",
     "margin_for",
@@ -75,6 +76,32 @@ __all__ = [
 #: to ``1 / STABILITY_MARGIN`` samples; on longer ones inside ``1 - 1 / n``
 #: (:func:`stability_margin`).
 STABILITY_MARGIN = 1e-3
+
+
+def refuse_constant_inputs(data: Dataset) -> None:
+    """A :class:`~blockid.errors.DataError` naming every input that takes one value
+    over all of ``data``: no model learns from it how the outputs respond (an ARX fit
+    took it for an offset and returned a model with exit 0; ``identify`` reported that
+    no linear model simulated stably). Anything but a Dataset is left to the fitter's
+    own check."""
+    if not isinstance(data, Dataset):
+        return
+    constant = []
+    for name in data.inputs:
+        values = np.concatenate([np.ravel(v) for v in data.signal(name)])
+        if values.size and np.ptp(values) == 0.0:
+            constant.append(
+                f"input {name!r} is constant over the estimation data ({values[0]:.6g} at "
+                "every sample)"
+            )
+    if not constant:
+        return
+    several = len(data.inputs) > len(constant)
+    raise DataError(
+        "; ".join(constant) + ": a model cannot learn how the outputs respond to a constant "
+        "input; use data in which it varies"
+        + (", or leave it out of the inputs (-u)" if several else "")
+    )
 
 
 def margin_for(n_samples: int) -> float:

@@ -25,6 +25,7 @@ import numpy as np
 
 from blockid.data.dataset import Dataset
 from blockid.errors import EstimationError, ParameterError
+from blockid.fitting.checks import refuse_constant_inputs
 from blockid.fitting.registry import (
     STRUCTURES,
     Structure,
@@ -91,6 +92,7 @@ def fit_model(
                 parameter=key,
             )
     _check_orders_fit(data, decl.name, options)
+    refuse_constant_inputs(data)
     uncertainty = bool(options.pop("standard_errors", False))
     refine = bool(options.pop("refine", False))
     if not decl.block_oriented:

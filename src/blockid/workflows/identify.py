@@ -120,6 +120,7 @@ from blockid.data.folds import Fold, FoldPlan, fold_plan, materialise
 from blockid.defaults import TIE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.trust import Trust, assess
+from blockid.fitting.checks import refuse_constant_inputs
 from blockid.fitting.registry import STRUCTURES, searched_structures
 from blockid.workflows.distortion import distortion_record
 from blockid.workflows.effort import (
@@ -837,6 +838,7 @@ def identify(
     if not isinstance(data, Dataset):
         raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
     eff, asked = check_search(structures, effort, rule, jobs, time_limit)
+    refuse_constant_inputs(data)  # before any fold: it names the input, they would not
     if scheduler is not None and jobs is not None:
         raise ParameterError(
             "give jobs (worker processes here) or scheduler (a dask cluster), not both",
