@@ -42,3 +42,18 @@ def test_demo_keeps_data_models_figures_and_results(tmp_path):
         # and it is the lowest of that structure's rows in the table
         rows = [row for row in doc["table"] if row["model"] == structure and "mse" in row]
         assert best["mse"]["velocity"] == min(row["mse"]["velocity"] for row in rows)
+
+
+def test_the_demo_s_first_screen_says_why_before_a_cell_says_no_model(tmp_path):
+    """The paper's estimator returns no model on three of the four structures: the line
+    above the table says why there are notes, each such cell says what happened (not
+    converged, diverged) with the number of the note below that explains it."""
+    r = CliRunner().invoke(app, ["demo", "--output-dir", str(tmp_path / "demo")])
+    assert r.exit_code == 0, r.output
+    lines = r.stdout.splitlines()
+    first_mark = next(k for k, line in enumerate(lines) if "[1]" in line)
+    assert any("numbered notes below" in line for line in lines[:first_mark])
+    assert not any("│ failed" in line or " failed " in line for line in lines)
+    marks = [m for line in lines if "│" in line for m in ("[1]", "[2]", "[3]", "[4]") if m in line]
+    for mark in marks:
+        assert any(line.startswith(f"{mark} ") for line in lines), mark

@@ -27,10 +27,20 @@ def print_electrohydraulic(result: Any) -> None:
             justify="left" if col in ("model", "estimator") else "right",
             no_wrap=col in ("model", "estimator"),
         )
+    notes = [row for row in result.table if "error" in row]
+    if notes:
+        stdout.print(
+            "Each model is fitted by paper B's own estimator (key-term RLS, as published) and "
+            "by blockid's default; where the paper's does not converge or diverges on these "
+            "data the table says so and the numbered notes below it say why "
+            "(docs/convergence.md)."
+        )
     for row in result.table:
         best = result.best.get(row["model"], {}).get("estimator") == row["estimator"]
         if "error" in row:
-            table.add_row(row["model"], row["estimator"], "failed", "", "", "")
+            mark = f"[{notes.index(row) + 1}]"
+            table.add_row(row["model"], row["estimator"], f"{_outcome(row['error'])} {mark}",
+                          "", "", "")  # fmt: skip
             continue
         table.add_row(
             row["model"],
@@ -53,6 +63,14 @@ def print_electrohydraulic(result: Any) -> None:
             + ", ".join(f"{s} {100 * r:.0f} %" for s, r in red.items())
             + " (paper B: hammerstein 13 %, wiener 54 %, arx 58 %)"
         )
-    for row in result.table:
-        if "error" in row:
-            stdout.print(f"{row['model']} {row['estimator']}: {row['error']}", markup=False)
+    for k, row in enumerate(notes, start=1):
+        stdout.print(f"[{k}] {row['model']} {row['estimator']}: {row['error']}", markup=False)
+
+
+def _outcome(error: str) -> str:
+    """What became of a fit that returned no model, in a table cell's words."""
+    if "did not converge" in error:
+        return "not converged"
+    if "diverged" in error:
+        return "diverged"
+    return "no model"
