@@ -18,7 +18,7 @@ from blockid.blocks.integrator import Integrator
 from blockid.cli.main import app
 from blockid.data import Dataset
 from blockid.models import ARX, ChainModel, Hammerstein
-from blockid.workflows.identify import EFFORTS, Effort, identify
+from blockid.workflows.identify import EFFORTS, LONG_RECORD, Effort, identify
 
 from reference import (
     cubic_state_record,
@@ -902,3 +902,25 @@ def test_warm_starts_begin_beyond_the_slack_and_come_from_the_best_folds(monkeyp
     best = int(np.argmin(relative))
     assert relative.count(relative[best]) == 1 and max(relative) > relative[best]
     assert start == f"the model fitted without {plain.search['folds'][best]['name']}"
+
+
+def _state_record(n, seed=2):
+    plant = ARX(["u"], ["y"], na=2, nb=2, nk=1, a={"y": {"y": [-1.5, 0.7]}},
+                b={"y": {"u": [1.0, 0.5]}})  # fmt: skip
+    u = np.random.default_rng(seed).standard_normal((n, 1))
+    y = plant.simulate(u) + 0.3 * np.random.default_rng(seed + 1).standard_normal((n, 1))
+    return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+
+def test_a_short_record_s_state_spaces_stop_early_and_a_long_record_s_do_not():
+    """The chains' screening switches early stopping off (the folds hold data back);
+    the state spaces of a short record keep theirs (a held-back tail: their options
+    name no tail_fraction, the default holds 20 % back), a long record's hold none."""
+    short = identify(_state_record(600), structures=["state-space"], effort=SMALL, jobs=1)
+    scored = [s for s in short.ranked if s.candidate.structure == "state-space"]
+    assert scored and all("tail_fraction" not in s.candidate.options for s in scored)
+    assert short.fit.settings["refinement"]["tail_fraction"] == 0.2
+    long = identify(_state_record(LONG_RECORD), structures=["state-space"], effort=SMALL, jobs=1)
+    scored = [s for s in long.ranked if s.candidate.structure == "state-space"]
+    assert scored and all(s.candidate.options["tail_fraction"] == 0.0 for s in scored)
+    assert long.fit.settings["refinement"]["tail_fraction"] == 0.0
