@@ -539,6 +539,34 @@ def test_a_checkpoint_inside_a_glitch_resumes_with_the_guard_where_it_stood():
     assert resumed[-1].guard == whole[-1].guard == {**whole[-1].guard, "rejected": 1, "held": 2}
 
 
+def test_a_reader_that_closes_stdout_does_not_lose_the_learned_model(tmp_path):
+    """The plant's reader goes away (stdout closed): the stream stops as on SIGPIPE,
+    writes the model and the learner state, says where to resume, exits 128 + 13."""
+    import signal
+
+    u, y = _hw_record(800, seed=4)
+    text = _csv(u, y).splitlines()
+    out = tmp_path / "piped.json"
+    arx = ["-u", "u", "-y", "y", "--na", "3", "--nb", "3", "--nk", "2", "--method", "rls"]
+    proc = subprocess.Popen([sys.executable, "-c", _APP, "stream", *arx, "-o", str(out)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)  # fmt: skip
+    proc.stdin.write("\n".join(text[:201]) + "\n")
+    proc.stdin.flush()
+    for _ in range(200):
+        assert proc.stdout.readline()
+    proc.stdout.close()  # the reader goes away
+    try:
+        proc.stdin.write("\n".join(text[201:]) + "\n")
+        proc.stdin.close()
+    except BrokenPipeError:  # the stream stopped before it read them all
+        pass
+    err = proc.stderr.read()
+    assert proc.wait(timeout=60) == 128 + signal.SIGPIPE, err
+    assert "stopped by SIGPIPE" in err and f"--model {out}" in err
+    assert json.loads(out.read_text())["estimation"]["learner"]["state"]["n_samples"] >= 200
+
+
 def test_sigterm_writes_the_model_and_the_learner_state(tmp_path):
     """Issue 21: SIGTERM (or Ctrl-C) on ``stream -o FILE`` threw the learned model away;
     now it is written, and resuming from it ends where one uninterrupted stream ends."""
@@ -564,6 +592,7 @@ def test_sigterm_writes_the_model_and_the_learner_state(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + signal.SIGTERM, err
     assert "stopped by SIGTERM" in err and f"--model {out}" in err
+    assert "the data rows from row 300 on" in err  # where the resumed stream starts
     assert json.loads(out.read_text())["estimation"]["learner"]["state"]["n_samples"] == 300
     r = runner.invoke(app, ["stream", *arx, "-o", str(whole)], input="\n".join([head, *rows]))
     assert r.exit_code == 0

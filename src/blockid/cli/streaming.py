@@ -9,6 +9,7 @@ estimator flags are those of ``fit``, generated from the registry.
 from __future__ import annotations
 
 import inspect
+import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -256,8 +257,12 @@ def stream(
             if isinstance(event, Checkpoint):
                 save(event.model, event.record)
                 continue
-            write(to_line(event) + "\n")
-            flush()  # a plant waits for its answer
+            try:
+                write(to_line(event) + "\n")
+                flush()  # a plant waits for its answer
+            except BrokenPipeError:  # the reader closed stdout: stop as on SIGPIPE, saving
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+                raise _Stopped(signal.SIGPIPE) from None
     except BlockidError as exc:  # options or header: before the first sample
         name = _FLAGS.get(exc.parameter or "")
         if name is None or name in str(exc):
@@ -268,7 +273,8 @@ def stream(
         written = session.online is not None and save(*session.saved())
         where = (
             f"model and learner state after {session.online.n_samples} samples written to "
-            f"{out} (resume with --model {out})"
+            f"{out}; resume with --model {out}, sending the header line and then the data "
+            f"rows from row {session.rows} on (0-based: {session.rows} rows were read)"
             if written
             else "nothing written (no -o FILE, or no model yet)"
         )
@@ -300,7 +306,7 @@ def stream(
 
 
 class _Stopped(Exception):
-    """SIGINT or SIGTERM arrived during the stream."""
+    """SIGINT or SIGTERM arrived during the stream, or its stdout was closed (SIGPIPE)."""
 
     def __init__(self, number: int) -> None:
         super().__init__(number)
