@@ -79,21 +79,19 @@ PNLSS_TARGETS = {
 
 #: What this run was: edited by the session that runs it.
 RUN_NOTE = (
-    "This run (2026-11-28, session 14): the structures of a long record raced "
-    "([identify](identify.md#racing-the-structures-the-study)). The five long records "
-    "again: WH 2009 and the WH record with process noise at `dfd7beb` with nothing else "
-    "running (load at the start given), the Silverbox, Bouc-Wen and EMPS at `d21ffae` "
-    "beside other work (busy-machine times; `dfd7beb` adds near-ties and linear "
-    "candidates to what a race carries on, which leaves their leaders and choices as "
-    "they were). The quick effort on the three long records at `dfd7beb`, nothing else "
-    "running (the quick effort now also plans degree-3 full monomials). The other 17 "
-    "sets are not raced (short records and several-output records have no raced stage): "
-    "their results are session 13's, at `5db13e3` (the wing flutter at `8c3ff95`), on a "
-    "busy machine. The direct PNLSS fits are session 13's, at `1dfc812` and `8c3ff95`. "
-    "The before-and-after table compares with session 13's results of the same sets. "
-    "The fold-rule study was not re-run "
-    "([identify](identify.md#how-the-fold-scores-are-combined-the-study) keeps its last "
-    "numbers)."
+    "This run (2026-11-28, session 15): the state-space candidates of a short record stop "
+    "early on a held-back tail ([identify](identify.md#state-space-candidates-stop-early-"
+    "on-short-records-the-study-session-15)). The 17 short and several-output records at "
+    "`6d77a6c` (its short-record path is the one kept), beside other work (busy-machine "
+    "times). The five long records, whose searches keep no tail, at `6d57cf8`: the same "
+    "models and errors as session 14's, bit for bit; WH 2009 again at `20c0261` (the "
+    "final code) with nothing else running, the load at its start given (falling from a "
+    "test run: 2.67 over 15 minutes): 338 s, against 333 s at `6d57cf8` and session 14's "
+    "299 s for the same model, the machine's spread from run to run. The quick effort on "
+    "the long "
+    "records, the direct PNLSS fits and the fold-rule study are session 14's and 13's "
+    "(unchanged by this run's change). The before-and-after table compares with session "
+    "14's results of the same sets."
 )
 
 
