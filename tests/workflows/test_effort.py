@@ -55,3 +55,13 @@ def test_the_search_arguments_are_checked_before_any_work():
         check_search(None, "quick", jobs=0)
     with pytest.raises(ParameterError, match="unknown"):
         check_search(["narx"], "quick")
+
+
+def test_more_jobs_than_identify_starts_is_refused_not_cut():
+    """The cap on worker processes is an error that names it (it cut 100 to 64 silently)."""
+    from blockid.errors import ParameterError
+    from blockid.workflows.effort import MAX_JOBS, check_search
+
+    check_search(None, "quick", jobs=MAX_JOBS)
+    with pytest.raises(ParameterError, match=r"jobs=65 .* give 64 or fewer, or a dask cluster"):
+        check_search(None, "quick", jobs=MAX_JOBS + 1)

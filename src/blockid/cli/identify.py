@@ -102,7 +102,9 @@ def identify(
     ] = "standard",
     jobs: Annotated[
         int | None,
-        typer.Option(metavar="N", help="Worker processes (default: every core)."),
+        typer.Option(
+            metavar="N", help="Worker processes, at most 64 (default: every core, at most 64)."
+        ),
     ] = None,
     scheduler: Annotated[
         str | None,

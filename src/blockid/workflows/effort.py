@@ -16,10 +16,13 @@ from typing import Any
 from blockid.errors import ParameterError
 from blockid.fitting.registry import STRUCTURES
 
-__all__ = ["EFFORTS", "LONG_RECORD", "RULES", "Effort", "check_search"]
+__all__ = ["EFFORTS", "LONG_RECORD", "MAX_JOBS", "RULES", "Effort", "check_search"]
 
 #: Records of at least this many samples get fewer folds and screening on a part.
 LONG_RECORD = 20_000
+#: The most worker processes ``identify`` starts on one machine (each holds the record
+#: and a fit); more is refused, not cut silently: a dask cluster (``scheduler``) has more.
+MAX_JOBS = 64
 #: How fold scores are combined into a candidate's score (``docs/identify.md`` has the
 #: study that chose the first).
 RULES = ("geometric-mean", "median", "mean")
@@ -132,6 +135,12 @@ def check_search(
         raise ParameterError(f"rule={rule!r}: choose one of {', '.join(RULES)}", parameter="rule")
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
         raise ParameterError(f"jobs must be a whole number >= 1, got {jobs!r}", parameter="jobs")
+    if jobs is not None and jobs > MAX_JOBS:
+        raise ParameterError(
+            f"jobs={jobs} is more worker processes than identify starts on one machine "
+            f"({MAX_JOBS}); give {MAX_JOBS} or fewer, or a dask cluster (scheduler) for more",
+            parameter="jobs",
+        )
     if time_limit is not None and not time_limit > 0:
         raise ParameterError(
             f"time_limit must be a positive number of seconds, got {time_limit!r}",

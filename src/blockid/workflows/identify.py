@@ -126,6 +126,7 @@ from blockid.workflows.distortion import distortion_record
 from blockid.workflows.effort import (
     EFFORTS,
     LONG_RECORD,
+    MAX_JOBS,
     RULES,
     Effort,
     check_search,
@@ -812,7 +813,9 @@ def identify(
         The search's size (:data:`EFFORTS`, or an :class:`Effort` of one's own): the
         same effort on the same data gives the same model on any machine.
     jobs : int, optional
-        Worker processes (default: every core this process may use).
+        Worker processes, 1 to :data:`~blockid.workflows.effort.MAX_JOBS` (64; more is
+        refused: a dask cluster has more). Default: every core this process may use, at
+        most 64.
     scheduler : str or distributed.Client or cluster, optional
         Fit the candidates on this dask cluster instead of local worker processes (an
         address such as ``tcp://host:8786``, a client or a cluster): the record is sent
@@ -865,7 +868,7 @@ def identify(
         chosen = [s for s in chosen if not STRUCTURES[s].block_oriented] or [LINEAR]
     n_samples = sum(e.n_samples for e in data.experiments)
     plan = fold_plan(data, eff.folds if n_samples < LONG_RECORD else eff.folds_long)
-    jobs = available_cores() if jobs is None else jobs
+    jobs = min(available_cores(), MAX_JOBS) if jobs is None else jobs
     deadline = None if time_limit is None else time.monotonic() + float(time_limit)
 
     evidence, recommended = None, None
@@ -883,7 +886,7 @@ def identify(
     warm: list[dict[str, Any]] = []
     fit, selected = None, None
     short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
-    with TaskRunner(data, min(jobs, 64), scheduler) as runner:
+    with TaskRunner(data, jobs, scheduler) as runner:
         search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
         run_stages(search, chosen, recommended, notes, asked=bool(asked))
         for raced in (r["raced"] for r in search.stages if "raced" in r):
