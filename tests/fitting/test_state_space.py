@@ -505,3 +505,18 @@ def test_experiments_too_short_for_a_head_hold_nothing_back():
         fit.model.free_parameters(),
         fit_state_space(data, nx=2, tail_fraction=0.0).model.free_parameters(),
     )
+
+
+def test_an_early_stopped_fit_says_so_once_per_refinement_and_not_to_raise_max_nfev():
+    """A linear plant, 400 noisy samples, degree-2 monomials stopped at 30 simulations:
+    the nonlinear refinement returns an earlier iterate (its tail got worse after it),
+    so the evaluation limit's advice to raise --max-nfev would mislead; the linear
+    start's note, if any, is marked as the linear start's."""
+    plant = SYSTEMS["siso, 2 states"]
+    data = _record(plant, 400, seed=5, snr_db=6)
+    fit = fit_model(data, "polynomial-state-space", nx=2, degree=2, max_nfev=30)
+    notes = fit.settings.get("warnings", [])
+    assert fit.settings["best_tail_earlier"] and fit.settings["stop_reason"] == "max_nfev reached"
+    assert not any("evaluation limit" in n for n in notes), notes
+    assert len(set(notes)) == len(notes)
+    assert all(n.startswith("the linear start: ") for n in notes[:-1] if "kept the start" in n)

@@ -436,7 +436,8 @@ def fit_block_state_space(
         "refinement": info,
         "linear_simulation_metrics": linear.estimation_metrics,
     }
-    notes = [*linear.settings.get("warnings", []), *info.get("warnings", [])]
+    notes = [f"the linear start: {w}" for w in linear.settings.get("warnings", [])]
+    notes += info.get("warnings", [])
     if notes:
         settings["warnings"] = notes
     return FitResult(

@@ -229,6 +229,8 @@ def _evaluation_limit_notes(result: FitResult) -> list[str]:
     settings = result.settings
     if "max_nfev" not in str(settings.get("stop_reason", "")):
         return []
+    if settings.get("best_tail_earlier"):  # early stopping returned an earlier iterate:
+        return []  # the held-back tails got worse after it, more evaluations would not help
     limit = settings.get("max_nfev")
     return [
         f"the refinement stopped at its evaluation limit (max_nfev = {limit}, "

@@ -595,11 +595,13 @@ def refine_state_space(
     except EarlyStop:
         theta = tracker.best_theta
         reason = f"early stopping: no better tail error in {patience} accepted iteration(s)"
+    earlier = tracker.triggered  # the best tail came before the last iterate
     if tails is not None and not tracker.triggered:
         last, x0s = problem.split(theta)  # the solver's last iterate is not yet monitored
         if last is not None and problem.tail_mse(last, x0s) < tracker.best_tail:
             tracker.best_tail, tracker.best_theta = problem.tail_mse(last, x0s), theta.copy()
         if tracker.best_theta is not None:
+            earlier = not np.array_equal(tracker.best_theta, theta)
             theta = tracker.best_theta
     fitted, _ = problem.split(theta)
     if fitted is None:  # pragma: no cover - the solver keeps accepted iterates only
@@ -626,6 +628,7 @@ def refine_state_space(
             "early_stopping": tracker.triggered,
             "initial_tail_mse": tracker.tail[0] if tracker.tail else None,
             "tail_mse": float(tracker.best_tail),
+            "best_tail_earlier": bool(earlier),
         })  # fmt: skip
         if tracker.tail and np.array_equal(theta, theta0):
             info["warnings"] = [
@@ -667,6 +670,7 @@ def _solver_settings(info: dict[str, Any], max_nfev: int) -> dict[str, Any]:
         "initial_tail_mse": info.get("initial_tail_mse"),
         "tail_mse": info.get("tail_mse"),
         "early_stopping": bool(info.get("early_stopping", False)),
+        "best_tail_earlier": bool(info.get("best_tail_earlier", False)),
         "stop_reason": info["stop_reason"],
     }
 
@@ -993,7 +997,8 @@ def fit_polynomial_state_space(
         "refinement": info,
         "linear_simulation_metrics": linear.estimation_metrics,
     }
-    notes = [*linear.settings.get("warnings", []), *info.get("warnings", [])]
+    notes = [f"the linear start: {w}" for w in linear.settings.get("warnings", [])]
+    notes += info.get("warnings", [])
     if notes:
         settings["warnings"] = notes
     return FitResult(
