@@ -30,7 +30,7 @@ import numpy as np
 import pandas as pd
 from _report import machine, write_section
 
-from blockid.fitting.state_space import CHUNK
+from blockid.fitting.state_space_refinement import CHUNK
 from blockid.models.state_space import PolynomialStateSpace, monomial_exponents
 
 _CHILD = (

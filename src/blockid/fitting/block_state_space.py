@@ -358,7 +358,7 @@ def fit_block_state_space(
         Of the linear start (:func:`~blockid.fitting.state_space.fit_state_space`).
     max_nfev, tail_fraction, patience, ftol, xtol, gtol
         Of each refinement (the linear start's and the block model's; early stopping
-        on a held-back tail: :func:`~blockid.fitting.state_space.refine_state_space`).
+        on a held-back tail: :func:`~blockid.fitting.state_space_refinement.refine_state_space`).
 
     Returns
     -------
