@@ -11,7 +11,6 @@ from __future__ import annotations
 import inspect
 import os
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -30,20 +29,6 @@ from blockid.errors import BlockidError
 from blockid.workflows.stream_guard import THRESHOLD
 
 __all__ = ["stream"]
-
-
-def _text_lines(stream: Any) -> Iterator[str]:
-    """The lines of standard input as they come, each decoded as UTF-8 or, where it is
-    not, as Windows-1252 (a spreadsheet's Latin-1 export: ``fit`` reads a file so)."""
-    raw = getattr(stream, "buffer", None)
-    if raw is None:  # already text (a test's stand-in)
-        yield from stream
-        return
-    for line in raw:
-        try:
-            yield line.decode("utf-8-sig")
-        except UnicodeDecodeError:
-            yield line.decode("cp1252", errors="replace")
 
 
 #: This command's flags of the library parameters (for the one-line errors).
@@ -217,6 +202,7 @@ def stream(
         JsonLines,
         StreamSession,
         recursive_method,
+        text_lines,
     )
 
     resume, initial = None, None
@@ -231,7 +217,7 @@ def stream(
     settings = given(options)
     scales = {"input_scale": input_scale, "output_scale": output_scale}
     session = StreamSession(
-        _text_lines(sys.stdin), structure, inputs, outputs, method=method,
+        text_lines(sys.stdin), structure, inputs, outputs, method=method,
         options={**settings, **{k: v for k, v in scales.items() if v is not None}},
         initial=initial, fmt=fmt, every=every, stop_on_error=stop_on_error,
         checkpoint=checkpoint, resume=resume, guard=outlier_threshold if guard else None,
@@ -272,11 +258,7 @@ def stream(
         name = signal.Signals(exc.number).name
         written = session.online is not None and save(*session.saved())
         where = (
-            f"model and learner state after {session.online.n_samples} samples written to "
-            f"{out}; resume with --model {out}, sending the header line and then the data "
-            f"rows from row {session.rows} on (0-based: {session.rows} rows were read)"
-            if written
-            else "nothing written (no -o FILE, or no model yet)"
+            session.resume_hint(out) if written else "nothing written (no -o FILE, or no model yet)"
         )
         stderr.print(f"stopped by {name}: {where}", markup=False)
         raise typer.Exit(code=128 + exc.number) from None

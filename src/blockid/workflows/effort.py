@@ -20,8 +20,8 @@ __all__ = ["EFFORTS", "LONG_RECORD", "MAX_JOBS", "RULES", "Effort", "check_searc
 
 #: Records of at least this many samples get fewer folds and screening on a part.
 LONG_RECORD = 20_000
-#: The most worker processes ``identify`` starts on one machine (each holds the record
-#: and a fit); more is refused, not cut silently: a dask cluster (``scheduler``) has more.
+#: The most worker processes a search starts on one machine (each holds the record and
+#: a fit): more is refused, not cut silently; a dask cluster (``scheduler``) has more.
 MAX_JOBS = 64
 #: How fold scores are combined into a candidate's score (``docs/identify.md`` has the
 #: study that chose the first).
@@ -124,6 +124,7 @@ def check_search(
     rule: str = RULES[0],
     jobs: int | None = None,
     time_limit: float | None = None,
+    scheduler: Any = None,
 ) -> tuple[Effort, list[str] | None]:
     """Check ``identify``'s search arguments; return the effort and the structures asked
     for (None: the registry's searched ones)."""
@@ -140,6 +141,11 @@ def check_search(
             f"jobs={jobs} is more worker processes than identify starts on one machine "
             f"({MAX_JOBS}); give {MAX_JOBS} or fewer, or a dask cluster (scheduler) for more",
             parameter="jobs",
+        )
+    if scheduler is not None and jobs is not None:
+        raise ParameterError(
+            "give jobs (worker processes here) or scheduler (a dask cluster), not both",
+            parameter="scheduler",
         )
     if time_limit is not None and not time_limit > 0:
         raise ParameterError(

@@ -126,12 +126,11 @@ from blockid.workflows.distortion import distortion_record
 from blockid.workflows.effort import (
     EFFORTS,
     LONG_RECORD,
-    MAX_JOBS,
     RULES,
     Effort,
     check_search,
 )
-from blockid.workflows.parallel import TaskRunner, available_cores
+from blockid.workflows.parallel import TaskRunner
 from blockid.workflows.refit import (
     REFIT_SLACK,
     RefitFellShort,
@@ -813,9 +812,7 @@ def identify(
         The search's size (:data:`EFFORTS`, or an :class:`Effort` of one's own): the
         same effort on the same data gives the same model on any machine.
     jobs : int, optional
-        Worker processes, 1 to :data:`~blockid.workflows.effort.MAX_JOBS` (64; more is
-        refused: a dask cluster has more). Default: every core this process may use, at
-        most 64.
+        Worker processes, at most 64 (default: every core this process may use, at most 64).
     scheduler : str or distributed.Client or cluster, optional
         Fit the candidates on this dask cluster instead of local worker processes (an
         address such as ``tcp://host:8786``, a client or a cluster): the record is sent
@@ -840,13 +837,8 @@ def identify(
     t_start = time.perf_counter()
     if not isinstance(data, Dataset):
         raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
-    eff, asked = check_search(structures, effort, rule, jobs, time_limit)
+    eff, asked = check_search(structures, effort, rule, jobs, time_limit, scheduler)
     refuse_constant_inputs(data)  # before any fold: it names the input, they would not
-    if scheduler is not None and jobs is not None:
-        raise ParameterError(
-            "give jobs (worker processes here) or scheduler (a dask cluster), not both",
-            parameter="scheduler",
-        )
     chosen = asked or list(searched_structures())
     notes: list[str] = []
     if data.n_inputs != 1 or data.n_outputs != 1:
@@ -868,7 +860,6 @@ def identify(
         chosen = [s for s in chosen if not STRUCTURES[s].block_oriented] or [LINEAR]
     n_samples = sum(e.n_samples for e in data.experiments)
     plan = fold_plan(data, eff.folds if n_samples < LONG_RECORD else eff.folds_long)
-    jobs = min(available_cores(), MAX_JOBS) if jobs is None else jobs
     deadline = None if time_limit is None else time.monotonic() + float(time_limit)
 
     evidence, recommended = None, None

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from blockid.data.dataset import Dataset, Experiment
+from blockid.workflows.effort import MAX_JOBS
 
 __all__ = ["MISSING_DASK", "TaskRunner", "available_cores"]
 
@@ -153,8 +154,9 @@ class TaskRunner:
     ----------
     data : Dataset
         The record every call gets.
-    jobs : int
-        Worker processes; 1 runs everything in this process. Ignored with a scheduler.
+    jobs : int, optional
+        Worker processes; 1 runs everything in this process (default: every core, at
+        most :data:`~blockid.workflows.effort.MAX_JOBS`). Ignored with a scheduler.
     scheduler : str or distributed.Client or cluster, optional
         Run the items on this dask cluster instead (module notes). A client given is
         used and left open; one made here from an address or a cluster is closed.
@@ -170,9 +172,9 @@ class TaskRunner:
         The dask scheduler's address (None: no cluster).
     """
 
-    def __init__(self, data: Dataset, jobs: int, scheduler: Any = None) -> None:
+    def __init__(self, data: Dataset, jobs: int | None = None, scheduler: Any = None) -> None:
         self.data = data
-        self.jobs = max(1, int(jobs))
+        self.jobs = max(1, int(min(available_cores(), MAX_JOBS) if jobs is None else jobs))
         self.local_threads = self.jobs
         self.scheduler = scheduler
         self.address: str | None = None

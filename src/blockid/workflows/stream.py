@@ -64,6 +64,7 @@ from blockid.fitting.registry import get_structure
 from blockid.workflows.stream_guard import THRESHOLD, StreamGuard
 
 __all__ = [
+    "text_lines",
     "FORMATS",
     "Checkpoint",
     "Estimates",
@@ -245,6 +246,20 @@ def _json_rows(
             yield Row(line, (), (), problem or other)
         else:
             yield Row(line, u, y)
+
+
+def text_lines(stream: Any) -> Iterator[str]:
+    """The lines of standard input as they come, each decoded as UTF-8 or, where it is
+    not, as Windows-1252 (a spreadsheet's Latin-1 export: ``fit`` reads a file so)."""
+    raw = getattr(stream, "buffer", None)
+    if raw is None:  # already text (a test's stand-in)
+        yield from stream
+        return
+    for line in raw:
+        try:
+            yield line.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            yield line.decode("cp1252", errors="replace")
 
 
 def read_samples(
@@ -429,6 +444,14 @@ class StreamSession:
         self.guard = StreamGuard(self.online, self.threshold)
         if resume is not None and "guard" in resume:
             self.guard.restore(resume["guard"])
+
+    def resume_hint(self, path: Any) -> str:
+        """Where the learner's state was written and how to go on from it."""
+        return (
+            f"model and learner state after {self.online.n_samples} samples written to "
+            f"{path}; resume with --model {path}, sending the header line and then the data "
+            f"rows from row {self.rows} on (0-based: {self.rows} rows were read)"
+        )
 
     def saved(self) -> tuple[Any, dict[str, Any]]:
         """The model of the current estimate (None when it cannot be read back yet) and
