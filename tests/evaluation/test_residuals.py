@@ -16,11 +16,14 @@ A = (-1.5, 0.7)  # y(t) = 1.5 y(t-1) - 0.7 y(t-2) + u(t-1) + 0.5 u(t-2) + e(t)
 B = (1.0, 0.5)
 
 
-def _arx_record(n=3000, seed=0, noise=0.3, feedback=0.0):
+def _arx_record(n=3000, seed=0, noise=0.3, feedback=0.0, colour=0.0):
     """An ARX(2, 2, 1) plant with white equation noise; with ``feedback``, the input
-    carries ``-feedback * y(t-1)`` (a closed loop)."""
+    carries ``-feedback * y(t-1)`` (a closed loop); with ``colour``, the reference is
+    white noise through ``1 / (1 - colour q^-1)`` (a slow input)."""
     rng = np.random.default_rng(seed)
     r = rng.standard_normal(n)
+    for t in range(1, n):
+        r[t] += colour * r[t - 1]
     e = noise * rng.standard_normal(n)
     u, y = np.zeros(n), np.zeros(n)
     for t in range(n):
@@ -63,9 +66,47 @@ def test_feedback_in_the_data_shows_at_negative_lags():
     out = residual_analysis(model, fresh)
     pair = out.independence[("u", "y")]
     assert pair["outside_negative"] >= 1  # u(t+1) holds -0.1 y(t), hence e(t)
+    assert pair["feedback"] and pair["feedback_p_value"] < 1e-6
     lags = out.cross_lags
     r = out.cross_correlation[("u", "y")]
     assert abs(r[lags == -1][0]) > abs(r[lags >= 0]).max()  # the loop's lag stands out
+
+
+def test_a_wrong_model_on_a_slow_open_loop_input_is_not_called_feedback():
+    """With a coloured input, a model that misses a lag leaves a residual correlated
+    with the input at negative lags too (raw correlation outside its bound): that is
+    the model's error, not a loop; the prewhitened test over negative lags says so,
+    and still finds the loop of a closed-loop record with the same slow input."""
+    slow = dict(colour=0.9)
+    train, fresh = _arx_record(seed=0, **slow), _arx_record(seed=1, **slow)
+    late = fit_model(train, "arx", na=2, nb=1, nk=2).model  # misses u(t-1)
+    pair = residual_analysis(late, fresh).independence[("u", "y")]
+    assert not pair["independent"] and pair["outside_negative"] >= 3
+    assert not pair["feedback"] and pair["feedback_p_value"] > 0.01
+    loop = dict(colour=0.9, noise=1.0, feedback=0.1)
+    train, fresh = _arx_record(seed=0, **loop), _arx_record(seed=1, **loop)
+    model = fit_model(train, "arx", na=2, nb=2, nk=1).model
+    assert residual_analysis(model, fresh).independence[("u", "y")]["feedback"]
+
+
+def test_an_input_that_repeats_exactly_reports_no_feedback():
+    """A generated periodic input (a band-limited period, repeated) cannot carry the
+    output's noise back: a wrong model's residual correlates with it at negative lags
+    (an AR filter cannot whiten a band-limited line spectrum), and no loop is reported;
+    the same input with noise added is tested as any other."""
+    from scipy import signal
+
+    rng = np.random.default_rng(4)
+    b, a = signal.butter(4, 0.2)
+    period = signal.lfilter(b, a, rng.standard_normal(512))
+    u = np.tile(period, 6)
+    x = signal.lfilter([0.0, 1.0, 0.5], [1.0, -1.5, 0.7], u)
+    y = x + 0.3 * x**3 + 0.05 * rng.standard_normal(u.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    wrong = fit_model(data, "arx", na=1, nb=1, nk=1).model
+    pair = residual_analysis(wrong, data).independence[("u", "y")]
+    assert not pair["independent"] and pair["outside_negative"] >= 1
+    assert not pair["feedback"] and pair["feedback_statistic"] == 0.0
 
 
 def test_the_correlations_are_the_direct_sums_over_each_experiment():

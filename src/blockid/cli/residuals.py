@@ -107,14 +107,14 @@ def residuals(
         )  # fmt: skip
     stdout.print(table)
     stdout.print(f"verdict: the model {analysis.verdict()}", soft_wrap=True, markup=False)
-    feedback = [f"{u} -> {y}" for (u, y), t in analysis.independence.items()
-                if t["outside_negative"]]  # fmt: skip
+    feedback = [f"{u} -> {y} (p = {t['feedback_p_value']:.2g})"
+                for (u, y), t in analysis.independence.items() if t["feedback"]]  # fmt: skip
     if feedback:
         stdout.print(
-            "note: the residual correlates with later inputs (negative lags) for "
-            f"{', '.join(feedback)}: feedback from the output to the input in the data "
-            "(a closed loop), not a fault of the model; the independence test assumes "
-            "open-loop data, so its verdict is not to be trusted here"
+            "note: the residual correlates with later inputs (negative lags, the input "
+            f"prewhitened) for {', '.join(feedback)}: feedback from the output to the "
+            "input in the data (a closed loop), not a fault of the model; the independence "
+            "test assumes open-loop data, so its verdict is not to be trusted here"
         )
     if analysis.noise_model is False and not all(t["white"] for t in analysis.whiteness.values()):
         stdout.print(

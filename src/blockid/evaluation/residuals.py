@@ -26,7 +26,15 @@ error figures cannot (Ljung 1999, sec. 16.6; MATLAB's ``resid``):
   often: a hydraulic record's slow trajectory gave p = 2e-7 with no lag outside its
   bound.) The test assumes open-loop data: with feedback (correlation at negative
   lags) the filter spreads it into the positive lags, and the verdict is not to be
-  trusted.
+  trusted. **Feedback** is tested with the prewhitened input against the residual as
+  it is, over ``τ = -M .. -1`` (the same statistic, ``M`` degrees of freedom): in open
+  loop a white input's correlation with an earlier residual is zero even when the
+  model is wrong (its error is a causal filter of the input), while the raw
+  correlation is not when the input is coloured or periodic: a missed dynamic shows at
+  negative lags too, so the raw correlation alone does not indicate a closed loop.
+  An input that repeats exactly, period after period (a generated multisine or PRBS),
+  carries none of the output's noise, so no feedback is reported for it: an AR filter
+  cannot whiten a band-limited periodic input, and its model error would show.
 
 Correlations are pooled over the experiments (lagged products within each experiment
 only), with the mean of each signal removed; the first ``skip`` samples of each
@@ -75,7 +83,9 @@ class ResidualAnalysis:
     independence : dict
         ``(input, output)`` -> ``{"statistic": S, "p_value": ..., "outside": causal lags
         (τ >= 0) outside the bound, "outside_negative": τ < 0 outside,
-        "independent": p_value >= 1 - confidence}``.
+        "independent": p_value >= 1 - confidence, "feedback_statistic" and
+        "feedback_p_value": the same test over ``τ < 0``, "feedback": feedback_p_value <
+        1 - confidence (a closed loop in the data)}``.
     confidence : float
     noise_model : bool or None
         One-step mode: whether the model was fitted with a noise model, so that its
@@ -173,6 +183,21 @@ def _lagged_sums(a: list[np.ndarray], b: list[np.ndarray], max_lag: int) -> np.n
     return out
 
 
+def _repeats_exactly(parts: list[np.ndarray]) -> bool:
+    """Whether every experiment's signal repeats, to rounding, period after period (a
+    generated periodic excitation, at least two periods): such an input cannot carry
+    feedback of the output's noise, which differs from period to period."""
+    from blockid.evaluation.periods import find_period
+
+    for x in parts:
+        period = find_period(x)
+        if period is None or x.size < 2 * period:
+            return False
+        if np.max(np.abs(x[period:] - x[:-period])) > 1e-9 * max(float(np.ptp(x)), 1e-300):
+            return False
+    return True
+
+
 #: Order of the AR model that prewhitens the input for the independence test.
 PREWHITEN_ORDER = 10
 
@@ -202,20 +227,21 @@ def _prewhitener(parts: list[np.ndarray], order: int) -> Any:
 
 def _independence_statistic(
     u: list[np.ndarray], e: list[np.ndarray], max_lag: int
-) -> tuple[float, int]:
-    """``N Σ_{τ=0}^{M} r_ue(τ)² / P`` of the prewhitened signals (module docstring)
-    and its degrees of freedom."""
+) -> tuple[tuple[float, float], int]:
+    """``N Σ_{τ=0}^{M} r_ue(τ)² / P`` of the prewhitened signals (module docstring), the
+    same sum over ``τ = -M .. -1`` (feedback), and the first's degrees of freedom."""
     n = int(sum(x.size for x in u))
     uc = [x - np.mean(np.concatenate(u)) for x in u]
     ec = [x - np.mean(np.concatenate(e)) for x in e]
     pu, pe = sum(x @ x for x in uc) / n, sum(x @ x for x in ec) / n
     if not (pu > 0 and pe > 0):
-        return 0.0, max_lag + 1
+        return (0.0, 0.0), max_lag + 1
     r = _lagged_sums(uc, ec, max_lag) / (n * np.sqrt(pu * pe))
     r_u = _lagged_sums(uc, uc, max_lag) / (n * pu)
     r_e = _lagged_sums(ec, ec, max_lag) / (n * pe)
     big_p = max(float(np.sum(r_u * r_e)), 1e-12)
-    return float(n * np.sum(r[max_lag:] ** 2) / big_p), max_lag + 1
+    causal, loop = r[max_lag:], r[:max_lag]
+    return (float(n * np.sum(causal**2) / big_p), float(n * np.sum(loop**2) / big_p)), max_lag + 1
 
 
 def residual_analysis(
@@ -316,15 +342,23 @@ def residual_analysis(
         r_u = _lagged_sums(u_cols, u_cols, max_lag) / (n * u_power)
         whiten = _prewhitener(u_cols, min(PREWHITEN_ORDER, max_lag))
         u_white = [whiten(c) for c in u_cols]
+        repeats = _repeats_exactly(u_cols)
         for name in data.outputs:
             e_power = float(sum(c @ c for c in e_cols[name])) / n
             r = _lagged_sums(u_cols, e_cols[name], max_lag) / (n * np.sqrt(u_power * e_power))
             big_p = max(float(np.sum(r_e_full[name] * r_u)), 1e-12)
             level = z * np.sqrt(big_p / n)
             causal = r[max_lag:]
-            s, dof = _independence_statistic(u_white, [whiten(c) for c in e_cols[name]],
-                                             max_lag)  # fmt: skip
+            (s, _), dof = _independence_statistic(
+                u_white, [whiten(c) for c in e_cols[name]], max_lag
+            )
+            # feedback: the white input against the residual as it is (module docstring)
+            aligned = [c[c.size - w.size :] for c, w in zip(e_cols[name], u_white, strict=True)]
+            (_, s_loop), _ = _independence_statistic(u_white, aligned, max_lag)
             p = float(stats.chi2.sf(s, dof))
+            if repeats:  # an input that repeats exactly carries none of the output's noise
+                s_loop = 0.0
+            p_loop = float(stats.chi2.sf(s_loop, max_lag))
             key = (uname, name)
             cross[key], bound[key] = r, float(level)
             indep[key] = {
@@ -333,6 +367,9 @@ def residual_analysis(
                 "outside": int(np.sum(np.abs(causal) > level)),
                 "outside_negative": int(np.sum(np.abs(r[:max_lag]) > level)),
                 "independent": p >= 1.0 - confidence,
+                "feedback_statistic": s_loop,
+                "feedback_p_value": p_loop,
+                "feedback": p_loop < 1.0 - confidence,
             }
     # fitted to make its one-step residual white: least squares ARX, a state space with
     # its predictor gain; a simulation-error fit is not (its noise is the plant's, coloured)
