@@ -413,10 +413,38 @@ def test_a_degree_is_raised_by_a_climb_from_the_degree_below_within_its_own_budg
     assert result.selected.rmse < 0.5 * second
     assert [r["degree"] for r in result.fit.settings["rungs"]] == [2, 3]
     assert result.fit.settings["rungs"][1]["max_nfev"] == chosen["rung_nfev"]
+    # each fold's climb continued from that fold's degree-2 model (the candidate below)
+    climb = [r for r in result.search["stages"] if r["stage"] == "nonlinearity"]
+    assert climb and climb[0]["continued"] == climb[0]["fits"] == len(result.search["folds"])
     # over the climb's budget it is not tried
     tight = Effort(**{**effort.to_dict(), "climb_parameters": 40})
     result = identify(data, structures=["polynomial-state-space"], effort=tight, jobs=1)
     assert all("start_degree" not in s.candidate.options for s in result.ranked)
+
+
+def test_a_climb_on_a_fold_continues_from_the_fold_model_below_bit_for_bit():
+    """A climb's fold fit given the fold's model of the degree below (what the search
+    keeps from the candidate it grew from) scores exactly as the whole climb fitted
+    from the linear start: the same fold error and the same model, bit for bit."""
+    from blockid.data.folds import fold_plan
+    from blockid.workflows.identify import _fit_and_score, _Task
+    from blockid.workflows.search_space import Candidate, climb_base
+
+    data = cubic_state_record()
+    fold = fold_plan(data, 3).folds[1]
+    base = Candidate("polynomial-state-space", {"nx": 2, "degree": 2, "monomials": "full",
+                                                "max_nfev": 30})  # fmt: skip
+    climb = base.with_options(degree=3, start_degree=2, rung_nfev=20)
+    assert climb_base(climb) == (base.key, 2)
+    below = _fit_and_score(data, _Task(base, fold, None, 10))
+    whole = _fit_and_score(data, _Task(climb, fold, None, 10))
+    continued = _fit_and_score(data, _Task(climb, fold, None, 10, below.model, 2))
+    assert continued.rmse == whole.rmse and continued.relative == whole.relative
+    assert np.array_equal(continued.model.free_parameters(), whole.model.free_parameters())
+    # one more degree continues from the climbed model
+    higher = climb.with_options(degree=4)
+    assert climb_base(higher) == (climb.key, 3)
+    assert climb_base(base) is None and climb_base(Candidate("arx", {"na": 2})) is None
 
 
 def test_a_static_block_on_a_state_gets_a_loop_block_which_no_chain_holds():

@@ -39,6 +39,7 @@ __all__ = [
     "METHODS",
     "DEFAULT_METHOD",
     "accepted_options",
+    "climb_from",
     "fit_model",
     "refine_from",
     "resolve_options",
@@ -117,6 +118,35 @@ def fit_model(
             model = result.model.with_ranges([(e.u, e.y) for e in data.experiments])
             result = replace(result, model=model)
     return _finish(result, data, structure, uncertainty)
+
+
+def climb_from(model: Any, done: int, data: Dataset, structure: str, **options: Any) -> FitResult:
+    """:func:`fit_model` ``(data, structure, **options)`` of a polynomial state space fitted
+    degree by degree (``start_degree`` below ``degree``), continued from ``model``: the
+    fit of the same options up to degree ``done`` on the same ``data``. Only the rungs
+    above ``done`` are refined
+    (:func:`~blockid.fitting.state_space.continue_polynomial_state_space`), and the
+    options and the result are checked as :func:`fit_model` checks them, so the model
+    is the whole fit's, bit for bit, or the same error is raised."""
+    from blockid.fitting.state_space import continue_polynomial_state_space
+
+    decl, method, options = resolve_options(structure, None, options)
+    if decl.name != "polynomial-state-space":
+        raise ParameterError(
+            f"climb_from continues a polynomial state space fitted degree by degree, not "
+            f"{structure}",
+            parameter="structure",
+        )
+    _check_orders_fit(data, decl.name, options)
+    refuse_constant_inputs(data)
+    options.pop("standard_errors", None)
+    options.pop("refine", None)
+    if options.pop("integrator", 0):
+        raise ParameterError(
+            "climb_from continues a fit without integrators", parameter="integrator"
+        )
+    result = continue_polynomial_state_space(model, data, done, **options)
+    return _finish(result, data, structure, False)
 
 
 def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> FitResult:

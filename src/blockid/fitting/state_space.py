@@ -89,6 +89,7 @@ from blockid.fitting.state_space_refinement import (
 from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
 
 __all__ = [
+    "continue_polynomial_state_space",
     "fit_polynomial_state_space",
     "fit_state_space",
     "fit_subspace",
@@ -457,15 +458,7 @@ def fit_state_space(
             settings["warnings"] = list(info["warnings"])
         method = "subspace+simulation-error"
     metrics = _check(model, data, method)
-    return FitResult(
-        model=model,
-        method=method,
-        settings=settings,
-        estimation_metrics=metrics,
-        n_samples=int(sum(e.n_samples for e in data.experiments)),
-        history={"seconds": time.perf_counter() - t0},
-        metrics_mode="simulation",
-    )
+    return _result(model, data, method, settings, metrics, t0)
 
 
 def fit_subspace(
@@ -654,18 +647,14 @@ def fit_polynomial_state_space(
         output_offset=start.output_offset, output_scale=start.output_scale,
         sampling_time=start.sampling_time,
     )  # fmt: skip
-    rungs = []
-    model = template
+    refine = dict(feedthrough=feedthrough, tail_fraction=tail_fraction, patience=patience,
+                  ftol=ftol, xtol=xtol, gtol=gtol)  # fmt: skip
+    model, info, limit, rungs = template, {}, max_nfev, []
     for d in range(first, degree + 1):
         limit = max_nfev if d == first else rung_nfev
-        if d > first:
-            expo = monomial_exponents(n, len(data.inputs), d, monomials, constant=True)
-            model = model.with_monomials(expo)
-        model, info = refine_state_space(
-            model, data, feedthrough=feedthrough, max_nfev=limit,
-            tail_fraction=tail_fraction, patience=patience, ftol=ftol, xtol=xtol, gtol=gtol,
-        )  # fmt: skip
+        model, info = _rung(model, data, d, d > first, monomials, limit, refine)
         rungs.append({"degree": d, **_solver_settings(info, limit)})
+    expo = model.exponents
     model = with_observed_range(model, data)
     method = "subspace+polynomial-state-space"
     metrics = _check(model, data, method)
@@ -686,6 +675,13 @@ def fit_polynomial_state_space(
     notes += info.get("warnings", [])
     if notes:
         settings["warnings"] = notes
+    return _result(model, data, method, settings, metrics, t0)
+
+
+def _result(
+    model: Any, data: Dataset, method: str, settings: dict[str, Any], metrics: Any, t0: float
+) -> FitResult:
+    """A state-space fit's result: its metrics are of the free run (``_check``)."""
     return FitResult(
         model=model,
         method=method,
@@ -695,3 +691,65 @@ def fit_polynomial_state_space(
         history={"seconds": time.perf_counter() - t0},
         metrics_mode="simulation",
     )
+
+
+def _rung(
+    model: PolynomialStateSpace,
+    data: Dataset,
+    d: int,
+    new: bool,
+    monomials: str,
+    limit: int,
+    refine: dict[str, Any],
+) -> tuple[PolynomialStateSpace, dict[str, Any]]:
+    """One rung of the climb: the monomials of degree ``d`` added (``new``: the model has
+    those below, kept), then every parameter refined with at most ``limit``
+    simulations."""
+    if new:
+        expo = monomial_exponents(model.nx, len(data.inputs), d, monomials, constant=True)
+        model = model.with_monomials(expo)
+    return refine_state_space(model, data, max_nfev=limit, **refine)
+
+
+def continue_polynomial_state_space(
+    model: PolynomialStateSpace, data: Dataset, done: int, **options: Any
+) -> FitResult:
+    """:func:`fit_polynomial_state_space` ``(data, **options)`` of a climb
+    (``start_degree`` below ``degree``) continued from ``model``, its fit up to degree
+    ``done`` on the same data (the result of the same options with ``degree=done``, and
+    without ``start_degree`` and ``rung_nfev`` when ``done`` is the start): only the rungs
+    above ``done`` are refined, so the model is the one the whole climb gives, bit for
+    bit, without its first rungs fitted again (``identify``'s climb on a fold whose lower
+    degree it has fitted). Its settings are the last rung's."""
+    import inspect
+
+    bound = inspect.signature(fit_polynomial_state_space).bind(data, **options)
+    bound.apply_defaults()
+    o = bound.arguments
+    first = max(2, int(o["start_degree"] if o["start_degree"] is not None else o["degree"]))
+    if not first <= done < o["degree"]:
+        raise ParameterError(
+            f"a climb from degree {first} to {o['degree']} continues from a degree in "
+            f"{first}..{o['degree'] - 1}, not {done}",
+            parameter="start_degree",
+        )
+    limit = o["max_nfev"] if o["rung_nfev"] is None else o["rung_nfev"]
+    refine = {k: o[k] for k in ("feedthrough", "tail_fraction", "patience", "ftol", "xtol", "gtol")}
+    t0 = time.perf_counter()
+    info: dict[str, Any] = {}
+    for d in range(done + 1, o["degree"] + 1):
+        model, info = _rung(model, data, d, True, o["monomials"], limit, refine)
+    model = with_observed_range(model, data)
+    method = "subspace+polynomial-state-space"
+    metrics = _check(model, data, method)
+    settings = {
+        **_solver_settings(info, limit),
+        "degree": o["degree"],
+        "monomials": o["monomials"],
+        "start_degree": first,
+        "continued_from_degree": done,
+        "refinement": info,
+    }
+    if info.get("warnings"):
+        settings["warnings"] = list(info["warnings"])
+    return _result(model, data, method, settings, metrics, t0)

@@ -110,7 +110,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -119,7 +119,7 @@ from blockid.data.dataset import Dataset
 from blockid.data.folds import Fold, FoldPlan, fold_plan, materialise
 from blockid.defaults import TIE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
-from blockid.evaluation.trust import Trust, assess
+from blockid.evaluation.trust import assess
 from blockid.fitting.checks import refuse_constant_inputs
 from blockid.fitting.registry import STRUCTURES, searched_structures
 from blockid.workflows.distortion import distortion_record
@@ -143,7 +143,14 @@ from blockid.workflows.refit import (
     _Start,
     _Started,
 )
-from blockid.workflows.search_space import LINEAR, Candidate, unique
+from blockid.workflows.scores import FoldScore, IdentifyResult, Score
+from blockid.workflows.search_space import (
+    LINEAR,
+    Candidate,
+    climb_base,
+    keeps_fold_models,
+    unique,
+)
 from blockid.workflows.stages import INTEGRATING_POLE, run_stages
 
 __all__ = [
@@ -173,194 +180,6 @@ LINEAR_MARGIN = 0.75
 RACE_MIN = 8
 
 
-# ----------------------------------------------------------------------------- scores
-@dataclass(frozen=True)
-class FoldScore:
-    """One candidate on one fold: its free-run RMSE there, or why it failed."""
-
-    rmse: float = math.inf  # data units, pooled over the outputs
-    relative: float = math.inf  # rmse / the fold's output spread
-    n_parameters: int = 0
-    reason: str = ""
-    trust: Trust | None = None
-    seconds: float = 0.0
-
-
-@dataclass
-class Score:
-    """A candidate's result over the folds (or why it was rejected)."""
-
-    candidate: Candidate
-    stage: str
-    folds: list[FoldScore] = field(default_factory=list)
-    rmse: float = math.inf
-    fit_percent: float = -math.inf
-    n_parameters: int = 0
-    reason: str = ""
-    flags: list[str] = field(default_factory=list)
-    seconds: float = 0.0
-
-    @property
-    def ok(self) -> bool:
-        return not self.reason
-
-    def to_dict(self) -> dict[str, Any]:
-        out: dict[str, Any] = {
-            "structure": self.candidate.structure,
-            "options": _jsonable(self.candidate.options),
-            "stage": self.stage,
-            "seconds": round(self.seconds, 3),
-        }
-        if self.reason:
-            out["rejected"] = self.reason
-        else:
-            out.update(
-                cv_rmse=self.rmse,
-                cv_fit_percent=self.fit_percent,
-                fold_rmse=[f.rmse for f in self.folds],
-                n_parameters=self.n_parameters,
-            )
-        if self.flags:
-            out["flags"] = list(self.flags)
-        return out
-
-
-def _jsonable(options: dict[str, Any]) -> dict[str, Any]:
-    def plain(v: Any) -> Any:
-        if isinstance(v, int | float | str | bool):
-            return v
-        return [plain(x) for x in v] if isinstance(v, tuple) else str(v)
-
-    return {k: plain(v) for k, v in options.items()}
-
-
-@dataclass(frozen=True)
-class IdentifyResult:
-    """What :func:`identify` chose and everything it tried.
-
-    Attributes
-    ----------
-    selected : Score
-        The chosen candidate (its cross-validation score).
-    fit : FitResult
-        The chosen candidate fitted on all estimation data; ``fit.model`` is the model.
-    ranked : list of Score
-        Candidates that were scored, best first (the selected one first).
-    rejected : list of Score
-        Candidates that failed, with their reasons.
-    simulation, one_step : ModelOutput or None
-        Scores of the model on the validation data (or on the estimation data when no
-        validation data were given: see ``on``).
-    on : str
-        ``"validation"`` or ``"estimation"``.
-    seconds : float
-    holdout : str
-        How the estimation data were cut into folds.
-    search : dict
-        Effort, jobs, rule, folds, stages, whether the time limit cut the search.
-    """
-
-    selected: Score
-    fit: Any
-    ranked: list[Score]
-    rejected: list[Score]
-    simulation: Any
-    one_step: Any
-    one_step_error: str | None
-    on: str
-    seconds: float
-    holdout: str
-    orders_evidence: Any = None
-    notes: list[str] = field(default_factory=list)
-    search: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def model(self) -> Any:
-        return self.fit.model
-
-    @property
-    def cut_by_time_limit(self) -> bool:
-        return bool(self.search.get("cut_by_time_limit", False))
-
-    @property
-    def warnings(self) -> list[str]:
-        """The selected model's warnings: its fit's on all estimation data (not that its
-        refinement stopped at its evaluation limit: the effort set that limit, and
-        ``identify`` has no ``--max-nfev`` to raise it) and its scores' (``simulation``,
-        ``one_step``)."""
-        from blockid.fitting.dispatch import _evaluation_limit_notes
-
-        budget = _evaluation_limit_notes(self.fit)
-        notes = [n for n in self.fit.settings.get("warnings", []) if n not in budget]
-        for run in (self.simulation, self.one_step):
-            notes += [n for n in (run.warnings if run is not None else []) if n not in notes]
-        return notes
-
-    def best_scored(self, n: int) -> list[Score]:
-        """The ``n`` scored candidates with the lowest cross-validated RMSE, lowest first
-        (ties: by label), and the selected one after them if it is not among them: the
-        tables' order. (``ranked`` is the choice's order: the selected candidate first,
-        and among near-ties the one with fewer parameters before a lower score.)"""
-        ordered = sorted(self.ranked, key=lambda s: (s.rmse, s.candidate.label))[:n]
-        if self.selected not in ordered:
-            ordered.append(self.selected)
-        return ordered
-
-    def _repr_html_(self) -> str:
-        """The notebook display: :func:`blockid.reporting.notebook.identify_html`."""
-        from blockid.reporting.notebook import identify_html
-
-        return identify_html(self)
-
-    def plot(self, *, which: str | None = None) -> Any:
-        """The report's figures of the result (search, output, blocks, linear dynamics):
-        a dict of matplotlib figures, or the one ``which`` names; see
-        :func:`blockid.reporting.notebook.identify_figures`."""
-        from blockid.reporting.notebook import identify_figures
-
-        return identify_figures(self, which)
-
-    def to_dict(self) -> dict[str, Any]:
-        sel = self.selected.candidate
-        orders = sel.orders()
-        selected: dict[str, Any] = {
-            "structure": sel.structure,
-            "orders": orders,
-            "options": _jsonable({k: v for k, v in sel.options.items() if k not in orders}),
-            "method": self.fit.method,
-            "cv_rmse": self.selected.rmse,
-            "fold_rmse": [f.rmse for f in self.selected.folds],
-            "scored_on": self.on,
-            "simulation": _flat(self.simulation.metrics) if self.simulation else None,
-            "one_step": _flat(self.one_step.metrics) if self.one_step else None,
-        }
-        if self.selected.flags:
-            selected["flags"] = list(self.selected.flags)
-        if self.one_step_error:
-            selected["one_step_error"] = self.one_step_error
-        if self.warnings:
-            selected["warnings"] = self.warnings
-        return {
-            "selected": selected,
-            "models": [s.to_dict() for s in self.ranked],
-            "search": {
-                **self.search,
-                "candidates": len(self.ranked) + len(self.rejected),
-                "rejected": [s.to_dict() for s in self.rejected],
-                "holdout": self.holdout,
-                "seconds": round(self.seconds, 3),
-                "notes": self.notes,
-            },
-        }
-
-
-def _flat(metrics: dict[str, dict[str, float]]) -> dict[str, Any]:
-    """``{"rmse": {"y": v}}`` -> ``{"rmse": v}`` for one output, unchanged for several."""
-    if all(len(v) == 1 for v in metrics.values()):
-        return {k: next(iter(v.values())) for k, v in metrics.items()}
-    return metrics
-
-
 # ----------------------------------------------------------------------------- one fit
 @dataclass(frozen=True)
 class _Task:
@@ -371,19 +190,27 @@ class _Task:
     fold: Fold
     limit: int | None
     n_init: int
+    #: the fold's model of the candidate below this climb's top degree, and that degree
+    start: Any = None
+    done: int = 0
 
 
 def _fit_and_score(data: Dataset, task: _Task) -> FoldScore:
-    """One candidate on one fold (runs in a worker process or here)."""
+    """One candidate on one fold (runs in a worker process or here); a climb given the
+    fold's model of the degree below continues from it (the same model, bit for bit)."""
     from blockid.evaluation.validate import evaluate
-    from blockid.fitting.dispatch import fit_model
+    from blockid.fitting.dispatch import climb_from, fit_model
 
     t0 = time.perf_counter()
     train = materialise(data, task.fold.train, task.limit)
     test = materialise(data, task.fold.test)
+    cand = task.candidate
     try:
         with np.errstate(all="ignore"):
-            fit = fit_model(train, task.candidate.structure, **task.candidate.options)
+            if task.start is not None:
+                fit = climb_from(task.start, task.done, train, cand.structure, **cand.options)
+            else:
+                fit = fit_model(train, cand.structure, **cand.options)
             model = fit.model
             if not model.is_stable():
                 raise EstimationError("unstable")
@@ -398,7 +225,8 @@ def _fit_and_score(data: Dataset, task: _Task) -> FoldScore:
         n_par = model.n_free_parameters
     except Exception as exc:  # noqa: BLE001 - one candidate must not end the search
         return FoldScore(reason=_reason(exc), seconds=time.perf_counter() - t0)
-    return FoldScore(rmse, relative, n_par, "", trust, time.perf_counter() - t0)
+    kept = model if keeps_fold_models(cand) else None
+    return FoldScore(rmse, relative, n_par, "", trust, time.perf_counter() - t0, kept)
 
 
 # ----------------------------------------------------------------------------- the search
@@ -429,6 +257,8 @@ class _Search:
         self.cut = False
         self.stages: list[dict[str, Any]] = []
         self.raced: list[dict[str, Any]] = []  # candidates a race left out (:meth:`_race`)
+        #: (candidate key, fold name, training limit) -> that fit's model, for a climb
+        self.fold_models: dict[tuple[Any, ...], Any] = {}
         shortest = min(s.n_samples for f in plan.folds for s in f.test)
         self.n_init = int(min(50, max(10, shortest // 10)))
         y = np.vstack([e.y for e in data.experiments])
@@ -554,9 +384,12 @@ class _Search:
         """Each candidate fitted and scored on every fold of ``plan`` (in a worker, the
         stage recorded with its time, progress reported): its fold scores in order, or
         None where the time limit (when ``capped``) cut it, and ``cut`` is then set."""
-        tasks = [_Task(c, fold, limit, self.n_init) for c in candidates for fold in plan.folds]
+        tasks = [self._task(c, fold, limit) for c in candidates for fold in plan.folds]
         t0 = time.perf_counter()
         self.stages.append({"stage": stage, "candidates": len(candidates), "fits": len(tasks)})
+        continued = sum(t.start is not None for t in tasks)
+        if continued:  # fits that start from the fold's model of the degree below
+            self.stages[-1]["continued"] = continued
         if capped and self.expired():
             tasks = []
         count = [0]
@@ -570,6 +403,11 @@ class _Search:
         deadline = self.deadline if capped else None
         results = self.runner.map(_fit_and_score, tasks, done=done, deadline=deadline)
         out: list[list[FoldScore] | None] = []
+        for i, result in enumerate(results):
+            if result is not None and result.model is not None:  # a climb's start, kept here
+                task = tasks[i]
+                self.fold_models[task.candidate.key, task.fold.name, limit] = result.model
+                results[i] = replace(result, model=None)
         for j in range(len(candidates)):
             folds = results[j * k : (j + 1) * k]
             complete = len(folds) == k and all(f is not None for f in folds)
@@ -578,6 +416,15 @@ class _Search:
             self.cut = True
         self.stages[-1]["seconds"] = round(time.perf_counter() - t0, 3)
         return out
+
+    def _task(self, cand: Candidate, fold: Fold, limit: int | None) -> _Task:
+        """The fit of ``cand`` on ``fold``: a climb whose degree below was fitted on the
+        same training data continues from that model (:func:`climb_base`)."""
+        base = climb_base(cand)
+        start = None if base is None else self.fold_models.get((base[0], fold.name, limit))
+        if start is None:
+            return _Task(cand, fold, limit, self.n_init)
+        return _Task(cand, fold, limit, self.n_init, start, base[1])
 
     def final_fits(self, score: Score) -> list[tuple[str, _Started]]:
         """The candidate of ``score`` fitted on all estimation data directly (here, on as

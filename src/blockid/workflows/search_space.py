@@ -93,6 +93,35 @@ class Candidate:
         return Candidate(self.structure, {**self.options, **changes})
 
 
+def climb_base(candidate: Candidate) -> tuple[tuple[Any, ...], int] | None:
+    """For a polynomial state space fitted degree by degree, the key of the candidate
+    whose fit is this one's up to the degree below its top (the same options with that
+    degree: without ``start_degree`` and ``rung_nfev`` when it is the start) and that
+    degree; None for any other candidate. A fold model of that candidate, fitted on the
+    same training data, is where this one's fit continues (identify's climb: the
+    finalist's model is the climb's first rung, bit for bit)."""
+    o = candidate.options
+    if candidate.structure != "polynomial-state-space" or o.get("integrator"):
+        return None
+    if o.get("start_degree") is None or not isinstance(o.get("degree"), int):
+        return None
+    first, below = max(2, int(o["start_degree"])), o["degree"] - 1
+    if below < first:
+        return None
+    if below == first:
+        base = {k: v for k, v in o.items() if k not in ("start_degree", "rung_nfev")}
+        return Candidate(candidate.structure, {**base, "degree": below}).key, below
+    return candidate.with_options(degree=below).key, below
+
+
+def keeps_fold_models(candidate: Candidate) -> bool:
+    """Whether identify keeps this candidate's fold models (small: a polynomial state
+    space) as the starts of a climb one degree up (:func:`climb_base`)."""
+    return candidate.structure == "polynomial-state-space" and not candidate.options.get(
+        "integrator"
+    )
+
+
 def unique(candidates: Iterable[Candidate]) -> list[Candidate]:
     """The candidates in order, each fit once."""
     out, seen = [], set()
