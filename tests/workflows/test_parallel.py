@@ -47,6 +47,35 @@ def test_items_not_started_by_the_deadline_give_none():
     assert out[0] is not None and out[-1] is None
 
 
+def _threads_seen(data, item):
+    """Runs in a worker: the threads a fit may take now ("short") or, polled for up to
+    20 s, once the other item has finished ("long")."""
+    from blockid.fitting.threads import threads_for_fit
+
+    if item == "short":
+        return threads_for_fit()
+    end = time.monotonic() + 20.0
+    while threads_for_fit() < 2 and time.monotonic() < end:
+        time.sleep(0.01)
+    return threads_for_fit()
+
+
+def test_the_last_running_fit_takes_the_cores_the_others_left():
+    """Two items on two workers: one thread each while both run; once the short one has
+    finished, the long one's fit may take both cores (the allowance is read at each
+    iteration); here, in this process, nothing changes."""
+    from blockid.fitting.threads import threads_for_fit
+    from blockid.workflows.parallel import available_cores
+
+    if available_cores() < 2:
+        pytest.skip("needs two cores")
+    before = threads_for_fit()
+    with TaskRunner(_data(), 2) as pool:
+        short, long = pool.map(_threads_seen, ["short", "long"])
+    assert short == 1 and long == 2
+    assert threads_for_fit() == before
+
+
 def _fit_cpu_share(data, item):
     """Runs in a worker: CPU time of the whole process over that of this thread during a
     fit (1.0 when no other thread of the worker runs)."""

@@ -28,6 +28,7 @@ __all__ = [
     "fit_threads",
     "kernel_threads",
     "set_fit_threads",
+    "share_threads",
     "threads_for_fit",
 ]
 
@@ -38,6 +39,9 @@ TILE = 448
 MIN_TILE = 64
 
 _limit: int | None = None  # None: every core the process may use
+#: A one-element array a worker process's fits read their thread allowance from
+#: (:func:`share_threads`); None: no allowance beyond the limit.
+_shared: np.ndarray | None = None
 
 
 def _cores() -> int:
@@ -48,8 +52,21 @@ def _cores() -> int:
 
 
 def threads_for_fit() -> int:
-    """The threads a fit started now may use (:func:`fit_threads`, else every core)."""
-    return max(1, _cores() if _limit is None else min(_limit, _cores()))
+    """The threads a fit may use now (:func:`fit_threads`, else every core; raised to
+    the allowance of :func:`share_threads` when one is shared); a fit asks at each
+    iteration, so an allowance raised while it runs is taken from its next one."""
+    n = _cores() if _limit is None else _limit
+    if _shared is not None:
+        n = max(n, int(_shared[0]))
+    return max(1, min(n, _cores()))
+
+
+def share_threads(allowance: np.ndarray | None) -> None:
+    """Every later fit of this process may take ``int(allowance[0])`` threads, read at
+    each of its iterations (a worker of :class:`~blockid.workflows.parallel.TaskRunner`,
+    whose runner raises it while cores are idle); None: no shared allowance."""
+    global _shared
+    _shared = allowance
 
 
 def set_fit_threads(n: int | None) -> None:

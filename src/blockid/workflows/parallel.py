@@ -28,6 +28,14 @@ merges them gives the same answer with one worker or two.
   each task runs with one thread in every pool, like a local worker, so the results are
   those of ``jobs = 1`` bit for bit. The workers must be able to import blockid (the
   same version: the arithmetic is the same only with the same code).
+* **The last fits take the idle cores.** While fewer items are unfinished than there
+  are workers (the last wave of a stage: three folds on two workers leave one core
+  idle while the third fit runs), each running fit may take ``jobs // unfinished``
+  threads: the runner writes that allowance into the shared memory after every
+  result, and a worker's fit reads it at each of its iterations
+  (:func:`blockid.fitting.threads.share_threads`; the workers' numba pools are sized
+  to ``jobs`` for it, BLAS stays at one thread). A fit's result does not depend on its
+  threads (:mod:`blockid.fitting.threads`), so neither does the search's.
 * **A cap, not a budget.** :meth:`TaskRunner.map` takes a ``deadline`` (a
   :func:`time.monotonic` value): items not started by then are cancelled and their
   results are None. The caller says so; nothing else depends on the clock.
@@ -108,6 +116,12 @@ def _views(buffer: Any, data_meta: tuple[Any, ...]) -> Dataset:
     return Dataset(list(inputs), list(outputs), ts, exps, source)
 
 
+def _allowance(buffer: Any, floats: int) -> np.ndarray:
+    """The one-float slot after the record in the shared block: the threads each running
+    fit may take (:meth:`TaskRunner.map` writes it, the workers' fits read it)."""
+    return np.ndarray((1,), dtype=np.float64, buffer=buffer, offset=floats * 8)
+
+
 def _start_worker(memory_name: str, data_meta: tuple[Any, ...]) -> None:
     """Worker initialiser: map the shared record, limit the thread pools."""
     global _WORKER_DATA, _WORKER_MEMORY
@@ -118,9 +132,14 @@ def _start_worker(memory_name: str, data_meta: tuple[Any, ...]) -> None:
     _WORKER_MEMORY = shared_memory.SharedMemory(name=memory_name)
     _WORKER_DATA = _views(_WORKER_MEMORY.buf, data_meta)
     _single_threaded()  # for the life of the worker (the environment already says so)
-    from blockid.fitting.threads import set_fit_threads
+    from blockid.fitting.threads import set_fit_threads, share_threads
 
-    set_fit_threads(1)  # the workers share the cores already: one thread per fit
+    set_fit_threads(1)  # the workers share the cores already: one thread per fit,
+    floats = sum(n for _, n in data_meta[4]) * (len(data_meta[0]) + len(data_meta[1]))
+    share_threads(_allowance(_WORKER_MEMORY.buf, floats))  # more when cores fall idle
+    import numba
+
+    numba.set_num_threads(1)  # outside a fit's kernel_threads, as the environment said
 
 
 def _call(fn: Callable[[Dataset, Any], Any], item: Any) -> Any:
@@ -184,6 +203,7 @@ class TaskRunner:
         self._own_client = False
         self._scattered: Any = None
         self._submitted: list[Any] = []
+        self._allowance: np.ndarray | None = None
 
     def __enter__(self) -> TaskRunner:
         if self.scheduler is not None:
@@ -234,7 +254,9 @@ class TaskRunner:
         from loky import ProcessPoolExecutor
 
         shapes, floats = _layout(self.data)
-        self._memory = shared_memory.SharedMemory(create=True, size=max(floats, 1) * 8)
+        self._memory = shared_memory.SharedMemory(create=True, size=(floats + 1) * 8)
+        self._allowance = _allowance(self._memory.buf, floats)
+        self._allowance[0] = 1.0
         flat = np.ndarray((floats,), dtype=np.float64, buffer=self._memory.buf)
         at = 0
         for e in self.data.experiments:
@@ -252,7 +274,7 @@ class TaskRunner:
             max_workers=self.jobs,
             initializer=_start_worker,
             initargs=(self._memory.name, meta),
-            env=WORKER_ENV,
+            env={**WORKER_ENV, "NUMBA_NUM_THREADS": str(self.jobs)},  # the allowance's room
         )
 
     def close(self) -> None:
@@ -273,6 +295,7 @@ class TaskRunner:
             self._pool.shutdown(wait=True)
             self._pool = None
         if self._memory is not None:
+            self._allowance = None  # (a view on the block: released before it is closed)
             self._memory.close()
             self._memory.unlink()
             self._memory = None
@@ -309,6 +332,7 @@ class TaskRunner:
         futures = {self._pool.submit(_call, fn, item): i for i, item in enumerate(items)}
         self._submitted = list(futures)
         pending = set(futures)
+        self._share(len(pending))
         while pending:
             timeout = None if deadline is None else max(deadline - time.monotonic(), 0.0)
             finished, pending = wait(pending, timeout=timeout, return_when=FIRST_COMPLETED)
@@ -319,11 +343,18 @@ class TaskRunner:
                 results[i] = future.result()
                 if done is not None:
                     done(i, results[i])
+            self._share(len(pending))
             if deadline is not None and time.monotonic() > deadline:
                 for future in pending:
                     future.cancel()  # those already running finish; the rest do not start
                 deadline = None  # then wait for the running ones without a timeout
+        self._share(0)
         return results
+
+    def _share(self, unfinished: int) -> None:
+        """Each running fit may take ``jobs // unfinished`` threads (at least one)."""
+        if self._allowance is not None:
+            self._allowance[0] = float(max(1, self.jobs // max(unfinished, 1)))
 
     def _map_cluster(
         self,
