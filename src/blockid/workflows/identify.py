@@ -257,7 +257,7 @@ class _Search:
         self.cut = False
         self.stages: list[dict[str, Any]] = []
         self.raced: list[dict[str, Any]] = []  # candidates a race left out (:meth:`_race`)
-        #: (candidate key, fold name, training limit) -> that fit's model, for a climb
+        #: (candidate key, training segments, limit) -> that fit's model, for a climb
         self.fold_models: dict[tuple[Any, ...], Any] = {}
         shortest = min(s.n_samples for f in plan.folds for s in f.test)
         self.n_init = int(min(50, max(10, shortest // 10)))
@@ -406,7 +406,7 @@ class _Search:
         for i, result in enumerate(results):
             if result is not None and result.model is not None:  # a climb's start, kept here
                 task = tasks[i]
-                self.fold_models[task.candidate.key, task.fold.name, limit] = result.model
+                self.fold_models[task.candidate.key, task.fold.train, limit] = result.model
                 results[i] = replace(result, model=None)
         for j in range(len(candidates)):
             folds = results[j * k : (j + 1) * k]
@@ -421,7 +421,7 @@ class _Search:
         """The fit of ``cand`` on ``fold``: a climb whose degree below was fitted on the
         same training data continues from that model (:func:`climb_base`)."""
         base = climb_base(cand)
-        start = None if base is None else self.fold_models.get((base[0], fold.name, limit))
+        start = None if base is None else self.fold_models.get((base[0], fold.train, limit))
         if start is None:
             return _Task(cand, fold, limit, self.n_init)
         return _Task(cand, fold, limit, self.n_init, start, base[1])
