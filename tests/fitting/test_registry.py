@@ -185,6 +185,66 @@ def test_every_method_resolves_to_its_fitter_with_the_keywords_it_takes():
         assert kt.passes == ("structure",) and kt.recursive
 
 
+def test_every_structure_holds_its_model_class_loader_not_a_string():
+    """Issue 33 item 5 (no code in strings): the registry named its model classes as
+    ``"module:Class"`` text, resolved by importlib, which refactoring tools and the import
+    graph cannot see. They are loaders now (fitting/_targets.py), each returning the very
+    class it is named after."""
+    import dataclasses
+    import re
+
+    from blockid.fitting import _targets
+    from blockid.models.base import Model
+
+    dotted = re.compile(r"^[A-Za-z_][\w.]*:[A-Za-z_]\w*$")
+    for s in STRUCTURES.values():
+        for f in dataclasses.fields(s):
+            value = getattr(s, f.name)
+            assert not (isinstance(value, str) and dotted.match(value)), (s.name, f.name)
+        assert callable(s.model_loader) and not isinstance(s.model_loader, str)
+        assert s.model_loader.__module__ == _targets.__name__
+        cls = s.model_class()
+        assert isinstance(cls, type) and issubclass(cls, Model)
+        assert s.model_loader.__name__ == cls.__name__  # named after what it returns
+        assert cls.__module__.startswith("blockid.models.")
+
+
+def test_the_registry_writes_no_model_class_as_text():
+    """No ``"package.module:Class"`` literal in the registry's source: a string model
+    class coming back fails here. The estimators are still named as text (every fitting
+    module imports the registry, so a loader of one would close an import circle); the
+    only such literals allowed are those, under ``blockid.fitting``."""
+    import ast
+    import re
+
+    from blockid.fitting import registry
+
+    tree = ast.parse(inspect.getsource(registry))
+    dotted = re.compile(r"^\s*[A-Za-z_]\w*(\.\w+)+:\w+\s*$")
+    texts = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)]
+    named = {t.strip() for t in texts if isinstance(t, str) and dotted.match(t)}
+    methods = {m.target for s in STRUCTURES.values() for m in s.methods}
+    assert named == methods
+    assert all(t.startswith("blockid.fitting.") for t in named)
+
+
+def test_importing_the_registry_loads_no_model_or_estimator():
+    """The loaders keep the registry cheap to import (the command line reads it before
+    NumPy): no model, fitting module or numerical library is imported with it."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, blockid.fitting.registry\n"
+        "loaded = [m for m in sys.modules if m.split('.')[0] in "
+        "('numpy', 'scipy', 'numba', 'pandas') or m.startswith('blockid.models')\n"
+        "          or m.startswith('blockid.fitting.') and m not in "
+        "('blockid.fitting.registry', 'blockid.fitting._targets')]\n"
+        "assert not loaded, loaded\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
 def test_method_options_by_declaration():
     s = STRUCTURES["hammerstein-wiener"]
     se, kt = s.methods

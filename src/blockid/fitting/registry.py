@@ -35,8 +35,8 @@ in the default search, its ``slots`` name the block options every block family f
 (:attr:`blockid.blocks.base.Block.search_specs`), and ``search`` adds fixed option sets.
 A new structure or block is searched without editing the search.
 
-Modules are named as text and imported only when a fit runs, so that importing the
-registry (and starting the command line) stays cheap.
+Estimators are named as text and model classes by loaders (:mod:`blockid.fitting._targets`),
+imported only when a fit runs, so that importing the registry (and the CLI) stays cheap.
 """
 
 from __future__ import annotations
@@ -49,6 +49,7 @@ from typing import Any
 
 from blockid.defaults import RECURSIVE
 from blockid.errors import ParameterError
+from blockid.fitting import _targets
 
 __all__ = [
     "COMPARED_BY_DEFAULT",
@@ -561,10 +562,10 @@ class Method:
 
 @dataclass(frozen=True)
 class Structure:
-    """A model structure: name, model class, blocks, and its methods (default first)."""
+    """A model structure: name, model class (its loader), blocks, methods (default first)."""
 
     name: str
-    model: str
+    model_loader: Callable[[], type]
     help: str
     methods: tuple[Method, ...]
     #: Options every method of the structure takes (handled by fit_model itself).
@@ -622,8 +623,7 @@ class Structure:
         return self.common + self.method(method).options
 
     def model_class(self) -> type:
-        module, name = self.model.split(":")
-        return getattr(importlib.import_module(module), name)
+        return self.model_loader()
 
 
 _ORDERS = ("na", "nb", "nk")
@@ -678,7 +678,7 @@ STRUCTURES: dict[str, Structure] = {
     for s in (
         Structure(
             "arx",
-            "blockid.models.arx:ARX",
+            _targets.ARX,
             "linear ARX, multi-input multi-output (MATLAB na/nb/nk)",
             (
                 _arx_method("batch", (), "batch least squares (QR)"),
@@ -704,7 +704,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "hammerstein",
-            "blockid.models.block:Hammerstein",
+            _targets.Hammerstein,
             "static input block, then a linear block (N1-L)",
             _block_methods(("r1", "input_block", "integrator"), _key_term(("r1",))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
@@ -713,7 +713,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "wiener",
-            "blockid.models.block:Wiener",
+            _targets.Wiener,
             "linear block, then a static output block (L-N2)",
             _block_methods(("r2", "output_block"), _key_term(("r2",))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
@@ -723,7 +723,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "hammerstein-wiener",
-            "blockid.models.block:HammersteinWiener",
+            _targets.HammersteinWiener,
             "input block, linear block, output block (N1-L-N2, paper B)",
             _block_methods(("r1", "r2", "input_block", "output_block"), _key_term(("r1", "r2"))),
             common=_ORDERS + ("center", "refine", "standard_errors"),
@@ -732,7 +732,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "backlash",
-            "blockid.models.block:BacklashModel",
+            _targets.BacklashModel,
             "backlash, then a linear block (paper A's pseudo-Hammerstein)",
             _block_methods(
                 ("integrator",),
@@ -750,7 +750,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "output-error",
-            "blockid.models.block:OutputError",
+            _targets.OutputError,
             "linear output-error model B/A, fitted on free-run simulation error",
             (
                 Method(
@@ -771,7 +771,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "wiener-hammerstein",
-            "blockid.models.block:WienerHammerstein",
+            _targets.WienerHammerstein,
             "linear, static polynomial, linear (L1-N-L2), from the split of the BLA",
             (
                 Method(
@@ -790,7 +790,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "state-space",
-            "blockid.models.state_space:StateSpace",
+            _targets.StateSpace,
             "linear state space x(k+1) = A x + B u, y = C x + D u, multi-input multi-output: "
             "subspace (MOESP or CVA), refined on the free-run error",
             (
@@ -814,7 +814,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "polynomial-state-space",
-            "blockid.models.state_space:PolynomialStateSpace",
+            _targets.PolynomialStateSpace,
             "polynomial nonlinear state space (PNLSS): A x + B u + E z(x, u), C x + D u + "
             "F z(x, u), monomials z of degree 2..r, started from the linear state space",
             (
@@ -834,7 +834,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "block-state-space",
-            "blockid.models.block_state_space:BlockStateSpace",
+            _targets.BlockStateSpace,
             "a static block per input and/or output channel around a linear state space "
             "(Hammerstein, Wiener, Hammerstein-Wiener of several inputs and outputs)",
             (
@@ -891,7 +891,7 @@ STRUCTURES: dict[str, Structure] = {
         ),
         Structure(
             "feedback",
-            "blockid.models.feedback:LinearFeedback",
+            _targets.LinearFeedback,
             "linear block with a static nonlinearity of the output (polynomial, dead zone, "
             "saturation, piecewise-linear) fed back to its input (Lur'e form: Duffing "
             "oscillator, Silverbox)",
