@@ -46,6 +46,7 @@ estimates from more (:mod:`blockid.models.initial_state`) is not exported.
 from __future__ import annotations
 
 import json
+from importlib.resources import files
 from typing import Any
 
 import numpy as np
@@ -449,49 +450,20 @@ def _spec(model: Any) -> dict[str, Any]:
     )
 
 
-_HEADER = '''"""{title}
-
-Exported by blockid {version} ({what}). Self-contained: needs NumPy only.
-
-    simulate(u, y0=None) -> array (N, {ny})
-
-is the free-run simulation of blockid's ``simulate``: ``u`` has shape (N,) or (N, {nu})
-(inputs {inputs}); without ``y0`` the model starts at rest at its operating point, with
-``y0`` (the first measured outputs, at least {max_lag} of them; later ones are not
-used) it starts from them as blockid does. ``MODEL`` is the model file's description;
-``SPEC`` what simulation needs.
-"""
-
-import json
-
-import numpy as np
-
-__all__ = ["INPUTS", "MODEL", "OUTPUTS", "SAMPLING_TIME", "simulate"]
-
-MODEL = json.loads(
-    r"""
-{model}
-"""
-)
-SPEC = json.loads(
-    r"""
-{spec}
-"""
-)
-INPUTS = MODEL["inputs"]
-OUTPUTS = MODEL["outputs"]
-SAMPLING_TIME = MODEL.get("sampling_time")
-'''
+#: The module's header, a template filled by :func:`to_python_module` (``str.format``).
+_HEADER_FILE = "export_header.txt"
 
 #: The line after which ``_export_runtime.py`` is the module's runtime.
 _MARKER = "# --- runtime: copied from here ---\n"
 
 
+def _resource(name: str) -> str:
+    return files("blockid.models").joinpath(name).read_text(encoding="utf-8")
+
+
 def _runtime() -> str:
     """The interpreter of the module (``_export_runtime.py`` below its marker)."""
-    from importlib.resources import files
-
-    text = files("blockid.models").joinpath("_export_runtime.py").read_text(encoding="utf-8")
+    text = _resource("_export_runtime.py")
     return "\n\n" + text[text.index(_MARKER) + len(_MARKER) :]
 
 
@@ -524,7 +496,7 @@ def to_python_module(model: Any) -> str:
         f"{description['structure']} model from {', '.join(model.inputs)} to "
         f"{', '.join(model.outputs)}."
     )
-    header = _HEADER.format(
+    header = _resource(_HEADER_FILE).format(
         title=title[0].upper() + title[1:],
         version=__version__,
         what="blockid export",
