@@ -183,3 +183,166 @@ def test_export_messages_are_exact():
         "2 input(s) and 1 output(s): export it as a Python module, or as one state space "
         "with to_control(model)"
     )
+
+
+# ----------------------------------------------------------------------------- block rules
+def test_the_module_holds_the_rules_of_the_models_blocks_only():
+    from blockid.blocks import DeadZone, TwoSegmentPolynomial
+    from blockid.models import HammersteinWiener
+    from blockid.models.export import to_python_module
+
+    model = HammersteinWiener(
+        "u", "y", input_block=TwoSegmentPolynomial([0.0, 1.0], [0.0, -0.5]),
+        output_block=Polynomial([1.0, 0.2], constant=False), na=1, nb=1, nk=1, a=[-0.5],
+        b=[1.0],
+    )  # fmt: skip
+    text = to_python_module(model)
+    assert "def _block_two_segment_polynomial():" in text
+    assert "    # 'polynomial': blockid.blocks.polynomial.Polynomial.export_source\n" in text
+    ns = _module(model)
+    assert list(ns["_BLOCKS"]) == ["two-segment-polynomial", "polynomial"]
+    assert ns["_BLOCKS"]["polynomial"]["tangent"] is True
+    assert set(ns["_BLOCKS"]["polynomial"]) == {"evaluate", "slope", "tangent"}
+    dz = _module(Hammerstein("u", "y", input_block=DeadZone(-0.5, 0.5), na=1, nb=1, nk=1,
+                             a=[-0.5], b=[1.0]))  # fmt: skip
+    assert list(dz["_BLOCKS"]) == ["dead-zone"] and dz["_BLOCKS"]["dead-zone"]["tangent"] is False
+    assert _module(ARX(["u"], ["y"], 1, 1, 1))["_BLOCKS"] == {}
+
+
+def test_the_header_is_the_template_file_filled_in():
+    from importlib.resources import files
+
+    from blockid.models.export import to_python_module
+
+    template = files("blockid.models").joinpath("export_header.txt").read_text(encoding="utf-8")
+    text = to_python_module(ARX(["u"], ["y"], 1, 1, 1))
+    head, tail = template.split("{title}", 1)
+    assert text.startswith(head + "Arx model from u to y.")
+    assert template.endswith('SAMPLING_TIME = MODEL.get("sampling_time")\n')
+    assert 'SAMPLING_TIME = MODEL.get("sampling_time")\n\n\n# --- blocks:' in text
+
+
+class _Plain:
+    """A static block's parts for the refusal tests (subclassed with StaticBlock)."""
+
+    @property
+    def parameters(self):
+        return {}
+
+    def __call__(self, u):
+        return np.asarray(u, dtype=float)
+
+
+def _refusal(model) -> str:
+    from blockid.errors import ParameterError
+    from blockid.models.export import to_python_module
+
+    with pytest.raises(ParameterError) as info:
+        to_python_module(model)
+    return str(info.value)
+
+
+def test_a_block_the_module_cannot_run_is_refused_naming_its_kind_and_why():
+    from blockid.blocks import BLOCK_TYPES, LinearBlock
+    from blockid.blocks.base import StaticBlock
+    from blockid.blocks.integrator import Integrator
+    from blockid.models.block import ChainModel
+
+    class NoRule(_Plain, StaticBlock):
+        kind = "test-no-rule"
+
+    class Broken(_Plain, StaticBlock):
+        kind = "test-broken-rule"
+        export_source = "def evaluate(p, s)\n    return s\n"
+
+    class Misnamed(_Plain, StaticBlock):
+        kind = "test-misnamed-rule"
+        export_source = "def value(p, s):\n    return s\n"
+
+    class Unnamed(_Plain, StaticBlock):
+        pass
+
+    def hammerstein(block):
+        return Hammerstein("u", "y", input_block=block, na=1, nb=1, nk=1, a=[-0.5], b=[1.0])
+
+    try:
+        assert _refusal(hammerstein(NoRule())) == (
+            "cannot export the 'test-no-rule' block (NoRule): its class gives no "
+            "export_source, the NumPy source of its evaluation that the module copies "
+            "(docs/extending.md)"
+        )
+        assert _refusal(hammerstein(Broken())) == (
+            "cannot export the 'test-broken-rule' block (Broken): its export_source is not "
+            "Python (expected ':', line 1)"
+        )
+        assert _refusal(hammerstein(Misnamed())) == (
+            "cannot export the 'test-misnamed-rule' block (Misnamed): its export_source "
+            "defines no evaluate(p, ...)"
+        )
+        assert _refusal(hammerstein(Unnamed())) == (
+            "cannot export a Unnamed block: it has no kind, the name the module would find "
+            "its rule by"
+        )
+    finally:
+        for kind in ("test-no-rule", "test-broken-rule", "test-misnamed-rule"):
+            del BLOCK_TYPES[kind]
+    chain = ChainModel(["u"], ["y"], [LinearBlock(1, 1, 1, [-0.5], [1.0]), Integrator()])
+    assert _refusal(chain) == (
+        "cannot export the 'integrator' block (Integrator): the module runs the linear "
+        "block of kind 'linear' (a, b, nk) only"
+    )
+
+
+def test_a_slope_the_model_needs_and_the_rule_lacks_is_refused():
+    """A block with its own derivative, continued along its tangent, needs its slope in
+    the module too; without a derivative of its own blockid's central differences are
+    taken, in the module as in blockid."""
+    from blockid.blocks import BLOCK_TYPES
+
+    class Cube(Polynomial):
+        kind = "test-cube-rule"
+        export_source = "def evaluate(p, s):\n    return _polyval(s, [0.0, *p['coefficients']])\n"
+
+    try:
+        model = Wiener("u", "y", output_block=Cube([1.0, 0.0, 0.1], constant=False), na=1,
+                       nb=1, nk=1, a=[-0.5], b=[1.0])  # fmt: skip
+        _module(model)  # no range recorded: no tangent, no slope needed
+        ranged = model.replace(ranges={"u": [-1.0, 1.0], "x": [-1.0, 1.0]})
+        assert _refusal(ranged) == (
+            "cannot export the 'test-cube-rule' block (Cube): the model continues it along "
+            "its tangent outside its estimation range, and its export_source defines no "
+            "slope(p, s) for its own derivative"
+        )
+    finally:
+        del BLOCK_TYPES["test-cube-rule"]
+
+
+def test_two_blocks_of_one_kind_with_two_rules_are_refused():
+    from blockid.blocks import DeadZone, LinearBlock
+    from blockid.models.block import ChainModel
+
+    class Other(DeadZone):  # the kind inherited: not registered
+        export_source = "def evaluate(p, s):\n    return s\n"
+
+    first, linear = DeadZone(-0.1, 0.1), LinearBlock(1, 1, 1, [-0.5], [1.0])
+    assert _refusal(ChainModel(["u"], ["y"], [first, linear, Other(-0.2, 0.2)])) == (
+        "cannot export the 'dead-zone' block (Other): another block of the model has its "
+        "kind and another rule"
+    )
+
+
+def test_a_subclass_that_changes_the_evaluation_gives_its_own_rule():
+    """An inherited export_source would simulate the parent block: refused."""
+    from blockid.blocks import DeadZone
+
+    class Doubled(DeadZone):  # the kind inherited: not registered
+        def __call__(self, u):
+            return 2.0 * super().__call__(u)
+
+    model = Hammerstein("u", "y", input_block=Doubled(-0.1, 0.1), na=1, nb=1, nk=1,
+                        a=[-0.5], b=[1.0])  # fmt: skip
+    assert _refusal(model) == (
+        "cannot export the 'dead-zone' block (Doubled): Doubled changes __call__ and "
+        "inherits the export_source of DeadZone, which would simulate the parent: give "
+        "Doubled its own"
+    )

@@ -68,6 +68,22 @@ class Backlash(DynamicBlock):
     """
 
     kind: ClassVar[str] = "backlash"
+    export_source: ClassVar[str | None] = """
+def run(p, u):  # from the middle of the dead band at the first input (rest_state)
+    m_left, c_left, m_right, c_right = p["m_left"], p["c_left"], p["m_right"], p["c_right"]
+    x = np.empty(len(u))
+    if len(u) == 0:
+        return x
+    u0 = float(u[0])
+    prev = 0.5 * (m_left * (u0 + c_left) + m_right * (u0 - c_right))
+    for t, ut in enumerate(u.tolist()):
+        if ut < prev / m_left - c_left:
+            prev = m_left * (ut + c_left)
+        elif ut > prev / m_right + c_right:
+            prev = m_right * (ut - c_right)
+        x[t] = prev
+    return x
+"""
 
     def __init__(self, m_left: float, c_left: float, m_right: float, c_right: float) -> None:
         self.m_left = _check_parameter("m_left", m_left, positive=True)

@@ -169,6 +169,18 @@ class Block(ABC):
     #: has it), around the operating point when not (a 2-10 V signal has no use for a
     #: break at 0 V) (:func:`blockid.fitting.dispatch.default_centring`).
     anchored: ClassVar[bool] = False
+    #: The block's own rule in the NumPy-only module ``blockid export --to python``
+    #: writes (:func:`blockid.models.export.to_python_module`): Python source that uses
+    #: ``np`` (and the module's ``_polyval(x, c)``, ``_derivative(c)``) and nothing else,
+    #: with ``p`` the block's :meth:`to_dict` as JSON gives it back (lists, floats) and
+    #: ``s``, ``u`` float arrays. A static block's defines ``evaluate(p, s)`` (its
+    #: output) and, if the block has its own :meth:`StaticBlock.derivative` and the
+    #: module needs a slope (a tangent beyond the estimation range, a block state
+    #: space), ``slope(p, s)`` (without it the module takes the default's central
+    #: differences); a dynamic block's defines ``run(p, u)`` (its output from
+    #: :meth:`DynamicBlock.rest_state`). Each must give the block's numbers operation by
+    #: operation. None: the block is not exported (the export says so).
+    export_source: ClassVar[str | None] = None
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)

@@ -83,6 +83,8 @@ class FreePiecewiseLinear(PiecewiseLinear):
     size_option: ClassVar[str | None] = "knots"
     search_priority: ClassVar[int] = 2
     linear_in_parameters = False
+    #: The same map, its derivative the same slope (:class:`PiecewiseLinear`'s).
+    export_source: ClassVar[str | None] = PiecewiseLinear.export_source
 
     # ------------------------------------------------------------------ parameters
     def vector_names(self, rename: dict[str, str] | None = None) -> list[str]:

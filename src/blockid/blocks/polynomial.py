@@ -116,6 +116,17 @@ class Polynomial(_PlottableStaticBlock):
     search_priority: ClassVar[int] = 0
     linear_in_parameters = True
     warn_extrapolation = True
+    export_source: ClassVar[str | None] = """
+def _powers(p):
+    c = [float(v) for v in p["coefficients"]]
+    return np.array(c if p.get("constant", True) else [0.0] + c)
+
+def evaluate(p, s):
+    return _polyval(s, _powers(p))
+
+def slope(p, s):
+    return _polyval(s, _derivative(_powers(p)))
+"""
 
     def __init__(self, coefficients: Sequence[float], constant: bool = True) -> None:
         self.coefficients = _float_vector("coefficients", coefficients)
@@ -471,6 +482,13 @@ class TwoSegmentPolynomial(_PlottableStaticBlock):
     search_priority: ClassVar[int] = 1
     linear_in_parameters = True
     warn_extrapolation = True
+    export_source: ClassVar[str | None] = """
+def evaluate(p, s):
+    return _polyval(s, np.array(p["f"])) + (s < 0) * _polyval(s, np.array(p["p"]))
+
+def slope(p, s):
+    return _polyval(s, _derivative(p["f"])) + (s < 0) * _polyval(s, _derivative(p["p"]))
+"""
 
     def __init__(self, f: Sequence[float], p: Sequence[float]) -> None:
         self.f = _float_vector("f", f)

@@ -153,6 +153,15 @@ class DeadZone(_PlottableStaticBlock):
         "feedback": "dead-zone",
     }
     search_priority: ClassVar[int] = 4
+    export_source: ClassVar[str | None] = """
+def evaluate(p, s):
+    return p["slope_left"] * np.minimum(s - p["lower"], 0.0) + p["slope_right"] * np.maximum(
+        s - p["upper"], 0.0
+    )
+
+def slope(p, s):
+    return p["slope_left"] * (s < p["lower"]) + p["slope_right"] * (s > p["upper"])
+"""
 
     def __init__(
         self, lower: float, upper: float, slope_left: float = 1.0, slope_right: float = 1.0
@@ -287,6 +296,14 @@ class Saturation(_PlottableStaticBlock):
         "feedback": "saturation",
     }
     search_priority: ClassVar[int] = 3
+    export_source: ClassVar[str | None] = """
+def evaluate(p, s):
+    return np.clip(p["slope"] * s, p["lower"], p["upper"])
+
+def slope(p, s):
+    v = p["slope"] * s
+    return p["slope"] * ((v >= p["lower"]) & (v <= p["upper"]))
+"""
 
     def __init__(self, lower: float, upper: float, slope: float = 1.0) -> None:
         self.lower = _float_scalar("lower", lower)
@@ -400,6 +417,21 @@ class PiecewiseLinear(_PlottableStaticBlock):
     size_option: ClassVar[str | None] = "knots"
     search_priority: ClassVar[int] = 5
     linear_in_parameters = True
+    export_source: ClassVar[str | None] = """
+def _segments(p, s):
+    bp, v = np.array(p["breakpoints"]), np.array(p["values"])
+    j = np.clip(np.searchsorted(bp, s, side="right") - 1, 0, bp.size - 2)
+    return bp, v, j
+
+def evaluate(p, s):
+    bp, v, j = _segments(p, s)
+    t = (s - bp[j]) / (bp[j + 1] - bp[j])
+    return v[j] + t * (v[j + 1] - v[j])
+
+def slope(p, s):
+    bp, v, j = _segments(p, s)
+    return (v[j + 1] - v[j]) / (bp[j + 1] - bp[j])
+"""
 
     def __init__(self, breakpoints: Sequence[float], values: Sequence[float]) -> None:
         self.breakpoints = _float_vector("breakpoints", breakpoints, min_length=2)

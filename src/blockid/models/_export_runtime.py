@@ -1,12 +1,17 @@
 """The runtime of a model exported by :func:`blockid.models.export.to_python_module`.
 
-Everything below the marker line is copied, as text, into every exported module after
-its header (which defines ``MODEL``, ``SPEC``, ``INPUTS``, ``OUTPUTS`` and
-``SAMPLING_TIME`` and imports ``json`` and NumPy): one rule per block kind, copied from
-blockid's blocks (and kernels) operation by operation, so that results agree to
-rounding. It is a real module so that the linter, the coverage and the mutation tools
-read it; it needs NumPy only, and nothing of blockid. The names above the marker stand
-for the header's; ``tests/test_export.py`` also runs this file's functions here.
+Everything below the marker line is copied, as text, at the end of every exported
+module, after its header (``export_header.txt``: ``MODEL``, ``SPEC``, ``INPUTS``,
+``OUTPUTS`` and ``SAMPLING_TIME``, ``json`` and NumPy) and the rules of the blocks the
+model holds (``_BLOCKS``). It runs the structures (chains, the feedback loop, ARX, state
+spaces) and the linear block, copied from blockid operation by operation so that results
+agree to rounding; it knows no block kind: a static block is evaluated by its own rule,
+``_BLOCKS[kind]["evaluate"]`` (and ``["slope"]``), which the exporter copies from the
+block's class (:attr:`blockid.blocks.base.Block.export_source`). ``_polyval`` and
+``_derivative`` are helpers those rules may use. It is a real module so that the linter,
+the coverage and the mutation tools read it; it needs NumPy only, and nothing of
+blockid. The names above the marker stand for the header's and the blocks';
+``tests/test_export.py`` also runs this file's functions here.
 """
 
 import numpy as np
@@ -15,6 +20,7 @@ MODEL: dict = {}
 SPEC: dict = {}
 INPUTS: list = []
 OUTPUTS: list = []
+_BLOCKS: dict = {}
 
 __all__ = ["simulate"]  # the exported module's header declares its own
 
@@ -35,32 +41,6 @@ def _polyval(x, c):
     return value
 
 
-def _powers(p):
-    c = [float(v) for v in p["coefficients"]]
-    return np.array(c if p.get("constant", True) else [0.0] + c)
-
-
-def _static(p, s):
-    """A memoryless block on the signal ``s``."""
-    kind = p["kind"]
-    if kind == "polynomial":
-        return _polyval(s, _powers(p))
-    if kind == "two-segment-polynomial":
-        return _polyval(s, np.array(p["f"])) + (s < 0) * _polyval(s, np.array(p["p"]))
-    if kind == "dead-zone":
-        return p["slope_left"] * np.minimum(s - p["lower"], 0.0) + p["slope_right"] * np.maximum(
-            s - p["upper"], 0.0
-        )
-    if kind == "saturation":
-        return np.clip(p["slope"] * s, p["lower"], p["upper"])
-    if kind in ("piecewise-linear", "piecewise-linear-free"):
-        bp, v = np.array(p["breakpoints"]), np.array(p["values"])
-        j = np.clip(np.searchsorted(bp, s, side="right") - 1, 0, bp.size - 2)
-        t = (s - bp[j]) / (bp[j + 1] - bp[j])
-        return v[j] + t * (v[j + 1] - v[j])
-    raise ValueError("unknown block kind " + repr(kind))
-
-
 def _derivative(c):
     """Coefficients of the derivative (numpy.polynomial.polynomial.polyder)."""
     c = np.asarray(c, dtype=float)
@@ -69,20 +49,31 @@ def _derivative(c):
     return np.array([j * c[j] for j in range(1, c.size)])
 
 
+def _static(p, s):
+    """A memoryless block on the signal ``s``: its own rule."""
+    return _BLOCKS[p["kind"]]["evaluate"](p, s)
+
+
 def _slope(p, s):
-    """dN/du of the blocks that continue along their tangent."""
-    if p["kind"] == "polynomial":
-        return _polyval(s, _derivative(_powers(p)))
-    return _polyval(s, _derivative(p["f"])) + (s < 0) * _polyval(s, _derivative(p["p"]))
+    """dN/ds of a static block: its own rule, else central differences as blockid's
+    default ``StaticBlock.derivative`` takes them."""
+    slope = _BLOCKS[p["kind"]].get("slope")
+    if slope is not None:
+        return slope(p, s)
+    h = 1e-6 * np.maximum(1.0, np.abs(s))
+    up, down = _static(p, s + h), _static(p, s - h)
+    return (np.asarray(up, dtype=float) - np.asarray(down, dtype=float)) / (2.0 * h)
 
 
 def _apply(i, p, s):
-    """Block ``i`` of the chain on ``s``, from rest; a polynomial block continues along
-    its tangent beyond the input range recorded in estimation (``SPEC["tangents"]``)."""
+    """Block ``i`` of the chain on ``s``, from rest; a block that extrapolates unreliably
+    (a polynomial) continues along its tangent beyond the input range recorded in
+    estimation (``SPEC["tangents"]``)."""
     if p["kind"] == "linear":
         return _linear(p, s)
-    if p["kind"] == "backlash":
-        return _backlash(p, s)
+    block = _BLOCKS[p["kind"]]
+    if "run" in block:  # a block with memory (backlash), from rest
+        return block["run"](p, s)
     out = _static(p, s)
     seen = SPEC["tangents"][i]
     if seen is None:
@@ -96,23 +87,6 @@ def _apply(i, p, s):
         s[outside] - edge[outside]
     )
     return out
-
-
-def _backlash(p, u):
-    """Backlash from the middle of its dead band at the first input."""
-    m_left, c_left, m_right, c_right = p["m_left"], p["c_left"], p["m_right"], p["c_right"]
-    x = np.empty(len(u))
-    if len(u) == 0:
-        return x
-    u0 = float(u[0])
-    prev = 0.5 * (m_left * (u0 + c_left) + m_right * (u0 - c_right))
-    for t, ut in enumerate(u.tolist()):
-        if ut < prev / m_left - c_left:
-            prev = m_left * (ut + c_left)
-        elif ut > prev / m_right + c_right:
-            prev = m_right * (ut - c_right)
-        x[t] = prev
-    return x
 
 
 def _arx(A, B, u, y, n0):
@@ -175,14 +149,15 @@ def _invert(p, spec, w):
         lo, hi = spec["range"]
         target = spec["sign"] * np.clip(w, *spec["clip"])
         return _bisect(lambda s: _static(p, s), target, lo, hi, spec["sign"], 80)
-    # a polynomial on its monotone branch around 0, clipped to the branch's image
+    # "branch": on the block's monotone branch around 0 (a polynomial's), clipped to the
+    # branch's image
     big = 1e6 * (1.0 + float(np.max(np.abs(w), initial=0.0)))
     lo, hi = max(spec["range"][0], -big), min(spec["range"][1], big)
-    powers = _powers(p)
-    ends = sorted((float(_polyval(lo, powers)), float(_polyval(hi, powers))))
-    sign = 1.0 if _polyval(hi, powers) > _polyval(lo, powers) else -1.0
+    at_lo, at_hi = _static(p, lo), _static(p, hi)
+    ends = sorted((float(at_lo), float(at_hi)))
+    sign = 1.0 if at_hi > at_lo else -1.0
     target = sign * np.clip(w, ends[0], ends[1])
-    return _bisect(lambda s: _polyval(s, powers), target, lo, hi, sign, 200)
+    return _bisect(lambda s: _static(p, s), target, lo, hi, sign, 200)
 
 
 def _rows(y0):
@@ -210,10 +185,9 @@ def _chain(u, y0):
 
 
 def _feedback(u, y0):
-    """y = z^-nk B/A [u - N(y)], N(y) = sum c_m y^m or another static block (Lur'e form)."""
+    """y = z^-nk B/A [u - N(y)], N a static block (Lur'e form)."""
     lin, fb = MODEL["linear"], MODEL["feedback"]
     a, b = [float(v) for v in lin["a"]], [float(v) for v in lin["b"]]
-    c = [float(v) for v in fb["coefficients"]] if fb["kind"] == "polynomial" else None
     nk = int(lin["nk"])
     s = (u[:, 0] - _offsets("inputs")[0]).tolist()
     N = len(s)
@@ -224,23 +198,18 @@ def _feedback(u, y0):
         n0 = min(SPEC["max_lag"], N)
         for t in range(min(n0, y0.shape[0])):
             y[t] = float(y0[t, 0]) - float(_offsets("outputs")[0])
-    for t in range(N):
-        if t >= n0:
-            acc = 0.0
-            for j in range(1, min(len(a), t) + 1):
-                acc -= a[j - 1] * y[t - j]
-            for i in range(len(b)):
-                if t - nk - i < 0:
-                    break
-                acc += b[i] * v[t - nk - i]
-            y[t] = acc
-        if c is None:
+    with np.errstate(all="ignore"):  # a loop that diverges runs to inf and nan silently
+        for t in range(N):
+            if t >= n0:
+                acc = 0.0
+                for j in range(1, min(len(a), t) + 1):
+                    acc -= a[j - 1] * y[t - j]
+                for i in range(len(b)):
+                    if t - nk - i < 0:
+                        break
+                    acc += b[i] * v[t - nk - i]
+                y[t] = acc
             v[t] = s[t] - float(_static(fb, np.array([y[t]]))[0])
-            continue
-        p = 0.0
-        for m in range(len(c) - 1, -1, -1):
-            p = p * y[t] + c[m]
-        v[t] = s[t] - y[t] * p
     return (np.array(y) + _offsets("outputs")[0])[:, None]
 
 
@@ -335,30 +304,14 @@ def _state_space(u, y0):
     return y
 
 
-def _static_slope(p, s):
-    """dN/du of a static block (an output block's, for the start from measured outputs)."""
-    kind = p["kind"]
-    if kind in ("polynomial", "two-segment-polynomial"):
-        return _slope(p, s)
-    if kind == "dead-zone":
-        return p["slope_left"] * (s < p["lower"]) + p["slope_right"] * (s > p["upper"])
-    if kind == "saturation":
-        v = p["slope"] * s
-        return p["slope"] * ((v >= p["lower"]) & (v <= p["upper"]))
-    if kind in ("piecewise-linear", "piecewise-linear-free"):
-        bp, v = np.array(p["breakpoints"]), np.array(p["values"])
-        j = np.clip(np.searchsorted(bp, s, side="right") - 1, 0, bp.size - 2)
-        return (v[j + 1] - v[j]) / (bp[j + 1] - bp[j])
-    raise ValueError("unknown block kind " + repr(kind))
-
-
 def _bss_block(p, s, seen):
-    """A block of a block state-space model on ``s`` and its slope; a polynomial block
-    continues along its tangent beyond its recorded range ``seen``."""
+    """A block of a block state-space model on ``s`` and its slope; a block that
+    extrapolates unreliably (a polynomial) continues along its tangent beyond its
+    recorded range ``seen``."""
     edge = s
-    if p["kind"] in ("polynomial", "two-segment-polynomial") and None not in seen:
+    if _BLOCKS[p["kind"]]["tangent"] and None not in seen:
         edge = np.clip(s, seen[0], seen[1])
-    out, slope = _static(p, edge), _static_slope(p, edge)
+    out, slope = _static(p, edge), _slope(p, edge)
     return out + slope * (s - edge) * (edge != s), slope
 
 

@@ -31,10 +31,15 @@ Offsets (the operating point) are not part of a transfer function; the exported 
 keeps them.
 
 The module interprets the model description it embeds (the model file's ``"model"``
-entry): it holds one evaluation rule per block kind, copied from the blocks, which is
-knowledge of the blocks outside them, the price of a file that needs nothing but NumPy.
-A block kind it does not know (a user-defined block) is refused at export, so a module
-is never written that would simulate something else. Starting from measured outputs
+entry). It is three texts: the header (``export_header.txt``, a template), the rules of
+the block kinds the model holds, each copied from its block's class
+(:attr:`~blockid.blocks.base.Block.export_source`: ``evaluate`` and ``slope`` of a
+static block, ``run`` of a dynamic one) into a table ``_BLOCKS`` by kind, and the runtime
+(``_export_runtime.py`` below its marker), which runs the structures and the linear block
+and knows no other block kind. So a block family written in one file (or a test) is
+exported as it is; a block whose class gives no rule, or not the slope the model needs,
+is refused at export with one line naming its kind and what is missing, so a module is
+never written that would simulate something else. Starting from measured outputs
 follows :meth:`~blockid.models.ChainModel.simulate` given the first ``max_lag`` of them:
 the last linear block starts from ``N^{-1}`` of the first outputs where the blocks after
 it are invertible over their estimation range (decided here, at export, with the blocks'
@@ -45,18 +50,21 @@ estimates from more (:mod:`blockid.models.initial_state`) is not exported.
 
 from __future__ import annotations
 
+import ast
 import json
+import re
+import textwrap
 from importlib.resources import files
 from typing import Any
 
 import numpy as np
 
-from blockid.blocks.base import StaticBlock
+from blockid.blocks.base import Block, StaticBlock
+from blockid.blocks.polynomial import Polynomial
 from blockid.errors import BlockidError, ParameterError
 from blockid.models.linearise import linearise
 
 __all__ = [
-    "EXPORTABLE_KINDS",
     "FORMATS",
     "export_text",
     "linearise",
@@ -66,21 +74,6 @@ __all__ = [
     "to_scipy",
     "transfer_functions",
 ]
-
-#: Block kinds whose derivative the exported module knows (for tangent extrapolation).
-_SLOPES = ("polynomial", "two-segment-polynomial")
-
-#: Block kinds the exported module can evaluate.
-EXPORTABLE_KINDS = (
-    "linear",
-    "polynomial",
-    "two-segment-polynomial",
-    "dead-zone",
-    "saturation",
-    "piecewise-linear",
-    "piecewise-linear-free",
-    "backlash",
-)
 
 
 # ----------------------------------------------------------------------------- transfer functions
@@ -373,7 +366,7 @@ def _inverse_spec(model: Any, i: int) -> dict[str, Any] | None:
             "sign": 1.0 if values[1] > values[0] else -1.0,
             "clip": [float(values.min()), float(values.max())],
         }
-    if block.kind == "polynomial" and hasattr(block, "monotone_branch"):
+    if own.invert is Polynomial.invert:  # on its monotone branch around 0
         lo, hi = block.monotone_branch()
         return {"method": "branch", "range": [float(lo), float(hi)]}
     raise ParameterError(
@@ -389,23 +382,7 @@ def _tangent_range(model: Any, i: int) -> list[float] | None:
     if not (block.warn_extrapolation and block.role == "static"):
         return None
     seen = model.ranges.get(model._range_key(i))
-    if seen is None:
-        return None
-    if block.kind not in _SLOPES:
-        raise ParameterError(
-            f"the exported module has no derivative of a {block.kind} block, which the model "
-            "continues along its tangent outside its estimation range"
-        )
-    return [float(seen[0]), float(seen[1])]
-
-
-def _check_kinds(blocks: Any) -> None:
-    for block in blocks:
-        if block.kind not in EXPORTABLE_KINDS:
-            raise ParameterError(
-                f"cannot export a {block.kind!r} block (a user-defined block?): the module "
-                f"evaluates {', '.join(EXPORTABLE_KINDS)}"
-            )
+    return None if seen is None else [float(seen[0]), float(seen[1])]
 
 
 def _spec(model: Any) -> dict[str, Any]:
@@ -416,13 +393,6 @@ def _spec(model: Any) -> dict[str, Any]:
     if isinstance(model, PolynomialStateSpace):
         return {"form": "state-space", "max_lag": model.max_lag, "iterations": INITIAL_ITERATIONS}
     if isinstance(model, BlockStateSpace):
-        _check_kinds(
-            [
-                b
-                for b in (*model.input_blocks, *model.loop_blocks, *model.output_blocks)
-                if b is not None
-            ]
-        )
         return {
             "form": "block-state-space",
             "max_lag": model.max_lag,
@@ -432,10 +402,8 @@ def _spec(model: Any) -> dict[str, Any]:
         A, B = model.lag_arrays()
         return {"form": "arx", "A": A.tolist(), "B": B.tolist(), "max_lag": model.max_lag}
     if hasattr(model, "feedback") and hasattr(model, "linear"):
-        _check_kinds([model.linear, model.feedback])
         return {"form": "feedback", "max_lag": model.max_lag}
     if hasattr(model, "last_linear_index"):
-        _check_kinds(model.blocks)
         last = model.last_linear_index
         tail = range(len(model.blocks) - 1, last, -1)
         return {
@@ -450,6 +418,125 @@ def _spec(model: Any) -> dict[str, Any]:
     )
 
 
+# ----------------------------------------------------------------------------- block rules
+#: What the module calls in a block's export_source, by the block's role: the first is
+#: required.
+_CALLS = {"static": ("evaluate", "slope"), "dynamic": ("run",)}
+
+#: The block's methods its export_source copies, by role: a subclass that changes one
+#: of them must give its own export_source (an inherited one would simulate its parent).
+#: A static block's derivative counts where the module takes its slope.
+_COPIED = {"static": ("__call__",), "dynamic": ("run", "simulate", "rest_state")}
+
+#: Why the module needs a static block's slope, by form (None: it does not).
+_SLOPE_USE = {
+    "chain": "the model continues it along its tangent outside its estimation range",
+    "block-state-space": "a block state-space model takes its slope (tangent and start)",
+}
+
+
+def _blocks(model: Any, spec: dict[str, Any]) -> list[tuple[Block, str | None]]:
+    """The blocks of the model, each with why the module needs its slope (or None)."""
+    form = spec["form"]
+    if form == "chain":
+        return [
+            (b, None if seen is None else _SLOPE_USE["chain"])
+            for b, seen in zip(model.blocks, spec["tangents"], strict=True)
+        ]
+    if form == "feedback":
+        return [(model.linear, None), (model.feedback, None)]
+    if form == "block-state-space":
+        every = (*model.input_blocks, *model.loop_blocks, *model.output_blocks)
+        return [(b, _SLOPE_USE[form]) for b in every if b is not None]
+    return []
+
+
+def _refused(block: Block, why: str) -> ParameterError:
+    return ParameterError(f"cannot export the {block.kind!r} block ({type(block).__name__}): {why}")
+
+
+def _rule(block: Block, slope_use: str | None) -> tuple[str, tuple[str, ...]]:
+    """The block's export_source, checked, and the functions of it the module calls."""
+    cls = type(block)
+    source = cls.export_source
+    if source is None:
+        raise _refused(
+            block,
+            "its class gives no export_source, the NumPy source of its evaluation that the "
+            "module copies (docs/extending.md)",
+        )
+    owner = next(c for c in cls.__mro__ if "export_source" in c.__dict__)
+    for method in _COPIED.get(block.role, ()) + (("derivative",) if slope_use else ()):
+        changed = next((c for c in cls.__mro__ if method in c.__dict__), owner)
+        if changed is not owner and issubclass(changed, owner):
+            raise _refused(
+                block,
+                f"{changed.__name__} changes {method} and inherits the export_source of "
+                f"{owner.__name__}, which would simulate the parent: give {changed.__name__} "
+                "its own",
+            )
+    source = textwrap.dedent(source).strip("\n") + "\n"
+    try:
+        defined = {n.name for n in ast.parse(source).body if isinstance(n, ast.FunctionDef)}
+    except SyntaxError as exc:
+        raise _refused(
+            block, f"its export_source is not Python ({exc.msg}, line {exc.lineno})"
+        ) from None
+    calls = _CALLS.get(block.role, ("evaluate",))
+    if calls[0] not in defined:
+        raise _refused(block, f"its export_source defines no {calls[0]}(p, ...)")
+    own_slope = getattr(cls, "derivative", None) is not StaticBlock.derivative
+    if slope_use and own_slope and "slope" not in defined:
+        raise _refused(
+            block,
+            f"{slope_use}, and its export_source defines no slope(p, s) for its own derivative",
+        )
+    return source, tuple(name for name in calls if name in defined)
+
+
+def _blocks_text(pairs: list[tuple[Block, str | None]]) -> str:
+    """The module's ``_BLOCKS``: the rule of each block kind the model holds, copied from
+    its class into a function of its own (so that its names stay its own)."""
+    kinds: dict[str, list[tuple[Block, str | None]]] = {}
+    for block, slope_use in pairs:
+        if block.role == "linear":  # the runtime's own, when it is the plain linear block
+            if block.kind != "linear":
+                raise _refused(
+                    block, "the module runs the linear block of kind 'linear' (a, b, nk) only"
+                )
+            continue
+        if not block.kind:
+            raise ParameterError(
+                f"cannot export a {type(block).__name__} block: it has no kind, the name the "
+                "module would find its rule by"
+            )
+        kinds.setdefault(block.kind, []).append((block, slope_use))
+    parts, table = [], []
+    for kind, uses in kinds.items():
+        rules = {_rule(block, slope_use) for block, slope_use in uses}
+        block = uses[-1][0]
+        if len(rules) > 1:
+            raise _refused(block, "another block of the model has its kind and another rule")
+        ((source, calls),) = rules
+        name = "_block_" + re.sub(r"\W+", "_", kind).strip("_")
+        while any(line.startswith(f"def {name}():") for line in parts):
+            name += "_"
+        owner = next(c for c in type(block).__mro__ if "export_source" in c.__dict__)
+        tangent = bool(block.warn_extrapolation and block.role == "static")
+        returned = "".join(f'"{c}": {c}, ' for c in calls)
+        parts.append(
+            f"def {name}():\n"
+            f"    # {kind!r}: {owner.__module__}.{owner.__qualname__}.export_source\n"
+            f"{textwrap.indent(source, '    ')}\n"
+            f'    return {{{returned}"tangent": {tangent}}}\n'
+        )
+        table.append(f"    {json.dumps(kind)}: {name}(),\n")
+    head = "# --- blocks: the rule of each block kind in MODEL, copied from its class ---\n"
+    body = "{\n" + "".join(table) + "}" if table else "{}"
+    return head + "".join(p + "\n\n" for p in parts) + f"_BLOCKS = {body}\n"
+
+
+# ----------------------------------------------------------------------------- the module
 #: The module's header, a template filled by :func:`to_python_module` (``str.format``).
 _HEADER_FILE = "export_header.txt"
 
@@ -464,7 +551,7 @@ def _resource(name: str) -> str:
 def _runtime() -> str:
     """The interpreter of the module (``_export_runtime.py`` below its marker)."""
     text = _resource("_export_runtime.py")
-    return "\n\n" + text[text.index(_MARKER) + len(_MARKER) :]
+    return text[text.index(_MARKER) + len(_MARKER) :]
 
 
 def to_python_module(model: Any) -> str:
@@ -507,7 +594,7 @@ def to_python_module(model: Any) -> str:
         model=json.dumps(description, indent=1),
         spec=json.dumps(spec, indent=1),
     )
-    return header + _runtime()
+    return "\n\n".join((header, _blocks_text(_blocks(model, spec)), _runtime()))
 
 
 def _scipy_json(model: Any) -> str:
