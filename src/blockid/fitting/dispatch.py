@@ -131,7 +131,7 @@ def climb_from(model: Any, done: int, data: Dataset, structure: str, **options: 
     from blockid.fitting.state_space import continue_polynomial_state_space
 
     decl, method, options = resolve_options(structure, None, options)
-    if decl.name != "polynomial-state-space":
+    if "start_degree" not in decl.accepted(method):
         raise ParameterError(
             f"climb_from continues a polynomial state space fitted degree by degree, not "
             f"{structure}",

@@ -101,7 +101,7 @@ def climb_base(candidate: Candidate) -> tuple[tuple[Any, ...], int] | None:
     same training data, is where this one's fit continues (identify's climb: the
     finalist's model is the climb's first rung, bit for bit)."""
     o = candidate.options
-    if candidate.structure != "polynomial-state-space" or o.get("integrator"):
+    if not keeps_fold_models(candidate):
         return None
     if o.get("start_degree") is None or not isinstance(o.get("degree"), int):
         return None
@@ -115,11 +115,13 @@ def climb_base(candidate: Candidate) -> tuple[tuple[Any, ...], int] | None:
 
 
 def keeps_fold_models(candidate: Candidate) -> bool:
-    """Whether identify keeps this candidate's fold models (small: a polynomial state
-    space) as the starts of a climb one degree up (:func:`climb_base`)."""
-    return candidate.structure == "polynomial-state-space" and not candidate.options.get(
-        "integrator"
-    )
+    """Whether identify keeps this candidate's fold models as the starts of a climb one
+    degree up (:func:`climb_base`): those of a structure fitted degree by degree (the
+    registry's ``start_degree`` option: a polynomial state space, whose models are
+    small), without integrators."""
+    decl = STRUCTURES.get(candidate.structure)
+    climbs = decl is not None and "start_degree" in decl.accepted(None)
+    return climbs and not candidate.options.get("integrator")
 
 
 def unique(candidates: Iterable[Candidate]) -> list[Candidate]:
