@@ -202,13 +202,6 @@ def test_the_report_shows_it(identified):
     assert html.count(KIND) >= 2 and "level" in html
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AttributeError,
-    reason="fitting/online_paper.py's _orders_from reads the input block's .order, which "
-    "only a two-segment polynomial has: a stream started from a model with another input "
-    "block fails with AttributeError instead of saying why",
-)
 def test_a_stream_cannot_learn_it_and_says_why(fitted):
     from blockid.workflows.stream import StreamSession
 

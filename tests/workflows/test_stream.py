@@ -27,3 +27,21 @@ def test_a_checkpoint_comes_after_every_nth_sample_learned_not_before():
     assert [p.record["learner"]["rows"] for p in points] == [250, 500]
     assert [p.k for p in points] == [249, 499]  # the row of the 250th sample: row 249
     assert isinstance(events[-1], Final) and events[-1].n_samples == 620
+
+
+def test_a_starting_model_whose_block_key_term_rls_cannot_learn_is_refused_by_name():
+    """Key-term RLS learns paper B's polynomial blocks; a Hammerstein model with a
+    saturation input block cannot seed it, and the stream says so (it used to fail with
+    AttributeError: 'Saturation' object has no attribute 'order')."""
+    import pytest
+
+    from blockid.blocks import Saturation
+    from blockid.errors import ParameterError
+    from blockid.models import Hammerstein
+
+    model = Hammerstein("u", "y", input_block=Saturation(-0.5, 0.5, 1.0), na=1, nb=2, nk=1,
+                        a=[-0.6], b=[1.0, 0.3])  # fmt: skip
+    u = np.random.default_rng(0).uniform(-1, 1, 60)
+    lines = ["u,y", *(f"{a!r},{b!r}" for a, b in zip(u, model.simulate(u)[:, 0], strict=True))]
+    with pytest.raises(ParameterError, match="input block is a 'saturation' block"):
+        list(StreamSession(lines, "hammerstein", ["u"], ["y"], initial=model))

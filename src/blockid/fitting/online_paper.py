@@ -165,10 +165,20 @@ def _orders_from(initial: Any, opts: dict[str, Any], keys: tuple[str, ...]) -> d
     if initial is None:
         return opts
     found = {"na": initial.na, "nb": initial.nb, "nk": initial.nk}
-    if "r1" in keys and initial.input_block is not None:
-        found["r1"] = initial.input_block.order
-    if "r2" in keys and initial.output_block is not None:
-        found["r2"] = initial.output_block.degree
+    for key, side, size in (("r1", "input", "order"), ("r2", "output", "degree")):
+        block = getattr(initial, f"{side}_block", None)
+        if key not in keys or block is None:
+            continue
+        if getattr(block, size, None) is None:  # not the polynomial the papers' RLS learns
+            raise ParameterError(
+                f"the starting model's {side} block is a {block.kind!r} block; key-term RLS "
+                f"learns paper B's polynomial blocks ({key}: the "
+                f"{'two-segment polynomial' if key == 'r1' else 'polynomial'}'s degree), so "
+                "it cannot continue this model: start the stream without the model (give "
+                f"the orders and {key}), or from a model fitted by key-term RLS",
+                parameter="initial",
+            )
+        found[key] = getattr(block, size)
     return {**{k: v for k, v in found.items() if k in keys}, **opts}
 
 
