@@ -46,6 +46,9 @@ def test_a_static_rule_evaluates_and_differentiates_as_the_block(block):
     assert np.array_equal(rule["evaluate"](p, s), block(s))
     if type(block).derivative is not StaticBlock.derivative:  # its own derivative
         assert np.array_equal(rule["slope"](p, s), block.derivative(s))
+    if "scalar" in rule:  # one float at a time, for a feedback loop: the same numbers
+        one = rule["scalar"](p)
+        assert np.array_equal(np.array([one(float(v)) for v in s]), block(s))
 
 
 def test_the_backlash_rule_runs_as_the_block_from_rest():

@@ -202,7 +202,7 @@ def test_the_module_holds_the_rules_of_the_models_blocks_only():
     ns = _module(model)
     assert list(ns["_BLOCKS"]) == ["two-segment-polynomial", "polynomial"]
     assert ns["_BLOCKS"]["polynomial"]["tangent"] is True
-    assert set(ns["_BLOCKS"]["polynomial"]) == {"evaluate", "slope", "tangent"}
+    assert set(ns["_BLOCKS"]["polynomial"]) == {"evaluate", "slope", "scalar", "tangent"}
     dz = _module(Hammerstein("u", "y", input_block=DeadZone(-0.5, 0.5), na=1, nb=1, nk=1,
                              a=[-0.5], b=[1.0]))  # fmt: skip
     assert list(dz["_BLOCKS"]) == ["dead-zone"] and dz["_BLOCKS"]["dead-zone"]["tangent"] is False

@@ -177,7 +177,10 @@ class Block(ABC):
     #: output) and, if the block has its own :meth:`StaticBlock.derivative` and the
     #: module needs a slope (a tangent beyond the estimation range, a block state
     #: space), ``slope(p, s)`` (without it the module takes the default's central
-    #: differences); a dynamic block's defines ``run(p, u)`` (its output from
+    #: differences), and may define ``scalar(p)``: a plain-Python function of one float
+    #: equal to ``evaluate`` bit for bit, which a feedback loop calls sample by sample
+    #: (without it the loop calls ``evaluate`` on one-element arrays, several times
+    #: slower); a dynamic block's defines ``run(p, u)`` (its output from
     #: :meth:`DynamicBlock.rest_state`). Each must give the block's numbers operation by
     #: operation. None: the block is not exported (the export says so).
     export_source: ClassVar[str | None] = None

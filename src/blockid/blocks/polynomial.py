@@ -126,6 +126,17 @@ def evaluate(p, s):
 
 def slope(p, s):
     return _polyval(s, _derivative(_powers(p)))
+
+def scalar(p):
+    c = [float(v) for v in _powers(p)]
+
+    def one(x):
+        value = c[-1] + x * 0
+        for i in range(2, len(c) + 1):
+            value = c[-i] + value * x
+        return value
+
+    return one
 """
 
     def __init__(self, coefficients: Sequence[float], constant: bool = True) -> None:

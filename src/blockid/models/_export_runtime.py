@@ -198,6 +198,14 @@ def _feedback(u, y0):
         n0 = min(SPEC["max_lag"], N)
         for t in range(min(n0, y0.shape[0])):
             y[t] = float(y0[t, 0]) - float(_offsets("outputs")[0])
+    rule = _BLOCKS[fb["kind"]]
+    if "scalar" in rule:  # the block's own rule for one float (no array per sample)
+        one = rule["scalar"](fb)
+    else:
+
+        def one(x):
+            return float(_static(fb, np.array([x]))[0])
+
     with np.errstate(all="ignore"):  # a loop that diverges runs to inf and nan silently
         for t in range(N):
             if t >= n0:
@@ -209,7 +217,7 @@ def _feedback(u, y0):
                         break
                     acc += b[i] * v[t - nk - i]
                 y[t] = acc
-            v[t] = s[t] - float(_static(fb, np.array([y[t]]))[0])
+            v[t] = s[t] - float(one(y[t]))
     return (np.array(y) + _offsets("outputs")[0])[:, None]
 
 

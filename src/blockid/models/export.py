@@ -420,8 +420,9 @@ def _spec(model: Any) -> dict[str, Any]:
 
 # ----------------------------------------------------------------------------- block rules
 #: What the module calls in a block's export_source, by the block's role: the first is
-#: required.
-_CALLS = {"static": ("evaluate", "slope"), "dynamic": ("run",)}
+#: required (a static block's ``scalar(p)``, a plain-Python function of one float equal
+#: to ``evaluate`` bit for bit, serves a feedback loop sample by sample).
+_CALLS = {"static": ("evaluate", "slope", "scalar"), "dynamic": ("run",)}
 
 #: The block's methods its export_source copies, by role: a subclass that changes one
 #: of them must give its own export_source (an inherited one would simulate its parent).
