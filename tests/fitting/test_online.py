@@ -579,3 +579,32 @@ def test_online_arx_names_the_sample_where_the_estimate_overflows():
         "RLS of output 'y' diverged at sample 3 (counted from the first sample learned online)"
     )
     assert info.value.sample == 3 and est.n_samples == 0
+
+
+@pytest.mark.parametrize(
+    ("structure", "method", "declared"),
+    [
+        ("hammerstein-wiener", "key-term-rls", "KEY_TERM_AT_LEAST"),
+        ("backlash", "aw-rls", "BACKLASH_AT_LEAST"),
+    ],  # fmt: skip
+)
+def test_the_batch_and_the_online_fit_refuse_orders_below_one_declaration(
+    structure, method, declared
+):
+    """Each paper method declares its smallest orders once (beside the fitter); the
+    batch fit and the online learner refuse one below it alike, naming that minimum."""
+    from blockid.data import Dataset
+    from blockid.errors import ParameterError
+    from blockid.fitting import backlash, fit_model, key_term_channels
+    from blockid.fitting.online import online_estimator
+
+    minimums = getattr(key_term_channels if declared.startswith("KEY") else backlash, declared)
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 400)
+    data = Dataset.from_arrays(u, np.convolve(u, [0.0, 1.0, 0.5])[:400], ["u"], ["y"])
+    for name, low in minimums.items():
+        message = f"{name}={low - 1} must be a whole number >= {low}"
+        with pytest.raises(ParameterError, match=message):
+            fit_model(data, structure, method=method, **{name: low - 1})
+        with pytest.raises(ParameterError, match=message):
+            online_estimator(structure, method, {name: low - 1}, ["u"], ["y"])

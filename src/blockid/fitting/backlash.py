@@ -44,9 +44,9 @@ from blockid.fitting.recursive import (
     check_siso,
     fit_recursive,
     given_scale_signals,
-    int_at_least,
     largest_lag,
     normalised_signals,
+    orders_at_least,
 )
 from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
@@ -54,7 +54,12 @@ from blockid.models.block import BacklashModel
 
 _AW = RECURSIVE["backlash-aw-rls"]
 
-__all__ = ["BacklashAWRLS", "fit_backlash_aw_rls"]
+__all__ = ["BACKLASH_AT_LEAST", "BacklashAWRLS", "fit_backlash_aw_rls"]
+
+#: The smallest orders the AW-RLS backlash fit (paper A's A6-A8) takes, declared once for
+#: the batch fit and its online form: the backlash's output enters one sample late at
+#: the earliest (nk >= 1), with one input coefficient at least.
+BACKLASH_AT_LEAST = {"na": 0, "nb": 1, "nk": 1}
 
 
 def _names(na: int, nb: int) -> list[str]:
@@ -317,9 +322,7 @@ def fit_backlash_aw_rls(
     """
     method = BacklashAWRLS.method
     check_siso(data, method)
-    na = int_at_least("na", na, 0)
-    nb = int_at_least("nb", nb, 1)
-    nk = int_at_least("nk", nk, 1)
+    na, nb, nk = orders_at_least(BACKLASH_AT_LEAST, na=na, nb=nb, nk=nk)
     # ranges from the options' one declaration (eps1 = 0 is allowed: lambda = eps2 > 0)
     passes, tol = checked("passes", passes), checked("tol", tol)
     eps1, eps2 = checked("eps1", eps1), checked("eps2", eps2)

@@ -55,16 +55,20 @@ from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE, RECURSIVE
 from blockid.errors import ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
-from blockid.fitting.key_term_channels import ChannelKeyTermRLS, fit_key_term_channels
+from blockid.fitting.key_term_channels import (
+    KEY_TERM_AT_LEAST,
+    ChannelKeyTermRLS,
+    fit_key_term_channels,
+)
 from blockid.fitting.recursive import (
     RecursiveAlgorithm,
     Signals,
     check_siso,
     fit_recursive,
     given_scale_signals,
-    int_at_least,
     largest_lag,
     normalised_signals,
+    orders_at_least,
 )
 from blockid.fitting.registry import checked, get_structure
 from blockid.fitting.result import FitResult
@@ -369,12 +373,10 @@ def fit_key_term_rls(
                                initial_parameters=initial_parameters, normalize=normalize,
                                record_history=record_history)  # fmt: skip
     check_siso(data, method)
-    na = int_at_least("na", na, 0)
-    nb = int_at_least("nb", nb, 1)
-    nk = int_at_least("nk", nk, 0)
+    na, nb, nk = orders_at_least(KEY_TERM_AT_LEAST, na=na, nb=nb, nk=nk)
     r1 = checked("r1", r1) if has_in else 0
     # the method's own minimum: key-term separation needs a nonlinear output block
-    r2 = int_at_least("r2", r2, 2) if has_out else 1
+    r2 = orders_at_least(KEY_TERM_AT_LEAST, r2=r2)[0] if has_out else 1
     passes, tol = checked("passes", passes), checked("tol", tol)  # one declaration
     mu = checked("initial_covariance", initial_covariance)
     n = len(_layout(structure, na, nb, r1, r2))
@@ -407,7 +409,9 @@ def _several_inputs(data: Dataset, structure: str, scales: Any, **options: Any) 
     return fit_key_term_channels(
         data,
         input_block=f"two-segment-polynomial:degree={checked('r1', r1)}" if has_in else None,
-        output_block=f"polynomial:degree={int_at_least('r2', r2, 2)}" if has_out else None,
+        output_block=(
+            f"polynomial:degree={orders_at_least(KEY_TERM_AT_LEAST, r2=r2)[0]}" if has_out else None
+        ),
         scales=scales,
         **options,
     )

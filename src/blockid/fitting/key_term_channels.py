@@ -85,12 +85,18 @@ from blockid.models.block_state_space import BlockStateSpace
 _KT = RECURSIVE["key-term-rls"]
 
 __all__ = [
+    "KEY_TERM_AT_LEAST",
     "ChannelKeyTermRLS",
     "fit_key_term_block",
     "fit_key_term_channels",
     "checked_scales",
     "key_term_algorithm",
 ]
+
+#: The smallest orders key-term RLS (paper B's B5) takes, declared once for the batch
+#: fit, its channels and its online form: one input coefficient at least, and a
+#: nonlinear output block (the key-term separation needs degree 2 or more).
+KEY_TERM_AT_LEAST = {"na": 0, "nb": 1, "nk": 0, "r2": 2}
 
 
 def _input_basis(input_block: Any) -> tuple[Basis, int, float]:
@@ -129,7 +135,7 @@ def _output_degree(output_block: Any) -> int:
             "simulation-error for other families",
             parameter="output_block",
         )
-    return int_at_least("output block degree", block.degree, 2)
+    return int_at_least("output block degree", block.degree, KEY_TERM_AT_LEAST["r2"])
 
 
 def _delays(nk: Any, inputs: tuple[str, ...]) -> np.ndarray:

@@ -15,8 +15,9 @@ from blockid._kernels import key_term_channels as _kc
 from blockid._kernels import rls as _kr
 from blockid.errors import EstimationError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
-from blockid.fitting.backlash import BacklashAWRLS, fit_backlash_aw_rls
+from blockid.fitting.backlash import BACKLASH_AT_LEAST, BacklashAWRLS, fit_backlash_aw_rls
 from blockid.fitting.key_term import KEY_TERM_STRUCTURES, KeyTermRLS, fit_key_term_rls
+from blockid.fitting.key_term_channels import KEY_TERM_AT_LEAST
 from blockid.fitting.online_base import (
     OnlineEstimator,
     _defaults,
@@ -26,8 +27,8 @@ from blockid.fitting.online_base import (
 from blockid.fitting.recursive import (
     Signals,
     initial_vector,
-    int_at_least,
     largest_lag,
+    orders_at_least,
 )
 from blockid.fitting.registry import checked
 
@@ -196,11 +197,10 @@ class _OnlineKeyTerm(_PaperOnline):
         keys += ("initial_parameters",)
         opts = _defaults(fit_key_term_rls, _orders_from(initial, opts, keys), keys)
         has_in, has_out = KEY_TERM_STRUCTURES[structure]
-        na = int_at_least("na", opts["na"], 0)
-        nb = int_at_least("nb", opts["nb"], 1)
-        nk = int_at_least("nk", opts["nk"], 0)
+        na, nb, nk = orders_at_least(KEY_TERM_AT_LEAST, na=opts["na"], nb=opts["nb"],
+                                     nk=opts["nk"])  # fmt: skip
         r1 = checked("r1", opts["r1"]) if has_in else 0
-        r2 = int_at_least("r2", opts["r2"], 2) if has_out else 1  # key-term's own minimum
+        r2 = orders_at_least(KEY_TERM_AT_LEAST, r2=opts["r2"])[0] if has_out else 1
         mu = checked("initial_covariance", opts["initial_covariance"])
         schedule = ForgettingSchedule.parse(opts["forgetting"])
         signals = _signals(scales)
@@ -428,9 +428,8 @@ class _OnlineBacklash(_PaperOnline):
         scales = _paper_scales(scales)
         keys = ("na", "nb", "nk", "eps1", "eps2", "initial_covariance", "initial_parameters")
         opts = _defaults(fit_backlash_aw_rls, _orders_from(initial, opts, keys), keys)
-        na = int_at_least("na", opts["na"], 0)
-        nb = int_at_least("nb", opts["nb"], 1)
-        nk = int_at_least("nk", opts["nk"], 1)
+        na, nb, nk = orders_at_least(BACKLASH_AT_LEAST, na=opts["na"], nb=opts["nb"],
+                                     nk=opts["nk"])  # fmt: skip
         eps = (checked("eps1", opts["eps1"]), checked("eps2", opts["eps2"]))
         mu = checked("initial_covariance", opts["initial_covariance"])
         signals = _signals(scales)

@@ -71,6 +71,12 @@ def int_at_least(name: str, value: Any, low: int) -> int:
     return int(value)
 
 
+def orders_at_least(minimums: dict[str, int], **values: Any) -> tuple[int, ...]:
+    """``values`` as ints, in the order given, each checked against its method's one
+    declaration of its minimum in ``minimums`` (e.g. key-term RLS's ``nb >= 1``)."""
+    return tuple(int_at_least(name, value, minimums[name]) for name, value in values.items())
+
+
 def positive_number(name: str, value: Any) -> float:
     """``value`` as a positive finite float, or a :class:`ParameterError` naming ``name``."""
     try:
