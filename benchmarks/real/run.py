@@ -79,19 +79,20 @@ PNLSS_TARGETS = {
 
 #: What this run was: edited by the session that runs it.
 RUN_NOTE = (
-    "This run (2026-11-28, session 15): the state-space candidates of a short record stop "
-    "early on a held-back tail ([identify](identify.md#state-space-candidates-stop-early-"
-    "on-short-records-the-study-session-15)). The 17 short and several-output records at "
-    "`6d77a6c` (its short-record path is the one kept), beside other work (busy-machine "
-    "times). The five long records, whose searches keep no tail, at `6d57cf8`: the same "
-    "models and errors as session 14's, bit for bit; WH 2009 again at `20c0261` (the "
-    "final code) with nothing else running, the load at its start given (falling from a "
-    "test run: 2.67 over 15 minutes): 338 s, against 333 s at `6d57cf8` and session 14's "
-    "299 s for the same model, the machine's spread from run to run. The quick effort on "
-    "the long "
-    "records, the direct PNLSS fits and the fold-rule study are session 14's and 13's "
-    "(unchanged by this run's change). The before-and-after table compares with session "
-    "14's results of the same sets."
+    "This run (2026-11-28, session 16): WH 2009 again at `57e1da8`, where a stage's last "
+    "fits take the cores the others left ([performance](performance.md#how-one-fit-uses-"
+    "every-core)), with nothing else running (load 2.0 at its start, the previous run's "
+    "own): 303.6 s against 316.0 s at `1ad8e3f` just before, the same model and errors "
+    "bit for bit. The other records are session 15's: this session's changes (a climb "
+    "continued from the fold's model below, the threads of the last fits) give the same "
+    "models bit for bit (tests; the heat exchanger checked by a run), so only their search "
+    "times would differ, and those were not measured again. Session 15's note: the "
+    "state-space candidates of a short record stop early on a held-back tail "
+    "([identify](identify.md#state-space-candidates-stop-early-on-short-records-the-study-"
+    "session-15)); its 17 short and several-output records at `6d77a6c`, beside other "
+    "work (busy-machine times); its five long records at `6d57cf8`. The quick effort on "
+    "the long records, the direct PNLSS fits and the fold-rule study are session 14's "
+    "and 13's. The before-and-after table compares with session 14's results."
 )
 
 
