@@ -87,6 +87,32 @@ def monomials(z, expo, lo, hi, out):
         out[j] = val
 
 
+@njit(cache=True, nogil=True)
+def _stack(x, u, z):
+    """``z = [x; u]``: the variables of the monomials at one sample."""
+    nx = x.shape[0]
+    for i in range(nx):
+        z[i] = x[i]
+    for i in range(u.shape[0]):
+        z[nx + i] = u[i]
+
+
+@njit(cache=True, nogil=True)
+def _affine(M, N, P, x, u, zeta, out):
+    """``out = M x + N u + P ζ``: one equation of the model at one sample (the state's
+    with ``A, B, E``, the output's with ``C, D, F``), each row's terms added in that
+    order."""
+    for i in range(M.shape[0]):
+        acc = 0.0
+        for j in range(x.shape[0]):
+            acc += M[i, j] * x[j]
+        for j in range(u.shape[0]):
+            acc += N[i, j] * u[j]
+        for j in range(zeta.shape[0]):
+            acc += P[i, j] * zeta[j]
+        out[i] = acc
+
+
 @njit(cache=True)
 def pnlss_simulate(A, B, C, D, E, F, expo, lo, hi, u, x, y):
     """Free run from state ``x`` (updated in place to the state after the last sample).
@@ -108,36 +134,18 @@ def pnlss_simulate(A, B, C, D, E, F, expo, lo, hi, u, x, y):
         False if the run became non-finite (the rest of ``y`` is then NaN).
     """
     N = u.shape[0]
-    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
+    nx, nu, nm = A.shape[0], B.shape[1], expo.shape[0]
     z = np.empty(nx + nu)
     zeta = np.empty(nm)
     xn = np.empty(nx)
     for k in range(N):
-        for i in range(nx):
-            z[i] = x[i]
-        for i in range(nu):
-            z[nx + i] = u[k, i]
+        _stack(x, u[k], z)
         monomials(z, expo, lo, hi, zeta)
-        for i in range(ny):
-            acc = 0.0
-            for j in range(nx):
-                acc += C[i, j] * x[j]
-            for j in range(nu):
-                acc += D[i, j] * u[k, j]
-            for j in range(nm):
-                acc += F[i, j] * zeta[j]
-            y[k, i] = acc
+        _affine(C, D, F, x, u[k], zeta, y[k])
+        _affine(A, B, E, x, u[k], zeta, xn)
         finite = True
         for i in range(nx):
-            acc = 0.0
-            for j in range(nx):
-                acc += A[i, j] * x[j]
-            for j in range(nu):
-                acc += B[i, j] * u[k, j]
-            for j in range(nm):
-                acc += E[i, j] * zeta[j]
-            xn[i] = acc
-            if not np.isfinite(acc):
+            if not np.isfinite(xn[i]):
                 finite = False
         if not finite:
             y[k + 1 :, :] = np.nan
@@ -212,7 +220,7 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
     every sample at once). ``x`` is updated in place to the state after the last sample;
     ``y`` (N, ny) receives the output."""
     N = u.shape[0]
-    nx, nu, ny, nm = A.shape[0], B.shape[1], C.shape[0], expo.shape[0]
+    nx, nu, nm = A.shape[0], B.shape[1], expo.shape[0]
     count, var, power = _sparse_exponents(expo)
     top = _powers(count, var, power, nm)
     z = np.empty(nx + nu)
@@ -220,10 +228,7 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
     zeta = np.empty(nm)
     xn = np.empty(nx)
     for k in range(N):
-        for i in range(nx):
-            z[i] = x[i]
-        for i in range(nu):
-            z[nx + i] = u[k, i]
+        _stack(x, u[k], z)
         for i in range(nx + nu):
             zi = min(max(z[i], lo[i]), hi[i])
             for e in range(top + 1):
@@ -235,24 +240,8 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
                 val *= zp[var[j, t], power[j, t]]
             zeta[j] = val
             V[k, nx + nu + j] = val
-        for i in range(ny):
-            acc = 0.0
-            for j in range(nx):
-                acc += C[i, j] * x[j]
-            for j in range(nu):
-                acc += D[i, j] * u[k, j]
-            for j in range(nm):
-                acc += F[i, j] * zeta[j]
-            y[k, i] = acc
-        for i in range(nx):
-            acc = 0.0
-            for j in range(nx):
-                acc += A[i, j] * x[j]
-            for j in range(nu):
-                acc += B[i, j] * u[k, j]
-            for j in range(nm):
-                acc += E[i, j] * zeta[j]
-            xn[i] = acc
+        _affine(C, D, F, x, u[k], zeta, y[k])
+        _affine(A, B, E, x, u[k], zeta, xn)
         for i in range(nx):
             x[i] = xn[i]
 
