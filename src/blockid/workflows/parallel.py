@@ -352,9 +352,11 @@ class TaskRunner:
         return results
 
     def _share(self, unfinished: int) -> None:
-        """Each running fit may take ``jobs // unfinished`` threads (at least one)."""
+        """Each running fit may take ``jobs // unfinished`` threads (at least one; one
+        again when nothing is left to run)."""
         if self._allowance is not None:
-            self._allowance[0] = float(max(1, self.jobs // max(unfinished, 1)))
+            share = self.jobs // unfinished if unfinished else 1
+            self._allowance[0] = float(max(1, share))
 
     def _map_cluster(
         self,
