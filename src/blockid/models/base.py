@@ -9,7 +9,7 @@ import numpy as np
 
 from blockid.errors import DataError, ModelFileError
 
-__all__ = ["Model", "MODEL_TYPES", "excursion", "model_from_dict"]
+__all__ = ["Model", "MODEL_TYPES", "OneChannel", "excursion", "model_from_dict"]
 
 #: ``structure -> class``, filled by :meth:`Model.__init_subclass__`.
 MODEL_TYPES: dict[str, type[Model]] = {}
@@ -58,6 +58,16 @@ class Model(ABC):
     @abstractmethod
     def from_dict(cls, data: dict[str, Any]) -> Model:
         """Inverse of :meth:`to_dict`."""
+
+    def _file_header(self) -> dict[str, Any]:
+        """The first fields of every model's :meth:`to_dict`: its structure, signals and
+        sampling time."""
+        return {
+            "structure": self.structure,
+            "inputs": list(self.inputs),
+            "outputs": list(self.outputs),
+            "sampling_time": self.sampling_time,
+        }
 
     def _repr_html_(self) -> str:
         """The notebook display: :func:`blockid.plotting.notebook.model_html`."""
@@ -148,6 +158,70 @@ class Model(ABC):
                     f"an output array of shape {y.shape}"
                 )
         return u, y
+
+
+class OneChannel:
+    """What a model of one input and one output with offsets (a chain of blocks, a
+    feedback loop) keeps beside its blocks: its sampling time, the offsets of its two
+    signals, the ranges seen in estimation, and how its file holds them."""
+
+    inputs: tuple[str]
+    outputs: tuple[str]
+    sampling_time: float | None
+    input_offset: float
+    output_offset: float
+    ranges: dict[str, list[float]]
+
+    def _set_channel(
+        self, sampling_time: float | None, input_offset: float, output_offset: float, ranges: Any
+    ) -> None:
+        self.sampling_time = sampling_time
+        self.input_offset = float(input_offset)
+        self.output_offset = float(output_offset)
+        self.ranges = {k: [float(v[0]), float(v[1])] for k, v in (ranges or {}).items()}
+
+    def _channel_settings(self, changes: dict[str, Any]) -> dict[str, Any]:
+        """The keyword arguments that rebuild the model's sampling time, offsets and ranges
+        (the ranges dropped when ``changes`` move an offset)."""
+        kwargs: dict[str, Any] = dict(
+            sampling_time=self.sampling_time,
+            input_offset=self.input_offset,
+            output_offset=self.output_offset,
+            ranges=self.ranges,
+        )
+        if "input_offset" in changes or "output_offset" in changes:
+            kwargs["ranges"] = None
+        return kwargs
+
+    def _channel_file(self) -> dict[str, Any]:
+        """The last fields of the model's :meth:`~Model.to_dict`."""
+        return {
+            "parameters": self.parameters,  # type: ignore[attr-defined]
+            "offsets": {
+                "inputs": {self.inputs[0]: self.input_offset},
+                "outputs": {self.outputs[0]: self.output_offset},
+            },
+            "estimation_ranges": self.ranges,
+        }
+
+    @staticmethod
+    def _channel_from_file(data: dict[str, Any], name: str, holder: str) -> dict[str, Any]:
+        """The keyword arguments :meth:`_channel_file` wrote (after checking that the file
+        names one input and one output: ``name`` the model in the message, ``holder`` what
+        has one of each)."""
+        for key in ("inputs", "outputs"):
+            if len(data[key]) != 1:
+                raise ModelFileError(
+                    f"the {name} model file names {len(data[key])} {key} ({data[key]}); "
+                    f"{holder} has one input and one output: the file was edited or damaged"
+                )
+        offsets = data.get("offsets", {})
+        return dict(
+            sampling_time=data.get("sampling_time"),
+            input_offset=offsets.get("inputs", {}).get(data["inputs"][0], 0.0),
+            output_offset=offsets.get("outputs", {}).get(data["outputs"][0], 0.0),
+            ranges=data.get("estimation_ranges", {}),
+        )
 
 
 def excursion(seen: Any, values: np.ndarray) -> float:

@@ -49,7 +49,7 @@ from blockid.blocks.base import BLOCK_TYPES, Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.defaults import DEGREE
 from blockid.errors import BlockidError, ModelFileError, OrderError, ParameterError
-from blockid.models.base import Model, excursion
+from blockid.models.base import Model, OneChannel, excursion
 from blockid.models.initial_state import estimated_starts
 
 __all__ = [
@@ -78,7 +78,7 @@ def _one_name(names: Any, what: str) -> tuple[str]:
     return names
 
 
-class ChainModel(Model):
+class ChainModel(OneChannel, Model):
     """A chain of blocks from one input to one output (module docstring).
 
     Parameters
@@ -125,15 +125,10 @@ class ChainModel(Model):
         blocks = tuple(blocks)
         self._check_chain(blocks)
         self.blocks: tuple[Block, ...] = blocks
-        self.sampling_time = sampling_time
-        self.input_offset = float(input_offset)
-        self.output_offset = float(output_offset)
-        #: Ranges of the nonlinear blocks' inputs seen in the estimation data (relative
-        #: to the offsets): ``"u"`` for the chain input, ``"x"`` for the input of the
-        #: output block, ``"s<i>"`` for a static block ``i`` inside the chain.
-        self.ranges: dict[str, list[float]] = {
-            k: [float(v[0]), float(v[1])] for k, v in (ranges or {}).items()
-        }
+        #: ``ranges``: those of the nonlinear blocks' inputs seen in the estimation data
+        #: (relative to the offsets): ``"u"`` for the chain input, ``"x"`` for the input of
+        #: the output block, ``"s<i>"`` for a static block ``i`` inside the chain.
+        self._set_channel(sampling_time, input_offset, output_offset, ranges)
 
     # ------------------------------------------------------------------ structure
     def _check_chain(self, blocks: tuple[Block, ...]) -> None:
@@ -464,14 +459,7 @@ class ChainModel(Model):
     def with_blocks(self, blocks: Sequence[Block], **changes: Any) -> ChainModel:
         """A model of the same class, names and offsets with other blocks (ranges kept
         unless the offsets change)."""
-        kwargs: dict[str, Any] = dict(
-            sampling_time=self.sampling_time,
-            input_offset=self.input_offset,
-            output_offset=self.output_offset,
-            ranges=self.ranges,
-        )
-        if "input_offset" in changes or "output_offset" in changes:
-            kwargs["ranges"] = None
+        kwargs = self._channel_settings(changes)
         kwargs.update(changes)
         return type(self)._from_blocks(self.inputs[0], self.outputs[0], tuple(blocks), **kwargs)
 
@@ -589,17 +577,9 @@ class ChainModel(Model):
     # ------------------------------------------------------------------ files
     def to_dict(self) -> dict[str, Any]:
         return {
-            "structure": self.structure,
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "sampling_time": self.sampling_time,
+            **self._file_header(),
             "chain": [b.to_dict() for b in self.blocks],
-            "parameters": self.parameters,
-            "offsets": {
-                "inputs": {self.inputs[0]: self.input_offset},
-                "outputs": {self.outputs[0]: self.output_offset},
-            },
-            "estimation_ranges": self.ranges,
+            **self._channel_file(),
         }
 
     @classmethod
@@ -608,24 +588,9 @@ class ChainModel(Model):
             blocks = tuple(block_from_dict(d) for d in data["chain"])
         else:
             blocks = cls._blocks_from_version1(data)
-        offsets = data.get("offsets", {})
-        for key in ("inputs", "outputs"):
-            if len(data[key]) != 1:
-                raise ModelFileError(
-                    f"the {cls.structure} model file names {len(data[key])} {key} "
-                    f"({data[key]}); a chain of blocks has one input and one output: the "
-                    "file was edited or damaged"
-                )
+        kwargs = cls._channel_from_file(data, cls.structure, "a chain of blocks")
         try:
-            return cls._from_blocks(
-                data["inputs"][0],
-                data["outputs"][0],
-                blocks,
-                sampling_time=data.get("sampling_time"),
-                input_offset=offsets.get("inputs", {}).get(data["inputs"][0], 0.0),
-                output_offset=offsets.get("outputs", {}).get(data["outputs"][0], 0.0),
-                ranges=data.get("estimation_ranges", {}),
-            )
+            return cls._from_blocks(data["inputs"][0], data["outputs"][0], blocks, **kwargs)
         except OrderError as exc:
             raise ModelFileError(f"the {cls.structure} model's blocks do not fit: {exc}") from None
 

@@ -67,7 +67,7 @@ from blockid.blocks import Polynomial
 from blockid.blocks.base import Block, StaticBlock, block_from_dict
 from blockid.blocks.linear import LinearBlock
 from blockid.errors import ModelFileError, OrderError
-from blockid.models.base import Model, excursion
+from blockid.models.base import Model, OneChannel, excursion
 from blockid.models.block import OneLinearBlock
 
 __all__ = ["LinearFeedback"]
@@ -107,7 +107,7 @@ def _checked_feedback(feedback: Any) -> StaticBlock:
     return feedback
 
 
-class LinearFeedback(OneLinearBlock, Model):
+class LinearFeedback(OneLinearBlock, OneChannel, Model):
     """Linear block with a static nonlinearity of the output fed back to its input
     (module docstring).
 
@@ -169,13 +169,8 @@ class LinearFeedback(OneLinearBlock, Model):
         )
         self._mask = np.asarray(self.feedback.feedback_mask(), dtype=bool)
         self._polynomial = self.feedback.kind == Polynomial.kind
-        self.sampling_time = sampling_time
-        self.input_offset = float(input_offset)
-        self.output_offset = float(output_offset)
-        #: Ranges of ``u`` and ``y`` (relative to the offsets) seen in estimation.
-        self.ranges: dict[str, list[float]] = {
-            k: [float(v[0]), float(v[1])] for k, v in (ranges or {}).items()
-        }
+        #: ``ranges``: those of ``u`` and ``y`` (relative to the offsets) seen in estimation.
+        self._set_channel(sampling_time, input_offset, output_offset, ranges)
 
     @classmethod
     def template(
@@ -315,16 +310,7 @@ class LinearFeedback(OneLinearBlock, Model):
     def replace(self, **changes: Any) -> LinearFeedback:
         """A copy with ``linear``, ``feedback``, ``sampling_time``, offsets or ``ranges``
         changed (ranges are dropped when an offset changes, unless given)."""
-        kwargs: dict[str, Any] = dict(
-            linear=self.linear,
-            feedback=self.feedback,
-            sampling_time=self.sampling_time,
-            input_offset=self.input_offset,
-            output_offset=self.output_offset,
-            ranges=self.ranges,
-        )
-        if "input_offset" in changes or "output_offset" in changes:
-            kwargs["ranges"] = None
+        kwargs = dict(linear=self.linear, feedback=self.feedback, **self._channel_settings(changes))
         unknown = set(changes) - set(kwargs)
         if unknown:
             raise TypeError(f"replace() got unknown field(s) {sorted(unknown)}")
@@ -514,39 +500,22 @@ class LinearFeedback(OneLinearBlock, Model):
     # ------------------------------------------------------------------ files
     def to_dict(self) -> dict[str, Any]:
         return {
-            "structure": self.structure,
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "sampling_time": self.sampling_time,
+            **self._file_header(),
             "linear": self.linear.to_dict(),
             "feedback": self.feedback.to_dict(),
-            "parameters": self.parameters,
-            "offsets": {
-                "inputs": {self.inputs[0]: self.input_offset},
-                "outputs": {self.outputs[0]: self.output_offset},
-            },
-            "estimation_ranges": self.ranges,
+            **self._channel_file(),
         }
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> LinearFeedback:
-        offsets = data.get("offsets", {})
-        for key in ("inputs", "outputs"):
-            if len(data[key]) != 1:
-                raise ModelFileError(
-                    f"the feedback model file names {len(data[key])} {key} ({data[key]}); the "
-                    "model has one input and one output: the file was edited or damaged"
-                )
+        kwargs = cls._channel_from_file(data, "feedback", "the model")
         try:
             return cls(
                 data["inputs"][0],
                 data["outputs"][0],
                 linear=block_from_dict(data["linear"]),  # type: ignore[arg-type]
                 feedback=block_from_dict(data["feedback"]),  # type: ignore[arg-type]
-                sampling_time=data.get("sampling_time"),
-                input_offset=offsets.get("inputs", {}).get(data["inputs"][0], 0.0),
-                output_offset=offsets.get("outputs", {}).get(data["outputs"][0], 0.0),
-                ranges=data.get("estimation_ranges", {}),
+                **kwargs,
             )
         except OrderError as exc:
             raise ModelFileError(f"the feedback model's blocks do not fit: {exc}") from None
