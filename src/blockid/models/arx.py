@@ -301,10 +301,7 @@ class ARX(Model):
     # ------------------------------------------------------------------ files
     def to_dict(self) -> dict[str, Any]:
         return {
-            "structure": self.structure,
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "sampling_time": self.sampling_time,
+            **self._file_header(),
             "orders": {"na": self.na.tolist(), "nb": self.nb.tolist(), "nk": self.nk.tolist()},
             "offsets": {
                 "inputs": dict(zip(self.inputs, self.input_offset.tolist(), strict=True)),

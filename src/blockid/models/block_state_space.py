@@ -929,10 +929,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
             return [None if b is None else b.to_dict() for b in bs]
 
         return {
-            "structure": self.structure,
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "sampling_time": self.sampling_time,
+            **self._file_header(),
             "nx": self.nx,
             "A": self.A.tolist(),
             "B": self.B.tolist(),

@@ -216,10 +216,7 @@ class Network(Model):
 
     def to_dict(self) -> dict[str, Any]:
         return {
-            "structure": self.structure,
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "sampling_time": self.sampling_time,
+            **self._file_header(),
             "subsystems": [{"name": n, "model": m.to_dict()} for n, m in self.subsystems],
         }
 

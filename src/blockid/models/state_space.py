@@ -721,10 +721,7 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
             return [float(x) if np.isfinite(x) else None for x in v]
 
         out: dict[str, Any] = {
-            "structure": self.structure,
-            "inputs": list(self.inputs),
-            "outputs": list(self.outputs),
-            "sampling_time": self.sampling_time,
+            **self._file_header(),
             "nx": self.nx,
             "A": self.A.tolist(),
             "B": self.B.tolist(),
