@@ -50,6 +50,7 @@ __all__ = [
     "block_from_dict",
     "block_template",
     "channel_specs",
+    "in_every_slot",
 ]
 
 #: Registry ``kind -> class`` filled by :meth:`Block.__init_subclass__`; used to load
@@ -586,6 +587,16 @@ def _option_value(text: str) -> Any:
         for v, p in zip(numbers, parts, strict=True)
     ]
     return numbers[0] if len(numbers) == 1 else numbers
+
+
+def in_every_slot(spec: str) -> dict[str, str]:
+    """:attr:`Block.search_specs` of a block searched with the same ``spec`` in every
+    slot it takes: input, output and feedback.
+
+    >>> in_every_slot("dead-zone")
+    {'input': 'dead-zone', 'output': 'dead-zone', 'feedback': 'dead-zone'}
+    """
+    return {"input": spec, "output": spec, "feedback": spec}
 
 
 def channel_specs(value: Any) -> dict[str, Any] | None:

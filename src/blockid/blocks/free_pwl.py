@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from blockid.blocks.base import LinearFamily
+from blockid.blocks.base import LinearFamily, in_every_slot
 from blockid.blocks.static import PiecewiseLinear, _as_input, _check_theta
 from blockid.errors import ParameterError
 
@@ -75,11 +75,7 @@ class FreePiecewiseLinear(PiecewiseLinear):
     """
 
     kind = "piecewise-linear-free"
-    search_specs: ClassVar[dict[str, str]] = {
-        "input": "piecewise-linear-free:knots=5",
-        "output": "piecewise-linear-free:knots=5",
-        "feedback": "piecewise-linear-free:knots=5",
-    }
+    search_specs: ClassVar[dict[str, str]] = in_every_slot("piecewise-linear-free:knots=5")
     size_option: ClassVar[str | None] = "knots"
     search_priority: ClassVar[int] = 2
     linear_in_parameters = False

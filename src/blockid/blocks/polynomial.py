@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.polynomial import polynomial as npoly
 
+from blockid.blocks.base import in_every_slot
 from blockid.blocks.static import (
     _as_input,
     _check_range,
@@ -107,11 +108,7 @@ class Polynomial(_PlottableStaticBlock):
     """
 
     kind = "polynomial"
-    search_specs: ClassVar[dict[str, str]] = {
-        "input": "polynomial:degree=3",
-        "output": "polynomial:degree=3",
-        "feedback": "polynomial:degree=3",
-    }
+    search_specs: ClassVar[dict[str, str]] = in_every_slot("polynomial:degree=3")
     size_option: ClassVar[str | None] = "degree"
     search_priority: ClassVar[int] = 0
     linear_in_parameters = True

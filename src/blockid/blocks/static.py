@@ -22,6 +22,7 @@ from blockid.blocks.base import (
     _coinciding,
     _far_outside,
     _vanishing,
+    in_every_slot,
 )
 from blockid.errors import DataError, ParameterError
 
@@ -147,11 +148,7 @@ class DeadZone(_PlottableStaticBlock):
 
     kind = "dead-zone"
     anchored: ClassVar[bool] = True
-    search_specs: ClassVar[dict[str, str]] = {
-        "input": "dead-zone",
-        "output": "dead-zone",
-        "feedback": "dead-zone",
-    }
+    search_specs: ClassVar[dict[str, str]] = in_every_slot("dead-zone")
     search_priority: ClassVar[int] = 4
     export_source: ClassVar[str | None] = """
 def evaluate(p, s):
@@ -290,11 +287,7 @@ class Saturation(_PlottableStaticBlock):
 
     kind = "saturation"
     anchored: ClassVar[bool] = True
-    search_specs: ClassVar[dict[str, str]] = {
-        "input": "saturation",
-        "output": "saturation",
-        "feedback": "saturation",
-    }
+    search_specs: ClassVar[dict[str, str]] = in_every_slot("saturation")
     search_priority: ClassVar[int] = 3
     export_source: ClassVar[str | None] = """
 def evaluate(p, s):
