@@ -52,7 +52,7 @@ from blockid.cli._options import (
     structures_help,
     with_fit_options,
 )
-from blockid.cli.report import write_report_option
+from blockid.cli.report import compare_ranges, structure_names, write_report_option
 
 __all__ = ["compare", "fit", "fit_network"]
 
@@ -168,24 +168,21 @@ def compare(
     free-run simulation and of one-step prediction on the validation range. Each
     structure takes the estimator options it uses and leaves the others.
     """
-    from blockid.data.ranges import check_disjoint, parse_range
+    from blockid.data.ranges import check_disjoint
     from blockid.fitting.registry import COMPARED_BY_DEFAULT, check_compared
 
     refuse_to_overwrite(report, force)
     check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
     check_disjoint(estimation, validation)
-    names = {} if structures is None else {"structures": _names(structures)}
+    names = structure_names(structures)
     check_compared(names.get("structures", COMPARED_BY_DEFAULT), method)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
-    from blockid.workflows import compare_structures
-
-    est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
-    val = data.select(*parse_range(validation, "--validation"), what="--validation")
     opts = given(options)
     if report is not None:  # trajectories and standard errors for the report's figures
         opts = {"record_history": True, "standard_errors": True, **opts}
-    with busy("identifying and comparing the structures", quiet or json_out):
-        result = compare_structures(est, val, **names, method=method, options=opts)
+    est, val, result = compare_ranges(
+        data, estimation, validation, names, method, opts, quiet or json_out
+    )
     if report is not None:
         with busy("writing the report", quiet or json_out):
             write_report_option(
@@ -217,10 +214,6 @@ def compare(
         if m.residuals is not None:
             line = f"{m.structure}: residual tests {m.residuals.verdict()}"
             stdout.print(line, soft_wrap=True, markup=False)
-
-
-def _names(text: str) -> list[str]:
-    return [name.strip() for name in text.split(",") if name.strip()]
 
 
 @cli_errors

@@ -35,7 +35,7 @@ from blockid.cli._options import (
     with_fit_options,
 )
 
-__all__ = ["command_words", "report", "write_report_option"]
+__all__ = ["command_words", "compare_ranges", "report", "structure_names", "write_report_option"]
 
 
 def command_words() -> list[str]:
@@ -115,8 +115,34 @@ def write_report_option(
     return written
 
 
-def _names(text: str) -> list[str]:
-    return [name.strip() for name in text.split(",") if name.strip()]
+def structure_names(structures: str | None) -> dict[str, list[str]]:
+    """``structures=`` of :func:`~blockid.workflows.compare_structures` from the
+    comma-separated ``--structures`` (not given: nothing, the default set)."""
+    if structures is None:
+        return {}
+    return {"structures": [name.strip() for name in structures.split(",") if name.strip()]}
+
+
+def compare_ranges(
+    data: Any,
+    estimation: str,
+    validation: str,
+    names: dict[str, list[str]],
+    method: str | None,
+    options: dict[str, Any],
+    quiet: bool,
+) -> tuple[Any, Any, Any]:
+    """The estimation and validation ranges of ``data`` and the comparison of the
+    structures fitted on the one and scored on the other (``compare`` and ``report``),
+    with a spinner unless ``quiet``."""
+    from blockid.data.ranges import parse_range
+    from blockid.workflows import compare_structures
+
+    est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
+    val = data.select(*parse_range(validation, "--validation"), what="--validation")
+    with busy("identifying and comparing the structures", quiet):
+        result = compare_structures(est, val, **names, method=method, options=options)
+    return est, val, result
 
 
 @with_fit_options
@@ -147,21 +173,17 @@ def report(
     bands when the fit has parameter standard errors), the parameter trajectories of the
     recursive methods, and the command, data file hashes and versions that made it.
     """
-    from blockid.data.ranges import check_disjoint, parse_range
+    from blockid.data.ranges import check_disjoint
 
     refuse_to_overwrite(out, force)
     check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
     check_disjoint(estimation, validation)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
-    from blockid.workflows import compare_structures
-
-    est = data.select(*parse_range(estimation, "--estimation"), what="--estimation")
-    val = data.select(*parse_range(validation, "--validation"), what="--validation")
-    names = {} if structures is None else {"structures": _names(structures)}
     # trajectories of the recursive methods and standard errors, for the figures
     opts = {"record_history": True, "standard_errors": True, **given(options)}
-    with busy("identifying and comparing the structures", quiet or json_out):
-        result = compare_structures(est, val, **names, method=method, options=opts)
+    est, val, result = compare_ranges(
+        data, estimation, validation, structure_names(structures), method, opts, quiet or json_out
+    )
     with busy("writing the report", quiet or json_out):
         path = write_report_option(
             out,
