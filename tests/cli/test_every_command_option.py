@@ -1380,10 +1380,16 @@ def fleet_method(f, calls):
     assert _summary(f)["method"] == "rls"
 
 
-def fleet_workers(f, calls):
-    doc = _json(_fleet(f, "--workers", "3", "--json"))
-    assert _fleet_call(calls)[1]["workers"] == 3
+def fleet_jobs(f, calls):
+    doc = _json(_fleet(f, "--jobs", "3", "--json"))
+    assert _fleet_call(calls)[1]["jobs"] == 3
     assert calls.one("LocalCluster")[1]["n_workers"] == 3 and doc["workers"] == 3
+
+
+def fleet_workers(f, calls):
+    """The old name of --jobs: taken, with a note."""
+    doc = _json(_fleet(f, "--workers", "3", "--json"))
+    assert _fleet_call(calls)[1]["jobs"] == 3 and doc["workers"] == 3
 
 
 def fleet_scheduler(f, calls):
@@ -1894,6 +1900,7 @@ CHECKS: dict[tuple[str, str], Callable[[Files, Calls], None]] = {
     ("fleet", "out"): fleet_out,
     ("fleet", "structure"): fleet_structure,
     ("fleet", "method"): fleet_method,
+    ("fleet", "jobs"): fleet_jobs,
     ("fleet", "workers"): fleet_workers,
     ("fleet", "scheduler"): fleet_scheduler,
     ("fleet", "ts"): fleet_ts,

@@ -156,9 +156,9 @@ def test_ctrl_c_says_how_many_model_files_were_written(tmp_path, monkeypatch):
 
 
 def test_a_cluster_of_its_own(records, tmp_path):
-    """The default: a local cluster of ``workers`` processes, started and closed here."""
+    """The default: a local cluster of ``jobs`` processes, started and closed here."""
     pytest.importorskip("distributed")
-    run = fit_fleet(records[:2], tmp_path, "arx", ["u"], ["y"], options=ORDERS, workers=1)
+    run = fit_fleet(records[:2], tmp_path, "arx", ["u"], ["y"], options=ORDERS, jobs=1)
     assert run.workers == 1 and run.counts()["ok"] == 2
 
 
@@ -193,3 +193,20 @@ def test_without_dask_the_command_says_what_to_install(records, tmp_path, monkey
     assert r.exit_code == 2
     assert r.stderr.strip() == f"error: {MISSING_DASK}"
     assert MISSING_DASK == "blockid fleet needs dask: pip install 'blockid[fleet]'"
+
+
+def test_jobs_is_identify_s_name_checked_alike_and_workers_still_works(records, tmp_path):
+    """One name for the worker processes: ``jobs``, checked as identify checks it (more
+    than MAX_JOBS refused, not cut); ``workers``, its old name, warns and works."""
+    from blockid.errors import ParameterError
+    from blockid.workflows.effort import MAX_JOBS
+
+    pytest.importorskip("distributed")
+    records = records[:1]
+    with pytest.raises(ParameterError, match=f"jobs={MAX_JOBS + 1} is more worker processes"):
+        fit_fleet(records, tmp_path / "a", "arx", ["u"], ["y"], options=ORDERS, jobs=MAX_JOBS + 1)
+    with pytest.raises(ParameterError, match="not also workers"):
+        fit_fleet(records, tmp_path / "b", "arx", ["u"], ["y"], options=ORDERS, jobs=1, workers=1)
+    with pytest.warns(DeprecationWarning, match="now fleet\\(jobs="):
+        run = fit_fleet(records, tmp_path / "c", "arx", ["u"], ["y"], options=ORDERS, workers=1)
+    assert run.workers == 1 and run.counts()["ok"] == 1

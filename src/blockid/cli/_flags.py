@@ -27,6 +27,7 @@ __all__ = [
     "Json",
     "ModelOut",
     "Outputs",
+    "Jobs",
     "PlotDir",
     "ReportFile",
     "Quiet",
@@ -56,6 +57,7 @@ SHARED: dict[str, tuple[tuple[str, ...], str | None]] = {
     "experiment_column": (("--experiment-column",), "NAME"),
     "report": (("--report",), "FILE"),
     "scheduler": (("--scheduler",), "ADDRESS"),
+    "jobs": (("--jobs",), "N"),
     "range": (("--range",), "START:STOP"),
     "periods": (("--periods",), "N"),
     "confidence": (("--confidence",), "LEVEL"),
@@ -98,6 +100,16 @@ FolderForce = Annotated[
     bool, shared("force", "Write into a folder that is not empty (files replaced).")
 ]
 Json = Annotated[bool, shared("json_out", "Print one JSON document on stdout.")]
+#: ``--jobs``: the worker processes of this machine (identify's search, fleet's cluster),
+#: one name and one default (``workflows.effort.check_jobs``).
+Jobs = Annotated[
+    int | None,
+    shared(
+        "jobs",
+        "Worker processes on this machine, at most 64 (default: every core, at most 64).",
+        show_default=False,
+    ),
+]
 #: ``--quiet`` of every command that shows progress.
 Quiet = Annotated[
     bool,

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import glob
 import inspect
-import os
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -17,7 +16,17 @@ import typer
 
 from blockid.cli._common import cli_errors, print_json, progress_bar, stderr, stdout
 from blockid.cli._data import check_arguments
-from blockid.cli._flags import Force, Inputs, Json, Outputs, Quiet, SamplingTime, TimeColumn, shared
+from blockid.cli._flags import (
+    Force,
+    Inputs,
+    Jobs,
+    Json,
+    Outputs,
+    Quiet,
+    SamplingTime,
+    TimeColumn,
+    shared,
+)
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
     Method,
@@ -41,13 +50,11 @@ OutDir = Annotated[
     Path,
     shared("out", "Folder of the model files and summary.", metavar="DIR"),
 ]
+#: ``--workers``: the old name of ``--jobs`` (hidden; still taken).
 Workers = Annotated[
     int | None,
     typer.Option(
-        metavar="N",
-        min=1,
-        help="Worker processes of the local cluster (default: the number of cores).",
-        show_default=False,
+        metavar="N", min=1, help="The old name of --jobs.", hidden=True, show_default=False
     ),
 ]
 Scheduler = Annotated[
@@ -78,19 +85,20 @@ def fleet(
     out: OutDir,
     structure: Structure = DEFAULT_STRUCTURE,
     method: Method = None,
-    workers: Workers = None,
+    jobs: Jobs = None,
     scheduler: Scheduler = None,
     ts: SamplingTime = None,
     time_column: TimeColumn = None,
     force: Force = False,
     quiet: Quiet = False,
     json_out: Json = False,
+    workers: Workers = None,
     **options: Any,
 ) -> None:
     """Fit one model per record, many records in parallel (dask.distributed).
 
     Every record (one data file) is fitted with the same structure, method and options,
-    as 'blockid fit' would, one task per record on a local cluster of --workers
+    as 'blockid fit' would, one task per record on a local cluster of --jobs
     processes or on a running cluster (--scheduler). Writes DIR/<record>.json per
     record and DIR/summary.csv and DIR/summary.parquet (file, structure, method,
     status, error, seconds, samples, rmse and fit % per output). A record that fails is
@@ -99,6 +107,14 @@ def fleet(
     """
     files = _expand(patterns)
     check_arguments(structure=structure, method=method, options=given(options))
+    if workers is not None:  # --workers, the old name: taken, with a word on stderr
+        if jobs is not None:
+            raise ParameterError("give --jobs, not also --workers (its old name)")
+        jobs = workers
+        stderr.print("note: --workers is now --jobs (identify's name)")
+    from blockid.workflows.effort import check_jobs
+
+    check_jobs(jobs)
     from blockid.data.dataset import _check_sampling_time
     from blockid.workflows.fleet import fit_fleet
 
@@ -127,7 +143,7 @@ def fleet(
             method=method,
             options=given(options),
             read_options={k: v for k, v in read.items() if v is not None},
-            workers=workers or os.cpu_count() or 1,
+            jobs=jobs,
             scheduler=scheduler,
             force=force,
             on_result=on_result,

@@ -31,6 +31,7 @@ from blockid.cli._flags import (
     ExperimentColumn,
     Force,
     Inputs,
+    Jobs,
     Json,
     ModelOut,
     Outputs,
@@ -100,12 +101,7 @@ def identify(
             "gives the same model on any machine.",
         ),
     ] = "standard",
-    jobs: Annotated[
-        int | None,
-        typer.Option(
-            metavar="N", help="Worker processes, at most 64 (default: every core, at most 64)."
-        ),
-    ] = None,
+    jobs: Jobs = None,
     scheduler: Annotated[
         str | None,
         shared(

@@ -16,7 +16,7 @@ from typing import Any
 from blockid.errors import ParameterError
 from blockid.fitting.registry import STRUCTURES
 
-__all__ = ["EFFORTS", "LONG_RECORD", "MAX_JOBS", "RULES", "Effort", "check_search"]
+__all__ = ["EFFORTS", "LONG_RECORD", "MAX_JOBS", "RULES", "Effort", "check_jobs", "check_search"]
 
 #: Records of at least this many samples get fewer folds and screening on a part.
 LONG_RECORD = 20_000
@@ -118,6 +118,21 @@ EFFORTS: dict[str, Effort] = {
 }  # fmt: skip
 
 
+def check_jobs(jobs: int | None) -> int | None:
+    """``jobs``, the worker processes of one machine (``identify``'s and ``fleet``'s one
+    name for them), checked: a whole number from 1 to :data:`MAX_JOBS`, or None (every
+    core, at most ``MAX_JOBS``)."""
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
+        raise ParameterError(f"jobs must be a whole number >= 1, got {jobs!r}", parameter="jobs")
+    if jobs is not None and jobs > MAX_JOBS:
+        raise ParameterError(
+            f"jobs={jobs} is more worker processes than blockid starts on one machine "
+            f"({MAX_JOBS}); give {MAX_JOBS} or fewer, or a dask cluster (scheduler) for more",
+            parameter="jobs",
+        )
+    return jobs
+
+
 def check_search(
     structures: Sequence[str] | None,
     effort: str | Effort,
@@ -134,14 +149,7 @@ def check_search(
         )
     if rule not in RULES:
         raise ParameterError(f"rule={rule!r}: choose one of {', '.join(RULES)}", parameter="rule")
-    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1):
-        raise ParameterError(f"jobs must be a whole number >= 1, got {jobs!r}", parameter="jobs")
-    if jobs is not None and jobs > MAX_JOBS:
-        raise ParameterError(
-            f"jobs={jobs} is more worker processes than identify starts on one machine "
-            f"({MAX_JOBS}); give {MAX_JOBS} or fewer, or a dask cluster (scheduler) for more",
-            parameter="jobs",
-        )
+    check_jobs(jobs)
     if scheduler is not None and jobs is not None:
         raise ParameterError(
             "give jobs (worker processes here) or scheduler (a dask cluster), not both",

@@ -9,7 +9,7 @@ status, error, seconds, samples and the estimation metrics ``rmse_<output>`` and
 
 Choices:
 
-- **Where it runs.** A local cluster of ``workers`` processes with one thread each
+- **Where it runs.** A local cluster of ``jobs`` worker processes with one thread each
   (the fits hold the GIL in NumPy and numba code, so processes, not threads), or an
   existing cluster given by its scheduler address; the records must then be readable
   at the same paths on every worker (shared storage; paths are made absolute here).
@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from blockid.errors import BlockidError, ParameterError
+from blockid.workflows.effort import MAX_JOBS, check_jobs
 
 __all__ = [
     "MISSING_DASK",
@@ -164,10 +165,11 @@ def fit_fleet(
     method: str | None = None,
     options: dict[str, Any] | None = None,
     read_options: dict[str, Any] | None = None,
-    workers: int = 2,
+    jobs: int | None = None,
     scheduler: str | None = None,
     force: bool = False,
     on_result: Callable[[dict[str, Any]], None] | None = None,
+    workers: int | None = None,
 ) -> FleetResult:
     """Fit every record of ``paths`` in parallel; write the models and the summary.
 
@@ -183,15 +185,19 @@ def fit_fleet(
     inputs, outputs, read_options
         As in :func:`~blockid.data.read_data` (``read_options``: ``sampling_time``,
         ``time_column``, ``experiment_column``).
-    workers : int
-        Worker processes of the local cluster (one thread each).
+    jobs : int, optional
+        Worker processes of the local cluster, one thread each (``identify``'s name and
+        default: every core, at most :data:`~blockid.workflows.effort.MAX_JOBS`; more
+        is refused, a cluster of your own takes more).
     scheduler : str, optional
-        Address of a running cluster's scheduler (``tcp://host:8786``); ``workers``
-        is then ignored.
+        Address of a running cluster's scheduler (``tcp://host:8786``); ``jobs`` is
+        then ignored.
     force : bool
         Refit records whose model file exists.
     on_result : callable, optional
         Called with each row as its record finishes (progress).
+    workers : int, optional
+        The old name of ``jobs`` (a :class:`DeprecationWarning`; not with ``jobs``).
 
     Raises
     ------
@@ -205,8 +211,21 @@ def fit_fleet(
     options = dict(options or {})
     # refuse bad options before any work; name the method in every row
     _, method, _ = resolve_options(structure, method, options)
-    if workers < 1:
-        raise ParameterError(f"workers must be >= 1, got {workers}", parameter="workers")
+    if workers is not None:
+        if jobs is not None:
+            raise ParameterError("give jobs, not also workers (its old name)", parameter="workers")
+        import warnings
+
+        warnings.warn(
+            "fleet(workers=...) is now fleet(jobs=...), identify's name for the same thing",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        jobs = workers
+    if check_jobs(jobs) is None:
+        from blockid.workflows.parallel import available_cores
+
+        jobs = min(available_cores(), MAX_JOBS)
     files = [str(Path(p).resolve()) for p in paths]
     if not files:
         raise ParameterError("no records to fit")
@@ -238,11 +257,11 @@ def fit_fleet(
 
     start = time.perf_counter()
     cluster = None
-    n_workers = workers
+    n_workers = jobs
     if todo:
         if scheduler is None:
             cluster = LocalCluster(
-                n_workers=workers,
+                n_workers=jobs,
                 threads_per_worker=1,
                 processes=True,
                 dashboard_address=":0",  # any free port: clusters side by side
