@@ -146,3 +146,31 @@ def test_a_model_with_a_nan_parameter_is_not_written(tmp_path):
     with pytest.raises(ValueError, match="Out of range float values"):
         save_model(model, path)
     assert not path.exists()
+
+
+@pytest.mark.parametrize(
+    ("key", "bad", "match"),
+    [
+        ("offsets", "abc", "offsets of its inputs \\('abc'\\) do not give the input 'u'"),
+        ("offsets", {"inputs": {"v": 1.0}, "outputs": {"y": 0.0}}, "input 'u' a number"),
+        ("offsets", {"inputs": {"u": 0.0}, "outputs": []}, "output 'y' a number"),
+        ("estimation_ranges", "zz", "estimation_ranges \\(zz\\) are not pairs"),
+        ("estimation_ranges", {"input": [1.0]}, "are not pairs"),
+    ],
+)
+def test_a_damaged_offset_or_range_of_a_block_model_is_named(tmp_path, key, bad, match):
+    """A chain's (or feedback loop's) offsets and ranges: a damaged entry is refused by
+    name; it raised AttributeError with a traceback, or (an offset under another signal's
+    name) was read as 0 without a word."""
+    from blockid.blocks import Polynomial
+    from blockid.models import Hammerstein
+
+    model = Hammerstein("u", "y", input_block=Polynomial([0.0, 1.0, 0.2]), na=1, nb=1, nk=1,
+                        a=[-0.5], b=[1.0], input_offset=0.3, output_offset=-0.1)  # fmt: skip
+    path = tmp_path / "m.json"
+    save_model(model, path)
+    document = json.loads(path.read_text())
+    document["model"][key] = bad
+    path.write_text(json.dumps(document))
+    with pytest.raises(ModelFileError, match=match):
+        load_model(path)

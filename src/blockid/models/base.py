@@ -215,13 +215,28 @@ class OneChannel:
                     f"the {name} model file names {len(data[key])} {key} ({data[key]}); "
                     f"{holder} has one input and one output: the file was edited or damaged"
                 )
-        offsets = data.get("offsets", {})
-        return dict(
-            sampling_time=data.get("sampling_time"),
-            input_offset=offsets.get("inputs", {}).get(data["inputs"][0], 0.0),
-            output_offset=offsets.get("outputs", {}).get(data["outputs"][0], 0.0),
-            ranges=data.get("estimation_ranges", {}),
-        )
+        offsets = data.get("offsets") or {}
+        given = {}
+        for key, side in (("inputs", "input"), ("outputs", "output")):
+            table = offsets.get(key, {}) if isinstance(offsets, dict) else None
+            signal = data[key][0]
+            if not isinstance(table, dict) or (table and signal not in table):
+                shown = table if isinstance(offsets, dict) else offsets
+                raise ModelFileError(
+                    f"the {name} model file's offsets of its {key} ({shown!r}) do not give "
+                    f"the {side} {signal!r} a number: the file was edited or damaged, refit "
+                    "or restore it"
+                )
+            given[f"{side}_offset"] = table.get(signal, 0.0)
+        ranges = data.get("estimation_ranges") or {}
+        if not isinstance(ranges, dict) or not all(
+            isinstance(v, list | tuple) and len(v) == 2 for v in ranges.values()
+        ):
+            raise ModelFileError(
+                f"the {name} model file's estimation_ranges ({str(ranges)[:80]}) are not "
+                "pairs [low, high] by signal: the file was edited or damaged, refit or restore it"
+            )
+        return dict(sampling_time=data.get("sampling_time"), ranges=ranges, **given)
 
 
 def excursion(seen: Any, values: np.ndarray) -> float:
@@ -246,7 +261,7 @@ def model_from_dict(data: dict[str, Any]) -> Model:
         return MODEL_TYPES[structure].from_dict(data)
     except ModelFileError:
         raise
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
         raise ModelFileError(
             f"the {structure} model description is damaged or incomplete ({type(exc).__name__}: "
             f"{exc})"
