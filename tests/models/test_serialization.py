@@ -174,3 +174,35 @@ def test_a_damaged_offset_or_range_of_a_block_model_is_named(tmp_path, key, bad,
     path.write_text(json.dumps(document))
     with pytest.raises(ModelFileError, match=match):
         load_model(path)
+
+
+@pytest.mark.parametrize(
+    ("structure", "key", "bad", "match"),
+    [
+        ("arx", "offsets", "abc", "offsets of its inputs \\('abc'\\)"),
+        ("arx", "offsets", {"zz": 1.0}, "must give each of \\['u'\\] a number"),
+        ("arx", "offsets", {"inputs": {"u": 0.0}, "outputs": {"q": 1.0}}, "of its outputs"),
+        ("state-space", "normalisation", "abc", "normalisation \\(abc\\) must give"),
+        ("state-space", "normalisation", {"zz": 1}, "input_offset, input_scale"),
+    ],
+)
+def test_a_damaged_offset_or_normalisation_of_a_linear_model_is_named(
+    tmp_path, structure, key, bad, match
+):
+    """An ARX model's offsets and a state space's normalisation: a table under other names
+    was read as no offset (0) and no scaling (1) without a word; a string raised
+    AttributeError. Both are refused by name."""
+    from blockid.data import Dataset
+    from blockid.fitting import fit_model
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, 300)
+    data = Dataset.from_arrays(u, np.convolve(u, [0.0, 1.0, 0.5])[:300] + 2.0, ["u"], ["y"])
+    orders = {"na": 1, "nb": 2, "nk": 1} if structure == "arx" else {"nx": 2}
+    path = tmp_path / "m.json"
+    save_model(fit_model(data, structure, **orders).model, path)
+    document = json.loads(path.read_text())
+    document["model"][key] = bad
+    path.write_text(json.dumps(document))
+    with pytest.raises(ModelFileError, match=match):
+        load_model(path)

@@ -319,7 +319,18 @@ class ARX(Model):
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ARX:
         params = data["parameters"]
-        offsets = data.get("offsets", {})
+        offsets = data.get("offsets") or {}
+        if isinstance(offsets, dict) and offsets and set(offsets) != {"inputs", "outputs"}:
+            offsets = {"inputs": offsets}  # named in the message below, as what it holds
+        for key in ("inputs", "outputs"):
+            table = offsets.get(key, {}) if isinstance(offsets, dict) else offsets
+            names = set(data[key])
+            if not isinstance(table, dict) or (table and set(table) != names):
+                raise ModelFileError(
+                    f"the arx model file's offsets of its {key} ({table!r}) must give each "
+                    f"of {sorted(names)} a number: the file was edited or damaged, refit or "
+                    "restore it"
+                )
         for yi in data["outputs"]:
             for what in ("a", "b"):
                 for name, coeffs in params[yi][what].items():

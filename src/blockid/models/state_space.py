@@ -747,7 +747,13 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> PolynomialStateSpace:
-        norm = data.get("normalisation", {})
+        norm = data.get("normalisation") or {}
+        if not isinstance(norm, dict) or (norm and set(norm) != set(_NORMALISATION)):
+            raise ModelFileError(
+                f"the state-space model file's normalisation ({str(norm)[:80]}) must give "
+                f"{', '.join(_NORMALISATION)}: the file was edited or damaged, refit or "
+                "restore it"
+            )
 
         def bound(key: str, default: float) -> Any:
             values = data.get(key)
@@ -769,6 +775,10 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
             )  # fmt: skip
         except OrderError as exc:
             raise ModelFileError(f"the state-space model description is invalid: {exc}") from None
+
+
+#: The fields of a state-space model file's ``normalisation``.
+_NORMALISATION = ("input_offset", "input_scale", "output_offset", "output_scale")
 
 
 class StateSpace(PolynomialStateSpace):
