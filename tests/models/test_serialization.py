@@ -151,9 +151,9 @@ def test_a_model_with_a_nan_parameter_is_not_written(tmp_path):
 @pytest.mark.parametrize(
     ("key", "bad", "match"),
     [
-        ("offsets", "abc", "offsets of its inputs \\('abc'\\) do not give the input 'u'"),
-        ("offsets", {"inputs": {"v": 1.0}, "outputs": {"y": 0.0}}, "input 'u' a number"),
-        ("offsets", {"inputs": {"u": 0.0}, "outputs": []}, "output 'y' a number"),
+        ("offsets", "abc", "offsets of its inputs \\('abc'\\) must give each of \\['u'\\]"),
+        ("offsets", {"inputs": {"v": 1.0}, "outputs": {"y": 0.0}}, "of its inputs .* \\['u'\\]"),
+        ("offsets", {"inputs": {"u": 0.0}, "outputs": []}, "of its outputs"),
         ("estimation_ranges", "zz", "estimation_ranges \\(zz\\) are not pairs"),
         ("estimation_ranges", {"input": [1.0]}, "are not pairs"),
     ],

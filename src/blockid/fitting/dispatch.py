@@ -83,17 +83,7 @@ def fit_model(
         An option the method does not use is an error, not silently ignored. ``None``
         values are dropped (the method's default applies).
     """
-    decl, method, options = resolve_options(structure, method, options)
-    for key in ("input_block", "output_block"):
-        if decl.block_oriented and isinstance(options.get(key), dict):
-            raise ParameterError(
-                f"{key}: blocks per channel ({', '.join(options[key])}) are for a model of "
-                f"several inputs or outputs (structure block-state-space); {decl.name} takes "
-                "one block",
-                parameter=key,
-            )
-    _check_orders_fit(data, decl.name, options)
-    refuse_constant_inputs(data)
+    decl, method, options = _checked(data, structure, method, options)
     uncertainty = bool(options.pop("standard_errors", False))
     refine = bool(options.pop("refine", False))
     if not decl.block_oriented:
@@ -120,6 +110,25 @@ def fit_model(
     return _finish(result, data, structure, uncertainty)
 
 
+def _checked(
+    data: Dataset, structure: str, method: str | None, options: dict[str, Any]
+) -> tuple[Any, str, dict[str, Any]]:
+    """The structure's declaration, the method and the converted options of a fit on
+    ``data``, checked before any work (:func:`fit_model` and :func:`climb_from` alike)."""
+    decl, method, options = resolve_options(structure, method, options)
+    for key in ("input_block", "output_block"):
+        if decl.block_oriented and isinstance(options.get(key), dict):
+            raise ParameterError(
+                f"{key}: blocks per channel ({', '.join(options[key])}) are for a model of "
+                f"several inputs or outputs (structure block-state-space); {decl.name} takes "
+                "one block",
+                parameter=key,
+            )
+    _check_orders_fit(data, decl.name, options)
+    refuse_constant_inputs(data)
+    return decl, method, options
+
+
 def climb_from(model: Any, done: int, data: Dataset, structure: str, **options: Any) -> FitResult:
     """:func:`fit_model` ``(data, structure, **options)`` of a polynomial state space fitted
     degree by degree (``start_degree`` below ``degree``), continued from ``model``: the
@@ -130,15 +139,13 @@ def climb_from(model: Any, done: int, data: Dataset, structure: str, **options: 
     is the whole fit's, bit for bit, or the same error is raised."""
     from blockid.fitting.state_space import continue_polynomial_state_space
 
-    decl, method, options = resolve_options(structure, None, options)
+    decl, method, options = _checked(data, structure, None, options)
     if "start_degree" not in decl.accepted(method):
         raise ParameterError(
             f"climb_from continues a polynomial state space fitted degree by degree, not "
             f"{structure}",
             parameter="structure",
         )
-    _check_orders_fit(data, decl.name, options)
-    refuse_constant_inputs(data)
     options.pop("standard_errors", None)
     options.pop("refine", None)
     if options.pop("integrator", 0):

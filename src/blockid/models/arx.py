@@ -23,7 +23,7 @@ import numpy as np
 
 from blockid._kernels.arx import arx_simulate
 from blockid.errors import ModelFileError, OrderError
-from blockid.models.base import Model
+from blockid.models.base import Model, file_offsets
 
 __all__ = ["ARX", "order_matrix"]
 
@@ -319,18 +319,7 @@ class ARX(Model):
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ARX:
         params = data["parameters"]
-        offsets = data.get("offsets") or {}
-        if isinstance(offsets, dict) and offsets and set(offsets) != {"inputs", "outputs"}:
-            offsets = {"inputs": offsets}  # named in the message below, as what it holds
-        for key in ("inputs", "outputs"):
-            table = offsets.get(key, {}) if isinstance(offsets, dict) else offsets
-            names = set(data[key])
-            if not isinstance(table, dict) or (table and set(table) != names):
-                raise ModelFileError(
-                    f"the arx model file's offsets of its {key} ({table!r}) must give each "
-                    f"of {sorted(names)} a number: the file was edited or damaged, refit or "
-                    "restore it"
-                )
+        offsets = file_offsets(data, "arx")
         for yi in data["outputs"]:
             for what in ("a", "b"):
                 for name, coeffs in params[yi][what].items():
@@ -348,8 +337,8 @@ class ARX(Model):
             a={yi: params[yi]["a"] for yi in data["outputs"]},
             b={yi: params[yi]["b"] for yi in data["outputs"]},
             sampling_time=data.get("sampling_time"),
-            input_offset=[offsets.get("inputs", {}).get(n, 0.0) for n in data["inputs"]],
-            output_offset=[offsets.get("outputs", {}).get(n, 0.0) for n in data["outputs"]],
+            input_offset=offsets["inputs"],
+            output_offset=offsets["outputs"],
         )
 
 

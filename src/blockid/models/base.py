@@ -215,19 +215,8 @@ class OneChannel:
                     f"the {name} model file names {len(data[key])} {key} ({data[key]}); "
                     f"{holder} has one input and one output: the file was edited or damaged"
                 )
-        offsets = data.get("offsets") or {}
-        given = {}
-        for key, side in (("inputs", "input"), ("outputs", "output")):
-            table = offsets.get(key, {}) if isinstance(offsets, dict) else None
-            signal = data[key][0]
-            if not isinstance(table, dict) or (table and signal not in table):
-                shown = table if isinstance(offsets, dict) else offsets
-                raise ModelFileError(
-                    f"the {name} model file's offsets of its {key} ({shown!r}) do not give "
-                    f"the {side} {signal!r} a number: the file was edited or damaged, refit "
-                    "or restore it"
-                )
-            given[f"{side}_offset"] = table.get(signal, 0.0)
+        offsets = file_offsets(data, name)
+        given = {"input_offset": offsets["inputs"][0], "output_offset": offsets["outputs"][0]}
         ranges = data.get("estimation_ranges") or {}
         if not isinstance(ranges, dict) or not all(
             isinstance(v, list | tuple) and len(v) == 2 for v in ranges.values()
@@ -237,6 +226,26 @@ class OneChannel:
                 "pairs [low, high] by signal: the file was edited or damaged, refit or restore it"
             )
         return dict(sampling_time=data.get("sampling_time"), ranges=ranges, **given)
+
+
+def file_offsets(data: dict[str, Any], name: str) -> dict[str, list[Any]]:
+    """The offsets a model file's ``offsets`` table gives its inputs and outputs, in the
+    order of its signals (``{"inputs": {name: value}, "outputs": {...}}``; a missing or
+    empty table: 0); a table that does not name exactly the model's signals is refused
+    (``name``: the model, for the message)."""
+    offsets = data.get("offsets") or {}
+    if not isinstance(offsets, dict) or (offsets and set(offsets) != {"inputs", "outputs"}):
+        offsets = {"inputs": offsets, "outputs": offsets}  # what the message shows
+    out: dict[str, list[Any]] = {}
+    for key in ("inputs", "outputs"):
+        table, names = offsets.get(key, {}), list(data[key])
+        if not isinstance(table, dict) or (table and set(table) != set(names)):
+            raise ModelFileError(
+                f"the {name} model file's offsets of its {key} ({table!r}) must give each of "
+                f"{names} a number: the file was edited or damaged, refit or restore it"
+            )
+        out[key] = [table.get(n, 0.0) for n in names]
+    return out
 
 
 def excursion(seen: Any, values: np.ndarray) -> float:

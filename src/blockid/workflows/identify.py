@@ -387,11 +387,11 @@ class _Search:
         tasks = [self._task(c, fold, limit) for c in candidates for fold in plan.folds]
         t0 = time.perf_counter()
         self.stages.append({"stage": stage, "candidates": len(candidates), "fits": len(tasks)})
+        if capped and self.expired():
+            tasks = []
         continued = sum(t.start is not None for t in tasks)
         if continued:  # fits that start from the fold's model of the degree below
             self.stages[-1]["continued"] = continued
-        if capped and self.expired():
-            tasks = []
         count = [0]
         k = len(plan)
 
