@@ -113,7 +113,7 @@ def profile(u: np.ndarray, y: np.ndarray) -> dict[str, Any]:
         pnlss_sensitivities,
         pnlss_trajectory,
     )
-    from blockid.fitting import state_space as ss
+    from blockid.fitting import state_space_refinement as ss
     from blockid.fitting.threads import NormalSums, kernel_threads
 
     from reference import pnlss_jacobian
