@@ -7,10 +7,11 @@ this command line's flags, so that a message always says what to change on the l
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,7 @@ __all__ = [
     "cli_errors",
     "error_line",
     "flag",
+    "flagged",
     "metrics_table",
     "print_json",
     "print_model",
@@ -89,6 +91,19 @@ def error_line(exc: BlockidError) -> str:
     return f"error: {message}"
 
 
+@contextlib.contextmanager
+def flagged(flag_of: Callable[[str], str | None]) -> Iterator[None]:
+    """Within: a library error names this command's flag of its parameter (``flag_of``:
+    parameter -> flag, None where the command has none), unless its message does."""
+    try:
+        yield
+    except BlockidError as exc:
+        name = flag_of(exc.parameter) if exc.parameter else None
+        if name is None or name in str(exc):
+            raise
+        raise type(exc)(f"{exc} (option {name})") from None
+
+
 def cli_errors(fn: Callable[..., Any]) -> Callable[..., Any]:
     """Turn blockid errors into one readable line on stderr and exit status 2."""
 
@@ -137,8 +152,6 @@ def progress_shown(quiet: bool) -> bool:
 def busy(what: str, quiet: bool = False) -> Any:
     """A spinner on stderr while ``what`` runs, when :func:`progress_shown` (else a
     context that does nothing)."""
-    import contextlib
-
     if not progress_shown(quiet):
         return contextlib.nullcontext()
     return stderr.status(f"{what} ...", spinner="dots")

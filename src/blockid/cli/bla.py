@@ -12,6 +12,7 @@ import typer
 from blockid.cli._common import (
     busy,
     cli_errors,
+    flagged,
     print_json,
     refuse_figures,
     refuse_model_name,
@@ -171,8 +172,10 @@ def bla(
         options = {"method": method, "period": period, "periods": periods,
                    "transient_periods": transient_periods, "segment": segment,
                    "confidence": confidence}  # fmt: skip
-        result = _flagged(best_linear_approximation, data, bands=_flagged(parse_bands, bands),
-                          data_label=where, **options)  # fmt: skip
+        with flagged(FLAGS.get):
+            result = best_linear_approximation(
+                data, bands=parse_bands(bands), data_label=where, **options
+            )
     figure = None
     if plot is not None:
         from blockid.plotting.bla import bla_figure
@@ -206,17 +209,6 @@ def bla(
         stdout.print(f"figure written to {figure}", markup=False)
     if out is not None:
         stdout.print(f"results written to {out}", markup=False)
-
-
-def _flagged(fn: Any, *args: Any, **kwargs: Any) -> Any:
-    """``fn(...)``, a library error naming this command's flag of its parameter."""
-    try:
-        return fn(*args, **kwargs)
-    except BlockidError as exc:
-        flag = FLAGS.get(exc.parameter or "")
-        if flag is None or flag in str(exc):
-            raise
-        raise type(exc)(f"{exc} (option {flag})") from None
 
 
 def _print(result: Any) -> None:

@@ -15,10 +15,10 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import busy, cli_errors, print_json, refuse_to_overwrite, stdout
+from blockid.cli._common import busy, cli_errors, flagged, print_json, refuse_to_overwrite, stdout
 from blockid.cli._flags import Force, Json, Quiet, SamplingTime, shared
 from blockid.design.checks import DEFAULTS, KINDS, check_design, check_positive
-from blockid.errors import BlockidError, ParameterError
+from blockid.errors import ParameterError
 
 __all__ = ["design"]
 
@@ -230,15 +230,15 @@ def _sampling_time(fs: float | None, ts: float | None) -> float:
 
 def _named(fn: Any, *args: Any) -> Any:
     """``fn(*args)``, a library error naming the flag of its parameter."""
-    try:
+    with flagged(_flag):
         return fn(*args)
-    except BlockidError as exc:
-        parameter = exc.parameter or ""
-        option = "--fs or --ts" if parameter == "sampling_time" else "--" + parameter
-        option = option.replace("_", "-")
-        if not parameter or parameter == "kind" or option in str(exc):
-            raise
-        raise type(exc)(f"{exc} (option {option})") from None
+
+
+def _flag(parameter: str) -> str | None:
+    """This command's flag of a library parameter (none of ``kind``: the argument)."""
+    if parameter == "kind":
+        return None
+    return "--fs or --ts" if parameter == "sampling_time" else "--" + parameter.replace("_", "-")
 
 
 def _make(kind: str, given: dict[str, Any]) -> Any:

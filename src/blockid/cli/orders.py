@@ -10,7 +10,7 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import cli_errors, print_json, stdout
+from blockid.cli._common import cli_errors, flagged, print_json, stdout
 from blockid.cli._data import load_data
 from blockid.cli._flags import (
     DataPaths,
@@ -21,7 +21,7 @@ from blockid.cli._flags import (
     TimeColumn,
     shared,
 )
-from blockid.errors import BlockidError, ParameterError
+from blockid.errors import ParameterError
 from blockid.fitting.order_defaults import DEFAULTS
 
 __all__ = ["orders"]
@@ -95,15 +95,10 @@ def orders(
     data = load_data(data_paths, inputs, [output], ts, time_column, experiment_column, estimation)
     from blockid.fitting.orders import false_nearest_neighbours
 
-    try:
+    with flagged(_FLAGS.get):
         evidence = false_nearest_neighbours(
             data, max_na=max_na, max_nb=max_nb, max_nk=max_nk, threshold=threshold, noise=level
         )
-    except BlockidError as exc:
-        name = _FLAGS.get(exc.parameter or "")
-        if name is None or name in str(exc):
-            raise
-        raise type(exc)(f"{exc} (option {name})") from None
     if json_out:
         print_json(evidence.to_dict())
         return

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from blockid.cli._common import cli_errors, print_json, refuse_figures, stdout
+from blockid.cli._common import cli_errors, flagged, print_json, refuse_figures, stdout
 from blockid.cli._data import check_arguments, load_data, model_rate
 from blockid.cli._flags import (
     DataPaths,
@@ -54,7 +54,7 @@ def residuals(
     """Test the residual of MODEL on DATA: its autocorrelation (whiteness, Ljung-Box)
     and its cross-correlation with each input (independence), with confidence bounds.
     Use data the model was not fitted on."""
-    from blockid.errors import BlockidError, ParameterError
+    from blockid.errors import ParameterError
 
     if mode not in ("one-step", "simulation"):
         raise ParameterError(f"--mode {mode!r}: choose one-step or simulation", parameter="mode")
@@ -70,13 +70,8 @@ def residuals(
         model_rate(model, ts, model_path), time_column, experiment_column,
         rng, "--range",
     )  # fmt: skip
-    try:
+    with flagged({"max_lag": "--lags", "confidence": "--confidence"}.get):
         analysis = residual_analysis(model, data, mode, max_lag=lags, confidence=confidence)
-    except BlockidError as exc:
-        flag = {"max_lag": "--lags", "confidence": "--confidence"}.get(exc.parameter or "")
-        if flag is None:
-            raise
-        raise type(exc)(f"{exc} (option {flag})") from None
     where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
     figure = None
     if plot is not None:

@@ -16,7 +16,7 @@ from typing import Annotated, Any
 
 import typer
 
-from blockid.cli._common import cli_errors, refuse_to_overwrite, stderr
+from blockid.cli._common import cli_errors, flagged, refuse_to_overwrite, stderr
 from blockid.cli._data import check_arguments
 from blockid.cli._flags import Force, Inputs, Outputs, shared
 from blockid.cli._options import (
@@ -25,7 +25,6 @@ from blockid.cli._options import (
     structures_help,
     with_fit_options,
 )
-from blockid.errors import BlockidError
 from blockid.workflows.stream_guard import THRESHOLD
 
 __all__ = ["stream"]
@@ -239,21 +238,17 @@ def stream(
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     event: Any = None
     try:
-        for event in events:  # the last is the Final
-            if isinstance(event, Checkpoint):
-                save(event.model, event.record)
-                continue
-            try:
-                write(to_line(event) + "\n")
-                flush()  # a plant waits for its answer
-            except BrokenPipeError:  # the reader closed stdout: stop as on SIGPIPE, saving
-                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-                raise _Stopped(signal.SIGPIPE) from None
-    except BlockidError as exc:  # options or header: before the first sample
-        name = _FLAGS.get(exc.parameter or "")
-        if name is None or name in str(exc):
-            raise
-        raise type(exc)(f"{exc} (option {name})") from None
+        with flagged(_FLAGS.get):  # options or header: errors before the first sample
+            for event in events:  # the last is the Final
+                if isinstance(event, Checkpoint):
+                    save(event.model, event.record)
+                    continue
+                try:
+                    write(to_line(event) + "\n")
+                    flush()  # a plant waits for its answer
+                except BrokenPipeError:  # the reader closed stdout: stop as on SIGPIPE, saving
+                    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+                    raise _Stopped(signal.SIGPIPE) from None
     except _Stopped as exc:
         name = signal.Signals(exc.number).name
         written = session.online is not None and save(*session.saved())
