@@ -435,7 +435,6 @@ def test_the_docs_flag_table_states_every_numeric_default():
     docs/cli.md: a default changed in one place fails here until the docs say it
     too (seen failing on the AW-RLS weights, the recursive P(0) and the solver
     tolerances, which the table did not state)."""
-    import importlib
     import inspect
     import re
     from pathlib import Path
@@ -458,8 +457,7 @@ def test_the_docs_flag_table_states_every_numeric_default():
     defaults: dict[str, set[float]] = {}
     for structure in STRUCTURES.values():
         for method in structure.methods:
-            module, name = method.target.split(":")
-            params = inspect.signature(getattr(importlib.import_module(module), name)).parameters
+            params = inspect.signature(method.function()).parameters
             for option in structure.accepted(method.name):
                 d = params[option].default if option in params else None
                 if isinstance(d, int | float) and not isinstance(d, bool):

@@ -172,16 +172,20 @@ def test_every_method_resolves_to_its_fitter_with_the_keywords_it_takes():
             parameters = inspect.signature(function).parameters
             for keyword in m.passes:
                 assert keyword in parameters
+    from blockid.fitting.arx import fit_arx
+    from blockid.fitting.key_term import fit_key_term_rls
+    from blockid.fitting.simulation_error import fit_simulation_error
+
     arx = STRUCTURES["arx"]
-    assert {m.target for m in arx.methods} == {"blockid.fitting.arx:fit_arx"}
+    assert {m.function() for m in arx.methods} == {fit_arx}
     assert all(m.passes == ("method",) for m in arx.methods)
     assert [m.recursive for m in arx.methods] == [False, True, True, True]
     for name in ("hammerstein", "wiener", "hammerstein-wiener"):
         se, kt = STRUCTURES[name].methods
-        assert se.target == "blockid.fitting.simulation_error:fit_simulation_error"
+        assert se.function() is fit_simulation_error
         assert se.passes == ("structure",) and not se.recursive
         assert se.help == "minimise the free-run simulation error (converges; the default)"
-        assert kt.target == "blockid.fitting.key_term:fit_key_term_rls"
+        assert kt.function() is fit_key_term_rls
         assert kt.passes == ("structure",) and kt.recursive
 
 
@@ -209,23 +213,26 @@ def test_every_structure_holds_its_model_class_loader_not_a_string():
         assert cls.__module__.startswith("blockid.models.")
 
 
-def test_the_registry_writes_no_model_class_as_text():
-    """No ``"package.module:Class"`` literal in the registry's source: a string model
-    class coming back fails here. The estimators are still named as text (every fitting
-    module imports the registry, so a loader of one would close an import circle); the
-    only such literals allowed are those, under ``blockid.fitting``."""
+def test_the_registry_writes_no_code_as_text():
+    """Issue 33 item 5: no ``"package.module:name"`` literal in the registry's source,
+    neither a model class nor an estimator. Every method holds a loader of
+    fitting/_targets.py named after the fitter it returns (importing the registry still
+    imports none: test_importing_the_registry_loads_no_model_or_estimator)."""
     import ast
     import re
 
-    from blockid.fitting import registry
+    from blockid.fitting import _targets, registry
 
     tree = ast.parse(inspect.getsource(registry))
     dotted = re.compile(r"^\s*[A-Za-z_]\w*(\.\w+)+:\w+\s*$")
     texts = [n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)]
-    named = {t.strip() for t in texts if isinstance(t, str) and dotted.match(t)}
-    methods = {m.target for s in STRUCTURES.values() for m in s.methods}
-    assert named == methods
-    assert all(t.startswith("blockid.fitting.") for t in named)
+    assert not [t for t in texts if isinstance(t, str) and dotted.match(t)]
+    for s in STRUCTURES.values():
+        for m in s.methods:
+            assert callable(m.loader) and m.loader.__module__ == _targets.__name__
+            function = m.function()
+            assert m.loader.__name__ == function.__name__  # named after what it returns
+            assert function.__module__.startswith("blockid.fitting.")
 
 
 def test_importing_the_registry_loads_no_model_or_estimator():
@@ -239,7 +246,7 @@ def test_importing_the_registry_loads_no_model_or_estimator():
         "loaded = [m for m in sys.modules if m.split('.')[0] in "
         "('numpy', 'scipy', 'numba', 'pandas') or m.startswith('blockid.models')\n"
         "          or m.startswith('blockid.fitting.') and m not in "
-        "('blockid.fitting.registry', 'blockid.fitting._targets')]\n"
+        "('blockid.fitting.registry', 'blockid.fitting.options', 'blockid.fitting._targets')]\n"
         "assert not loaded, loaded\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)

@@ -45,7 +45,7 @@ from blockid.estimators import (
 )
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.evaluation.metrics import metrics_by_output
-from blockid.fitting.registry import checked
+from blockid.fitting.options import checked
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
 

@@ -38,6 +38,7 @@ from blockid.blocks import Backlash
 from blockid.data.dataset import Dataset
 from blockid.defaults import RECURSIVE
 from blockid.errors import EstimationError, ParameterError
+from blockid.fitting.options import checked
 from blockid.fitting.recursive import (
     RecursiveAlgorithm,
     Signals,
@@ -48,7 +49,6 @@ from blockid.fitting.recursive import (
     normalised_signals,
     orders_at_least,
 )
-from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.models.block import BacklashModel
 

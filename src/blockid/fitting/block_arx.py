@@ -43,7 +43,7 @@ from blockid.blocks.base import StaticBlock, block_template
 from blockid.data.dataset import Dataset, Experiment
 from blockid.defaults import FORGETTING
 from blockid.errors import EstimationError, ParameterError
-from blockid.fitting.registry import checked
+from blockid.fitting.options import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space import _check, signal_statistics
 from blockid.models.arx import ARX

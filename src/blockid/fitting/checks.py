@@ -45,6 +45,7 @@ slopes that vanish, each block judging itself by
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -277,19 +278,18 @@ def degenerate_block_notes(model: Any) -> list[str]:
     ]
 
 
-def margin_notes(model: Any, margin: float) -> list[str]:
+def margin_notes(model: Any, margin: float, integrating: Sequence[str] = ()) -> list[str]:
     """Warnings for fitted linear blocks with a pole on the stability margin ``margin``
     (:func:`stability_margin` of the estimation data).
 
     A pole with ``|p| >= 1 - 2 margin`` sits where the fit's stability bound stops it.
     Near +1 (within ``2 margin``) the plant probably integrates: a pole at the margin is
     a leak that lets a simulated position drift; the note suggests an
-    explicit integrator (the structures that take one are read from the registry).
+    explicit integrator with one of the structures ``integrating`` (those that take one:
+    :func:`blockid.fitting.dispatch` reads them from the registry, above this module).
     Integrators themselves pass :meth:`is_stable` and give no note. Models without
     linear blocks (ARX, networks) give none.
     """
-    from blockid.fitting.registry import STRUCTURES
-
     linear = getattr(model, "linear_blocks", ())
     integrates = sum(getattr(b, "integrates", 0) for b in getattr(model, "blocks", ()))
     near = 2.0 * margin
@@ -308,13 +308,12 @@ def margin_notes(model: Any, margin: float) -> list[str]:
             f"{near:g} of the unit circle: it sits on the stability margin the fit keeps "
             f"(|p| < {1 - margin:.10g}). "
         )
-        takes = [s.name for s in STRUCTURES.values() if "integrator" in s.accepted(None)]
         if at_one.any() and integrates < 2:
             n = integrates + 1
             text += (
                 "The plant probably integrates (position from force, level from flow), and "
                 "a pole held just inside 1 leaks, so a simulation drifts: try an explicit "
-                f"integrator, integrator={n} (--integrator {n}), with {', '.join(takes)}"
+                f"integrator, integrator={n} (--integrator {n}), with {', '.join(integrating)}"
             )
         else:
             text += (
@@ -353,9 +352,10 @@ def _affine_deviation(s: np.ndarray, out: np.ndarray) -> float:
     return float(np.max(np.abs(out - out_mean - slope * ds), initial=0.0))
 
 
-def linear_block_notes(model: Any, data: Dataset) -> list[str]:
+def linear_block_notes(model: Any, data: Dataset, integrating: Sequence[str] = ()) -> list[str]:
     """Warnings for the static blocks of a chain that are linear over ``data``, and for
-    fitted poles on the stability margin (:func:`margin_notes`).
+    fitted poles on the stability margin (:func:`margin_notes`, which names the
+    structures ``integrating``).
 
     Each static block is evaluated on the signal that enters it over every experiment
     (simulated from rest, as :meth:`~blockid.models.block.ChainModel.block_inputs`
@@ -368,7 +368,7 @@ def linear_block_notes(model: Any, data: Dataset) -> list[str]:
     list of str
         One note per such block, meant for ``settings["warnings"]``.
     """
-    notes = margin_notes(model, stability_margin(data))
+    notes = margin_notes(model, stability_margin(data), integrating)
     blocks = getattr(model, "blocks", ())
     if not blocks or not hasattr(model, "block_inputs"):  # ARX, networks, feedback loops
         return notes

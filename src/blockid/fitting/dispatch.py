@@ -248,7 +248,8 @@ def _finish(result: FitResult, data: Dataset, structure: str, uncertainty: bool)
     )
 
     model = result.model
-    notes = linear_block_notes(model, data) + rest_notes(model, data)
+    integrating = [s.name for s in STRUCTURES.values() if "integrator" in s.accepted(None)]
+    notes = linear_block_notes(model, data, integrating) + rest_notes(model, data)
     notes += pole_warnings(model, data) + output_range_warnings(model, data)
     notes += degenerate_block_notes(model) + _evaluation_limit_notes(result)
     if notes:

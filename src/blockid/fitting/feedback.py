@@ -51,7 +51,7 @@ from blockid.defaults import MAX_NFEV, PATIENCE, TAIL_FRACTION, TOLERANCE
 from blockid.errors import BlockidError, EstimationError, ParameterError
 from blockid.fitting.checks import simulation_mse, stability_margin
 from blockid.fitting.initial import _lagged, _least_squares, _stabilise
-from blockid.fitting.registry import checked
+from blockid.fitting.options import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.simulation_error import refine
 from blockid.models.feedback import LinearFeedback

@@ -73,7 +73,7 @@ from blockid.errors import BlockidError, EstimationError, OrderError, ParameterE
 from blockid.estimators import BatchLeastSquares
 from blockid.fitting import arx as arx_fitting
 from blockid.fitting.checks import STABILITY_MARGIN, margin_for, simulation_mse, stability_margin
-from blockid.fitting.registry import STRUCTURES
+from blockid.models.base import MODEL_TYPES
 from blockid.models.block import BlockModel
 
 __all__ = ["absorbed_gain", "initial_estimate", "resolve_structure", "scaled_block"]
@@ -83,9 +83,11 @@ _ROUNDS = 3
 
 
 def resolve_structure(structure: str | type[BlockModel]) -> type[BlockModel]:
-    """The model class of a block-oriented structure name (``"hammerstein-wiener"``,
-    from the registry :mod:`blockid.fitting.registry`) or class."""
-    known = [s.name for s in STRUCTURES.values() if s.block_oriented]
+    """The model class of a chain structure name (``"hammerstein-wiener"``) or class:
+    one of the :class:`~blockid.models.block.BlockModel` classes (a linear block
+    between static blocks), the structures this module starts and
+    :func:`~blockid.fitting.simulation_error.fit_simulation_error` refines."""
+    known = [name for name, cls in MODEL_TYPES.items() if issubclass(cls, BlockModel)]
     if isinstance(structure, type) and issubclass(structure, BlockModel):
         if structure.structure not in known:
             raise ParameterError(f"{structure.__name__} is not a block-oriented structure")
@@ -95,7 +97,7 @@ def resolve_structure(structure: str | type[BlockModel]) -> type[BlockModel]:
             f"structure={structure!r} is not a block-oriented structure; choose one of "
             f"{', '.join(known)}"
         )
-    return STRUCTURES[structure].model_class()
+    return MODEL_TYPES[structure]  # type: ignore[return-value]
 
 
 def scaled_block(block: Block, gain: float) -> Block:

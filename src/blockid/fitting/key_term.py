@@ -60,6 +60,7 @@ from blockid.fitting.key_term_channels import (
     ChannelKeyTermRLS,
     fit_key_term_channels,
 )
+from blockid.fitting.options import checked
 from blockid.fitting.recursive import (
     RecursiveAlgorithm,
     Signals,
@@ -70,9 +71,9 @@ from blockid.fitting.recursive import (
     normalised_signals,
     orders_at_least,
 )
-from blockid.fitting.registry import checked, get_structure
 from blockid.fitting.result import FitResult
 from blockid.models.arx import ARX
+from blockid.models.base import MODEL_TYPES
 from blockid.models.block import BlockModel
 
 _KT = RECURSIVE["key-term-rls"]
@@ -212,7 +213,7 @@ class KeyTermRLS(RecursiveAlgorithm):
                 b={y_name: {u_name: b}},
                 sampling_time=data.sampling_time,
             )
-        cls = get_structure(self.structure).model_class()
+        cls = MODEL_TYPES[self.structure]  # a chain of models.block, imported above
         return cls.cascade(
             u_name,
             y_name,

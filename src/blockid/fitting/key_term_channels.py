@@ -69,6 +69,7 @@ from blockid.defaults import DEGREE, RECURSIVE
 from blockid.errors import DataError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
 from blockid.fitting.block_arx import Basis, _realisation, scalar_orders
+from blockid.fitting.options import checked
 from blockid.fitting.recursive import (
     RecursiveAlgorithm,
     Signals,
@@ -76,7 +77,6 @@ from blockid.fitting.recursive import (
     int_at_least,
     largest_lag,
 )
-from blockid.fitting.registry import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space import signal_statistics
 from blockid.models.arx import ARX

@@ -24,13 +24,13 @@ from blockid.fitting.online_base import (
     _paper_scales,
     _schedule_factor,
 )
+from blockid.fitting.options import checked
 from blockid.fitting.recursive import (
     Signals,
     initial_vector,
     largest_lag,
     orders_at_least,
 )
-from blockid.fitting.registry import checked
 
 __all__: list[str] = []  # built by online_estimator
 

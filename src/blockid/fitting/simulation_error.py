@@ -81,7 +81,7 @@ from blockid.errors import BlockidError, DataError, EstimationError, ParameterEr
 from blockid.fitting.checks import check_model, margin_for, simulation_mse, stability_margin
 from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.levenberg_marquardt import EarlyStop, levenberg_marquardt, note_tail
-from blockid.fitting.registry import checked
+from blockid.fitting.options import checked
 from blockid.fitting.result import FitResult
 from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
 from blockid.models.sensitivities import sensitivity_chunks

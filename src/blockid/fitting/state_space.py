@@ -78,7 +78,7 @@ from blockid.defaults import (
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.checks import stability_margin
-from blockid.fitting.registry import checked
+from blockid.fitting.options import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space_refinement import (
     CHUNK,
