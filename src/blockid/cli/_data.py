@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["check_arguments", "load_data", "model_rate", "select_range"]
+__all__ = ["check_arguments", "data_label", "load_data", "model_rate", "select_range"]
 
 
 def check_arguments(
@@ -82,6 +82,11 @@ def select_range(data: Any, rng: str | None, what: str) -> Any:
         return data
     start, stop = parse_range(rng, what)
     return data.select(start, stop, what=what)
+
+
+def data_label(paths: Sequence[Path], rng: str | None) -> str:
+    """The data files and range read, as titles and figures name them: ``a.csv [0:500]``."""
+    return ", ".join(map(str, paths)) + (f" [{rng}]" if rng else "")
 
 
 def model_rate(model: Any, ts: float | None, model_path: Path) -> float | None:

@@ -28,9 +28,11 @@ __all__ = [
     "ModelOut",
     "Outputs",
     "Jobs",
+    "ModelPath",
     "PlotDir",
     "ReportFile",
     "Quiet",
+    "SampleRange",
     "SamplingTime",
     "Seed",
     "TimeColumn",
@@ -83,6 +85,10 @@ DataPaths = Annotated[
     list[Path],
     typer.Argument(metavar="DATA", help="Data file(s): .csv, .tsv, .txt, .parquet or .mat."),
 ]
+#: The model file read by ``simulate``, ``predict``, ``residuals`` and ``export``.
+ModelPath = Annotated[
+    Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
+]
 Inputs = Annotated[list[str], shared("inputs", "Input column; repeat for several inputs.")]
 Outputs = Annotated[list[str], shared("outputs", "Output column; repeat for several outputs.")]
 SamplingTime = Annotated[
@@ -127,6 +133,8 @@ Estimation = Annotated[
     str | None,
     shared("estimation", "Estimation samples (0-based, stop excluded; default: all)."),
 ]
+#: ``--range`` of the commands that read one span of the data.
+SampleRange = Annotated[str | None, shared("range", "Samples to use (default: all).")]
 ModelOut = Annotated[Path | None, shared("out", "Model file to write.")]
 PlotDir = Annotated[Path | None, shared("plot", "Write PNG figures to this folder.")]
 #: ``--report FILE`` of ``compare`` and ``identify``.

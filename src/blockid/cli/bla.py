@@ -19,7 +19,7 @@ from blockid.cli._common import (
     refuse_to_overwrite,
     stdout,
 )
-from blockid.cli._data import check_arguments, load_data
+from blockid.cli._data import check_arguments, data_label, load_data
 from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
@@ -28,6 +28,7 @@ from blockid.cli._flags import (
     Json,
     Outputs,
     Quiet,
+    SampleRange,
     SamplingTime,
     TimeColumn,
     shared,
@@ -127,7 +128,7 @@ def bla(
             show_default=False,
         ),
     ] = None,
-    rng: Annotated[str | None, shared("range", "Samples to use (default: all).")] = None,
+    rng: SampleRange = None,
     plot: Annotated[
         Path | None,
         shared("plot", "Write the figure (BLA, noise and distortion levels) to DIR/bla.png."),
@@ -165,7 +166,7 @@ def bla(
     from blockid.plotting.bla import BLA_FIGURE
 
     refuse_figures(plot, [BLA_FIGURE], force)
-    where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+    where = data_label(data_paths, rng)
     with busy("measuring the best linear approximation", quiet or json_out):
         data = load_data(data_paths, [input], [output], ts, time_column, experiment_column,
                          rng, "--range")  # fmt: skip

@@ -14,7 +14,7 @@ import typer
 
 from blockid.cli._common import cli_errors, print_json, refuse_to_overwrite, stdout
 from blockid.cli._data import check_arguments
-from blockid.cli._flags import Force, Json, shared
+from blockid.cli._flags import Force, Json, ModelPath, shared
 
 __all__ = ["export"]
 
@@ -24,9 +24,7 @@ _FORMATS = ("python", "scipy-json")
 
 @cli_errors
 def export(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
-    ],
+    model_path: ModelPath,
     to: Annotated[
         str,
         typer.Option(

@@ -8,12 +8,14 @@ from typing import Annotated
 import typer
 
 from blockid.cli._common import cli_errors, flagged, print_json, refuse_figures, stdout
-from blockid.cli._data import check_arguments, load_data, model_rate
+from blockid.cli._data import check_arguments, data_label, load_data, model_rate
 from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
     Force,
     Json,
+    ModelPath,
+    SampleRange,
     SamplingTime,
     TimeColumn,
     shared,
@@ -24,11 +26,9 @@ __all__ = ["residuals"]
 
 @cli_errors
 def residuals(
-    model_path: Annotated[
-        Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
-    ],
+    model_path: ModelPath,
     data_paths: DataPaths,
-    rng: Annotated[str | None, shared("range", "Samples to use (default: all).")] = None,
+    rng: SampleRange = None,
     mode: Annotated[
         str,
         typer.Option(
@@ -72,7 +72,7 @@ def residuals(
     )  # fmt: skip
     with flagged({"max_lag": "--lags", "confidence": "--confidence"}.get):
         analysis = residual_analysis(model, data, mode, max_lag=lags, confidence=confidence)
-    where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+    where = data_label(data_paths, rng)
     figure = None
     if plot is not None:
         from blockid.plotting.residuals import residual_figure

@@ -17,13 +17,15 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
-from blockid.cli._data import check_arguments, load_data, model_rate
+from blockid.cli._data import check_arguments, data_label, load_data, model_rate
 from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
     Force,
     Json,
+    ModelPath,
     Quiet,
+    SampleRange,
     SamplingTime,
     TimeColumn,
     shared,
@@ -31,10 +33,6 @@ from blockid.cli._flags import (
 
 __all__ = ["predict", "simulate"]
 
-ModelPath = Annotated[
-    Path, typer.Argument(metavar="MODEL", help="Model file written by 'blockid fit'.")
-]
-Range = Annotated[str | None, shared("range", "Samples to use (default: all).")]
 OutTable = Annotated[
     Path | None,
     shared("out", "Write data and model output (.csv/.parquet)."),
@@ -67,7 +65,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
     def command(
         model_path: ModelPath,
         data_paths: DataPaths,
-        rng: Range = None,
+        rng: SampleRange = None,
         out: OutTable = None,
         plot: PlotDir = None,
         ts: SamplingTime = None,
@@ -151,7 +149,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
             result = predict_ahead(model, data, horizon)
         else:
             result = evaluate(model, data, mode, initial_samples=initial_samples)
-        where = ", ".join(map(str, data_paths)) + (f" [{rng}]" if rng else "")
+        where = data_label(data_paths, rng)
         if result.diverged is not None:
             from blockid.errors import SimulationError
 
