@@ -561,12 +561,11 @@ def test_an_unexcited_parameter_has_infinite_rows_and_columns():
 
 
 def test_arx_sensitivities_by_differences_are_the_derivatives():
-    from blockid.evaluation.uncertainty import _output_sensitivities
     from blockid.fitting.simulation_error import simulate_with_sensitivities
 
     # the ARX model's central differences equal the output-error model's analytic
     # derivatives with respect to the same (a_1, b_0), sign included
-    y, dy = _output_sensitivities(_arx(), _U, [2.0], ["a_1", "b_0"])
+    y, dy = _arx().output_sensitivities(_U, [2.0])
     y_oe, dy_oe = simulate_with_sensitivities(_oe(), _U, [2.0])
     assert dy.shape == (20, 1, 2)
     np.testing.assert_allclose(y[:, 0], y_oe, atol=1e-12)
@@ -738,15 +737,13 @@ def test_covariance_names_a_block_whose_parameters_are_not_all_in_its_vector():
 
 
 def test_arx_band_sensitivity_matches_the_exact_one_for_a_slow_pole():
-    from blockid.evaluation.uncertainty import _output_sensitivities
-
     # y(t) = 0.999 y(t-1) + u(t-1): dy/da follows s(t) = -y(t-1) - a s(t-1) exactly; the
     # central difference (step 1e-6 for |a| < 1) is off by its O(h^2) term, 4e-7 relative
     # here (a step of 2e-6 would be 1.6e-6)
     a, n = -0.999, 3000
     u = np.random.default_rng(0).uniform(-1, 1, n)
     model = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [a]}}, b={"y": {"u": [1.0]}})
-    y, dy = _output_sensitivities(model, u, [0.0], [])
+    y, dy = model.output_sensitivities(u, [0.0])
     assert y.shape == (n, 1) and dy.shape == (n, 1, 2)
     s_a, s_b = np.zeros(n), np.zeros(n)
     for t in range(1, n):

@@ -123,14 +123,12 @@ def predict(model: Any, data: Dataset, horizon: int = 1) -> Any:
             "run), so it predicts by its free run at every horizon"
         )
         return free
-    from blockid.models.block import ChainModel
-
     lag, k = int(model.max_lag), int(horizon)
     outputs = []
     for exp, run_free in zip(data.experiments, free.outputs, strict=True):
         out = np.array(run_free, dtype=float, copy=True)
         if k + lag < exp.n_samples:  # some windows start inside the record
-            if isinstance(model, ChainModel):
+            if hasattr(model, "x_from_y"):  # a chain: its outputs invert to its last block's
                 out[k + lag :] = _chain_ahead(model, exp, k)[k + lag :, None]
             else:
                 for t in range(lag + k, exp.n_samples):

@@ -234,15 +234,6 @@ class SimulationBand(NamedTuple):
     bias: np.ndarray
 
 
-def _state_space_models() -> tuple[type, ...]:
-    """The models whose covariance is that of a state-space fit (every experiment's
-    initial state estimated alongside; :meth:`information`)."""
-    from blockid.models.block_state_space import BlockStateSpace
-    from blockid.models.state_space import PolynomialStateSpace
-
-    return (PolynomialStateSpace, BlockStateSpace)
-
-
 def _finite_or_none(value: float) -> float | None:
     value = float(value)
     return value if np.isfinite(value) else None
@@ -521,7 +512,7 @@ def parameter_covariance(
             f"the model maps {list(model.inputs)} to {list(model.outputs)} but the data have "
             f"inputs {list(data.inputs)} and outputs {list(data.outputs)}"
         )
-    if isinstance(model, _state_space_models()):
+    if hasattr(model, "information"):  # a state space: initial states estimated alongside
         return _state_space_covariance(model, data, method)
     if centered is None:
         centered = hasattr(model, "output_offset") and _is_centered(model, data)
@@ -586,18 +577,13 @@ def named_standard_errors(model: Any, cov: ParameterCovariance | np.ndarray) -> 
 
     Raises :class:`~blockid.errors.ParameterError` if ``cov`` does not fit the model.
     """
-    from blockid.models.block_state_space import BlockStateSpace
-    from blockid.models.state_space import PolynomialStateSpace
-
     matrix = cov.matrix if isinstance(cov, ParameterCovariance) else np.asarray(cov, float)
     se = np.sqrt(np.abs(np.diag(matrix)))
-    if isinstance(model, PolynomialStateSpace):  # shaped like its matrices
-        return _state_space_shaped(model, se)
-    if isinstance(model, BlockStateSpace):
+    if hasattr(model, "shaped"):  # a state space shapes its own numbers like its matrices
         if se.size != model.free_parameters().size:
             raise ParameterError(
-                f"a covariance of {se.size} parameters does not fit the block-state-space "
-                f"model's {model.free_parameters().size}"
+                f"a covariance of {se.size} free parameters does not fit the "
+                f"{model.structure} model's {model.free_parameters().size}"
             )
         shaped = model.shaped(se)
         return _unflatten(shaped, [_finite_or_none(v) for v in _flatten(shaped)])
@@ -665,32 +651,16 @@ def with_standard_errors(result: Any, data: Dataset) -> Any:
 
 
 # ----------------------------------------------------------------------------- band
-def _output_sensitivities(
-    model: Any, u: Any, y_initial: Any, names: list[str]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Simulated output (N, ny) and its derivative (N, ny, p) to the free parameters."""
-    if isinstance(model, _state_space_models()):
-        return model.output_sensitivities(u, y_initial)
-    if hasattr(model, "free_parameters"):
-        y, dy = model.simulate_with_sensitivities(u, y_initial)
-        return np.asarray(y, float)[:, None], np.asarray(dy, float)[:, None, :]
-    # ARX: central differences, one parameter at a time
-    y = model.simulate(u, y_initial)
-    cols = []
-    for i in range(len(model.outputs)):
-        theta = model.parameter_vector(i)
-        for k in range(theta.size):
-            h = 1e-6 * max(1.0, abs(theta[k]))
-            sims = []
-            for step in (h, -h):
-                moved = type(model).from_dict(model.to_dict())
-                t = theta.copy()
-                t[k] += step
-                moved.set_parameter_vector(i, t)
-                sims.append(moved.simulate(u, y_initial))
-            cols.append((sims[0] - sims[1]) / (2 * h))
-    dy = np.stack(cols, axis=2) if cols else np.zeros(y.shape + (0,))
-    return y, dy
+def _output_sensitivities(model: Any, u: Any, y_initial: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Simulated output (N, ny) and its derivative (N, ny, p) to the free parameters, as
+    the model provides them (``output_sensitivities``)."""
+    provide = getattr(model, "output_sensitivities", None)
+    if provide is None:
+        raise ParameterError(
+            f"a {type(model).__name__} gives no output sensitivities: simulation bands "
+            "are drawn for ARX, block-oriented, feedback and state-space models"
+        )
+    return provide(u, y_initial)
 
 
 def simulation_band(
@@ -733,8 +703,7 @@ def simulation_band(
     if not 0.0 < float(level) < 1.0:
         raise ParameterError(f"level must be between 0 and 1, got {level!r}", parameter="level")
     matrix = cov.matrix if isinstance(cov, ParameterCovariance) else np.asarray(cov, float)
-    names = cov.names if isinstance(cov, ParameterCovariance) else []
-    y, dy = _output_sensitivities(model, u, y_initial, names)
+    y, dy = _output_sensitivities(model, u, y_initial)
     if dy.shape[2] != matrix.shape[0]:
         raise ParameterError(
             f"the covariance is of {matrix.shape[0]} parameters but the model has {dy.shape[2]}"

@@ -172,6 +172,13 @@ class OneChannel:
     output_offset: float
     ranges: dict[str, list[float]]
 
+    def output_sensitivities(self, u: Any, y_initial: Any = None) -> tuple[Any, Any]:
+        """Free-run output (N, 1) and its derivative (N, 1, p) to the free parameters,
+        as every model that provides its sensitivities gives them (the model's own
+        ``simulate_with_sensitivities``, shaped like a model of several outputs)."""
+        y, dy = self.simulate_with_sensitivities(u, y_initial)  # type: ignore[attr-defined]
+        return np.asarray(y, float)[:, None], np.asarray(dy, float)[:, None, :]
+
     def _set_channel(
         self, sampling_time: float | None, input_offset: float, output_offset: float, ranges: Any
     ) -> None:

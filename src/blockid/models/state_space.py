@@ -422,6 +422,19 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
         )  # fmt: skip
 
     # ------------------------------------------------------------------ parameters
+    def shaped(self, values: Any) -> dict[str, Any]:
+        """Numbers, one per entry of :meth:`free_parameters` (standard errors), shaped
+        like the matrices of :attr:`parameters` (``E`` and ``F`` only with monomials)."""
+        values = np.asarray(values, dtype=float).reshape(-1)
+        mats = [self.A, self.B, self.C, self.D, self.E, self.F]
+        parts = np.split(values, np.cumsum([m.size for m in mats])[:-1])
+        keys = "ABCDEF" if self.n_monomials else "ABCD"
+        return {
+            k: part.reshape(m.shape).tolist()
+            for k, part, m in zip("ABCDEF", parts, mats, strict=True)
+            if k in keys
+        }
+
     def free_parameters(self) -> np.ndarray:
         """``[A, B, C, D, E, F]``, each row-major (the state basis is not fixed: any
         invertible ``T`` gives the same model, so the parameters are unique only up to
