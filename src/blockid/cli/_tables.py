@@ -1,12 +1,33 @@
-"""Tables of the papers' reproductions, printed by ``demo`` and ``reproduce``."""
+"""Tables the commands print: a library result's summary (``bla``, ``design``) and the
+papers' reproductions (``demo`` and ``reproduce``)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from blockid.cli._common import stdout
 
-__all__ = ["print_electrohydraulic"]
+__all__ = ["print_electrohydraulic", "print_summary"]
+
+#: ``(title, columns, rows, notes)``: the summary a library result gives for a table.
+Summary = tuple[str, Sequence[str], Sequence[Sequence[str]], Sequence[str]]
+
+
+def print_summary(summary: Summary, *, label_column: bool) -> None:
+    """A result's summary as a table (numbers right-justified; with ``label_column`` the
+    first column, which names the rows, left-justified), then its notes line by line."""
+    from rich.table import Table
+
+    title, columns, rows, notes = summary
+    table = Table(title=title, title_justify="left")
+    for i, column in enumerate(columns):
+        table.add_column(column, justify="left" if label_column and i == 0 else "right")
+    for row in rows:
+        table.add_row(*row)
+    stdout.print(table)
+    for line in notes:
+        stdout.print(line, markup=False)
 
 
 def print_electrohydraulic(result: Any) -> None:

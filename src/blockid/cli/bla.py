@@ -33,6 +33,7 @@ from blockid.cli._flags import (
     TimeColumn,
     shared,
 )
+from blockid.cli._tables import print_summary
 from blockid.errors import BlockidError, ParameterError
 
 __all__ = ["bla"]
@@ -203,28 +204,13 @@ def bla(
         print_json({**doc, "figure": None if figure is None else str(figure),
                     "out": None if out is None else str(out)})  # fmt: skip
         return
-    _print(result)
+    print_summary(result.summary_table(), label_column=True)  # the bands, notes, verdict
     if fitted is not None:
         _print_fit(fitted)
     if figure is not None:
         stdout.print(f"figure written to {figure}", markup=False)
     if out is not None:
         stdout.print(f"results written to {out}", markup=False)
-
-
-def _print(result: Any) -> None:
-    """The band table of the result's ``summary_table``, its notes and the verdict."""
-    from rich.table import Table
-
-    title, columns, rows, text = result.summary_table()
-    table = Table(title=title, title_justify="left")
-    for i, column in enumerate(columns):
-        table.add_column(column, justify="left" if i == 0 else "right")
-    for row in rows:
-        table.add_row(*row)
-    stdout.print(table)
-    for line in text:
-        stdout.print(line, markup=False)
 
 
 def _orders(text: str) -> tuple[int, int, int]:

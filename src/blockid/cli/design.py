@@ -17,6 +17,7 @@ import typer
 
 from blockid.cli._common import busy, cli_errors, flagged, print_json, refuse_to_overwrite, stdout
 from blockid.cli._flags import Force, Json, Quiet, SamplingTime, shared
+from blockid.cli._tables import print_summary
 from blockid.design.checks import DEFAULTS, KINDS, check_design, check_positive
 from blockid.errors import ParameterError
 
@@ -202,7 +203,7 @@ def design(
         doc["columns"] = [*COLUMNS, name]
         print_json(doc)
         return
-    _print(excitation)
+    print_summary(excitation.summary(), label_column=False)
     if out is None:
         stdout.print("no file written (give -o FILE to write the signal)")
     else:
@@ -250,18 +251,3 @@ def _make(kind: str, given: dict[str, Any]) -> Any:
     if kind == "random-binary":
         return random_binary(**given)
     return multisine(odd=kind == "odd-multisine", **given)
-
-
-def _print(x: Any) -> None:
-    """The summary (:meth:`~blockid.design.excitation.Excitation.summary`) as a table."""
-    from rich.table import Table
-
-    title, columns, rows, text = x.summary()
-    table = Table(title=title, title_justify="left")
-    for column in columns:
-        table.add_column(column, justify="right")
-    for row in rows:
-        table.add_row(*row)
-    stdout.print(table)
-    for line in text:
-        stdout.print(line, markup=False)
