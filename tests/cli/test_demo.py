@@ -57,3 +57,12 @@ def test_the_demo_s_first_screen_says_why_before_a_cell_says_no_model(tmp_path):
     marks = [m for line in lines if "│" in line for m in ("[1]", "[2]", "[3]", "[4]") if m in line]
     for mark in marks:
         assert any(line.startswith(f"{mark} ") for line in lines), mark
+
+
+def test_demo_refuses_a_non_empty_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "mine.txt").write_text("keep")
+    r = CliRunner().invoke(app, ["demo", "--plot", "out"])
+    assert r.exit_code == 2 and "not empty" in r.stderr
+    assert (tmp_path / "out" / "mine.txt").read_text() == "keep"

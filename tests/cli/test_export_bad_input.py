@@ -1,6 +1,6 @@
 """Bad input to ``export`` (:mod:`blockid.cli.export`): a table of
-:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2 and
-no file touched (:func:`cli.bad_input.refused`)."""
+:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2, no
+file written or changed (:func:`cli.bad_input.refused`)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,6 @@ EXPORT = [
         ["parameters.y.a.y must be a list of numbers", "[[-1.2, 0.35]]"],
         bad_model(lambda doc: parameter(doc, "a", [[-1.2, 0.35]])),
     ),
-    # ------------------------------------------------------------------ export
     Case(
         "export to unknown",
         ["export", "model.json", "--to", "matlab"],

@@ -1,6 +1,6 @@
 """Bad input to ``fit``, ``compare`` and ``fit-network`` (:mod:`blockid.cli.fit`): one
 table of :class:`~cli.bad_input.Case` per command, each refused in one readable line
-with exit status 2 and no file touched (:func:`cli.bad_input.refused`)."""
+with exit status 2, no file written or changed (:func:`cli.bad_input.refused`)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Bad input to ``fleet`` (:mod:`blockid.cli.fleet_cli`): a table of
-:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2 and
-no file touched (:func:`cli.bad_input.refused`)."""
+:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2, no
+file written or changed (:func:`cli.bad_input.refused`)."""
 
 from __future__ import annotations
 

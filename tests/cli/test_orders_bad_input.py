@@ -1,6 +1,6 @@
 """Bad input to ``orders`` (:mod:`blockid.cli.orders`): a table of
-:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2 and
-no file touched (:func:`cli.bad_input.refused`)."""
+:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2, no
+file written or changed (:func:`cli.bad_input.refused`)."""
 
 from __future__ import annotations
 
@@ -51,7 +51,6 @@ ORDERS = [
         ["orders", *G, "--estimation", "100:1000", "--json"],
         ["--estimation 100:1000 does not fit"],
     ),
-    # ------------------------------------------------------------------ orders
     Case(
         "order orders max-na negative",
         ["orders", *G, "--max-na", "-1", "--json"],

@@ -1,6 +1,8 @@
 """Bad input to ``simulate`` and ``predict`` (:mod:`blockid.cli.running`): one table of
 :class:`~cli.bad_input.Case` per command, each refused in one readable line with exit
-status 2 and no file touched (:func:`cli.bad_input.refused`)."""
+status 2, no file written or changed (:func:`cli.bad_input.refused`). ``predict
+--horizon``'s edge cases that it accepts are in a second table
+(:func:`cli.bad_input.accepted`)."""
 
 from __future__ import annotations
 
@@ -12,9 +14,12 @@ import pytest
 
 from blockid.models import ARX, save_model
 from cli.bad_input import (
+    Accepted,
     Case,
+    accepted,
     bad_model,
     figures,
+    files,
     first_rows,
     folder_with_a_file,
     nan_parameter,
@@ -325,6 +330,13 @@ SIMULATE = [
         ["cycle: 'S1' -> v1 -> 'S2' -> v2 -> 'S1'"],
         _cyclic_network,
     ),
+    # ------------------------------------------------------------------ values
+    Case(
+        "simulate other sampling time",
+        ["simulate", "model_ts.json", "bad.csv", "--ts", "0.1"],
+        ["0.05", "--ts"],
+        write("bad.csv", "u,y\n1,2\n2,3\n1,1\n3,1\n"),
+    ),  # fmt: skip
 ]
 
 PREDICT = [
@@ -388,9 +400,64 @@ PREDICT = [
         ["predict", "model.json", "good.csv", "-o", "model.json"],
         ["model.json exists; pass --force"],
     ),
+    # ------------------------------------------------------------------ values
+    Case(
+        "predict horizon other sampling time",
+        ["predict", "model_ts.json", "bad.csv", "--ts", "0.1", "--horizon", "2"],
+        ["0.05", "--ts"],
+        write("bad.csv", "u,y\n1,2\n2,3\n1,1\n3,1\n"),
+    ),  # fmt: skip
+    # ------------------------------------------------------------------ predict --horizon
+    Case(
+        "predict horizon zero",
+        ["predict", "model.json", "good.csv", "--horizon", "0"],
+        ["--horizon"],
+    ),  # fmt: skip
+    Case(
+        "predict horizon negative",
+        ["predict", "model.json", "good.csv", "--horizon", "-1"],
+        ["--horizon"],
+    ),  # fmt: skip
+    Case(
+        "predict horizon text",
+        ["predict", "model.json", "good.csv", "--horizon", "1.5"],
+        ["--horizon"],
+    ),  # fmt: skip
+    Case(
+        "predict horizon output exists",
+        ["predict", "model.json", "good.csv", "--horizon", "5", "-o", "old.csv"],
+        ["old.csv exists"],
+        files("old.csv"),
+    ),  # fmt: skip
+    Case(
+        "predict horizon figure exists",
+        ["predict", "model.json", "good.csv", "--horizon", "5", "--plot", "figs"],
+        ["figs/prediction.png"],
+        files("figs/prediction.png"),
+    ),  # fmt: skip
+]
+
+PREDICT_ACCEPTED = [
+    Accepted(
+        "predict horizon longer than the record",
+        ["predict", "model.json", "good.csv", "--horizon", "100000"],
+        ["100000"],
+    ),  # fmt: skip
+    Accepted(
+        "predict horizon on three rows",
+        ["predict", "model.json", "bad.csv", "--horizon", "5"],
+        ["arx"],
+        write("bad.csv", "t,u,y\n0,1,2\n0.05,2,3\n0.1,1,1\n"),
+        warns=["fit_percent of output 'y' is undefined"],
+    ),  # fmt: skip
 ]
 
 
 @pytest.mark.parametrize("case", params(SIMULATE, PREDICT))
 def test_refused(case, workdir):
     refused(case, workdir)
+
+
+@pytest.mark.parametrize("case", params(PREDICT_ACCEPTED))
+def test_accepted(case, workdir):
+    accepted(case, workdir)

@@ -1,7 +1,7 @@
 """Bad input to ``stream`` (:mod:`blockid.cli.streaming`): a table of
-:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2 and
-no file touched (:func:`cli.bad_input.refused`). ``stream`` reads its samples from the
-case's ``input``."""
+:class:`~cli.bad_input.Case`, each refused in one readable line with exit status 2, no
+file written or changed (:func:`cli.bad_input.refused`). ``stream`` reads its samples
+from the case's ``input``."""
 
 from __future__ import annotations
 

@@ -106,3 +106,12 @@ def test_a_malformed_range_is_reported_under_its_option():
 def test_names_must_be_one_per_range():
     with pytest.raises(ValueError, match="zip\\(\\) argument 2 is longer than argument 1"):
         check_disjoint("0:10", "10:", names=("--estimation", "--validation", "--test"))
+
+
+def test_overlapping_ranges_are_refused():
+    check_disjoint("0:100", "100:")
+    check_disjoint((200, None), (0, 200))
+    with pytest.raises(ParameterError, match=r"overlap \(samples 50:100 are in both\)"):
+        check_disjoint("0:100", "50:")
+    with pytest.raises(ParameterError, match=r"samples 10: are in both"):
+        check_disjoint(":", "10:")

@@ -1,8 +1,11 @@
+import json
+
 import numpy as np
 import pytest
 
 from blockid import errors
 from blockid.evaluation import fit_percent, max_absolute_error, metrics_by_output
+from blockid.evaluation.metrics import json_safe
 
 
 def test_values_against_hand_computation():
@@ -71,3 +74,11 @@ def test_undefined_notes_say_why_for_every_metric():
 
     notes = undefined_notes({"mse": {"y": float("nan")}, "fit_percent": {"y": 5.0}})
     assert notes == ["mse of output 'y' is undefined (null): not defined on these samples"]
+
+
+def test_fit_percent_undefined_is_nan_and_json_null():
+    y = np.full(4, 2.0)
+    assert np.isnan(fit_percent(y, y + [0.0, 0.0, 0.0, 1.0])[0])
+    assert json.dumps(json_safe({"a": [np.float64("nan"), -np.inf, 1.0]}), allow_nan=False) == (
+        '{"a": [null, null, 1.0]}'
+    )

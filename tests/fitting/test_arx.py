@@ -3,8 +3,9 @@ import pytest
 
 from blockid import errors
 from blockid.data import Dataset
-from blockid.errors import ParameterError
+from blockid.errors import EstimationError, OrderError, ParameterError
 from blockid.fitting import fit_arx
+from blockid.models import ARX
 
 import reference
 from reference import _arx_data, _dataset
@@ -258,3 +259,50 @@ def test_a_rank_deficient_fit_names_a_glitch_by_its_row():
     u[123] = 1e12
     with pytest.raises(EstimationError, match=r"input 'u1' is 1e\+12 at row 123 \(0-based\)"):
         fit_arx(Dataset.from_arrays(u, y), na=2, nb=2, nk=1)
+
+
+def test_nb_zero_for_every_input_is_refused_but_some_zero_is_fine():
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((200, 2))
+    data = Dataset.from_arrays(u, u[:, 0] + 0.1 * rng.standard_normal(200))
+    with pytest.raises(OrderError, match="nb is 0 for every input of output 'y1'") as info:
+        fit_arx(data, 1, [[0, 0]], 1)
+    assert info.value.parameter == "nb"
+    fit_arx(data, 1, [[1, 0]], 1)  # one of two inputs left out: allowed
+
+
+def test_constant_input_names_the_signal_and_lag():
+    rng = np.random.default_rng(0)
+    data = Dataset.from_arrays(np.full(200, 0.5), rng.standard_normal(200), ["u"], ["y"])
+    with pytest.raises(EstimationError, match=r"u at lag 2 .*input 'u' is constant"):
+        fit_arx(data, 1, 2, 1)
+
+
+def _hrls_data(n):
+    plant = ARX(
+        ["u1", "u2"],
+        ["y"],
+        2,
+        2,
+        1,
+        a={"y": {"y": [-1.2, 0.35]}},
+        b={"y": {"u1": [1.0, 0.4], "u2": [0.5, -0.2]}},
+    )
+    u = np.random.default_rng(0).standard_normal((n, 2))
+    return Dataset.from_arrays(u, plant.simulate(u), ["u1", "u2"], ["y"])
+
+
+def test_hrls_on_noise_free_data_is_accepted_when_it_predicts_to_the_floor():
+    # one-step MSE ~3e-9 of var(y) against a least-squares optimum of ~1e-31
+    result = fit_arx(_hrls_data(1300), 2, 2, 1, method="hierarchical-rls", forgetting=0.95)
+    assert result.model.parameter_vector(0) == pytest.approx(
+        [-1.2, 0.35, 1, 0.4, 0.5, -0.2], abs=1e-3
+    )
+
+
+def test_hrls_advice_fits_the_forgetting_used():
+    with pytest.raises(EstimationError, match="forgetting 0.95 was used") as info:
+        fit_arx(_hrls_data(600), 2, 2, 1, method="hierarchical-rls", forgetting=0.95)
+    assert "below 1" not in str(info.value)
+    with pytest.raises(EstimationError, match="needs a forgetting factor below 1"):
+        fit_arx(_hrls_data(600), 2, 2, 1, method="hierarchical-rls", forgetting=1.0)

@@ -7,12 +7,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from blockid.blocks import DeadZone
+from blockid.blocks import DeadZone, Polynomial
+from blockid.blocks.linear import LinearBlock
 from blockid.data import Dataset
 from blockid.data.dataset import Experiment
 from blockid.fitting import fit_model
-from blockid.fitting.checks import degenerate_block_notes, output_range_warnings
+from blockid.fitting.checks import degenerate_block_notes, linear_block_notes, output_range_warnings
 from blockid.models import ARX, Hammerstein
+from blockid.models.block import ChainModel
 from blockid.models.block_state_space import BlockStateSpace
 
 
@@ -98,3 +100,20 @@ def test_a_constant_input_is_refused_by_name_before_any_fit():
     ):
         fit_model(two, "arx")
     fit_model(Dataset.from_arrays(rng.standard_normal(300), y, ["valve"], ["flow"]), "arx")
+
+
+def _chain(coefficients):
+    return ChainModel(
+        "u",
+        "y",
+        [Polynomial(coefficients, constant=False), LinearBlock(1, 1, 1, a=[-0.5], b=[1.0])],
+    )
+
+
+def test_linear_input_block_is_noted_not_refused():
+    u = np.random.default_rng(1).uniform(-2, 2, 400)
+    data = Dataset.from_arrays(u, np.zeros(400), ["u"], ["y"])
+    notes = linear_block_notes(_chain([1.0, 1e-19, 1e-19]), data)
+    assert len(notes) == 1 and "input block (polynomial) is linear" in notes[0]
+    assert linear_block_notes(_chain([1.0, 0.3, -0.1]), data) == []
+    assert linear_block_notes(ARX(["u"], ["y"], 1, 1, 1), data) == []

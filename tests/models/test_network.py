@@ -4,8 +4,10 @@ import pytest
 from blockid import errors
 from blockid.blocks import Backlash
 from blockid.data import Dataset
+from blockid.errors import OrderError
 from blockid.fitting import parse_subsystem, subset
 from blockid.models import ARX, BacklashModel, Network, load_model, save_model
+from blockid.models.network import check_wiring
 
 
 def paper_a_network():
@@ -129,3 +131,12 @@ def test_network_to_dict_lists_its_external_inputs_and_all_outputs():
     assert data["inputs"] == ["u"]
     assert data["outputs"] == ["v", "y"]
     assert [s["name"] for s in data["subsystems"]] == ["S1", "S2"]
+
+
+def test_cyclic_network_is_named():
+    s1 = ARX(["v2"], ["v1"], 1, 1, 1)
+    s2 = ARX(["v1"], ["v2"], 1, 1, 1)
+    with pytest.raises(OrderError, match=r"cycle: 'S1' -> v1 -> 'S2' -> v2 -> 'S1'"):
+        Network([("S1", s1), ("S2", s2)])
+    with pytest.raises(OrderError, match=r"'S' -> y -> 'S'"):
+        check_wiring([("S", ["y"], ["y"])])
