@@ -39,7 +39,9 @@ SCRIPT = textwrap.dedent(
         "pnlss_simulate": state_space.pnlss_simulate,
         "pnlss_trajectory": state_space.pnlss_trajectory,
         "pnlss_local_jacobians": state_space.pnlss_local_jacobians,
+        "pnlss_local_jacobians_serial": state_space.pnlss_local_jacobians_serial,
         "pnlss_sensitivities": state_space.pnlss_sensitivities,
+        "pnlss_sensitivities_serial": state_space.pnlss_sensitivities_serial,
         "feedback_simulate": feedback.feedback_simulate,
         "feedback_sensitivity": feedback.feedback_sensitivity,
         "allpole_run": simulation.allpole_run,
@@ -62,6 +64,11 @@ def test_the_kernels_of_fits_simulations_and_estimators_are_compiled_for_one_typ
     out = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True,
                          env=env, check=True, timeout=600)  # fmt: skip
     counts = eval(out.stdout.strip().splitlines()[-1])  # noqa: S307 - our own dict literal
+    # the local Jacobians and the walk run on the calling thread or in a parallel region
+    # by the model's size (pnlss_walk): this small model reaches one of each pair
+    for name in ("pnlss_local_jacobians", "pnlss_sensitivities"):
+        pair = counts.pop(name) + counts.pop(f"{name}_serial")
+        assert pair == 1, (name, pair)
     assert counts == dict.fromkeys(counts, 1)
 
 

@@ -97,6 +97,62 @@ def test_the_parallel_walk_is_its_single_threaded_twin_bit_for_bit():
         assert np.array_equal(x, x1) and np.array_equal(S, S0)
 
 
+def test_the_parallel_passes_are_their_serial_twins_bit_for_bit():
+    """``pnlss_walk`` runs a small model's local Jacobians and a walk of one column
+    block on the calling thread, a larger one's in parallel regions: both forms of each
+    pass give the same numbers (each called here directly, over several sample blocks
+    and column blocks, in a region of one thread or two), and the free run's sparse
+    powers give the trajectory's outputs."""
+    import numba
+
+    from blockid._kernels.state_space import (
+        COLUMN_BLOCK,
+        SAMPLE_BLOCK,
+        pnlss_columns,
+        pnlss_local_jacobians,
+        pnlss_local_jacobians_serial,
+        pnlss_sensitivities,
+        pnlss_sensitivities_serial,
+        pnlss_simulate,
+        pnlss_trajectory,
+    )
+
+    rng = np.random.default_rng(7)
+    nx, nu, ny, n = 4, 1, 2, 3 * SAMPLE_BLOCK + 17
+    arrays = _pnlss_arrays(rng, nx, nu, ny, degree=4, bound=0.8)  # clipping active
+    A, B, C, D, E, F, expo, lo, hi = arrays
+    u = rng.standard_normal((n, nu))
+    nm = expo.shape[0]
+    V, y = np.empty((n, nx + nu + nm)), np.zeros((n, ny))
+    pnlss_trajectory(*arrays, u, 0.2 * np.ones(nx), y, V)
+    y_free = np.zeros((n, ny))
+    pnlss_simulate(*arrays, u, 0.2 * np.ones(nx), y_free)
+    assert np.array_equal(y, y_free)
+    kind, row, src = pnlss_columns(nx, nu, ny, nm)
+    assert kind.size > 2 * COLUMN_BLOCK
+    before = numba.get_num_threads()
+    for threads in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+        numba.set_num_threads(threads)
+        jacobians = []
+        for local in (pnlss_local_jacobians, pnlss_local_jacobians_serial):
+            JX, JY = np.full((n, nx, nx), np.nan), np.full((n, ny, nx), np.nan)
+            local(A, C, E, F, expo, lo, hi, V, JX, JY)
+            jacobians.append((JX, JY))
+        assert all(np.array_equal(a, b) for a, b in zip(*jacobians, strict=True))
+        assert np.all(np.isfinite(jacobians[0][0]))
+        JX, JY = jacobians[0]
+        walks = []
+        for walk in (pnlss_sensitivities, pnlss_sensitivities_serial):
+            S = np.zeros((nx, kind.size))
+            S[:, -nx:] = np.eye(nx)
+            J = np.full((n * ny, kind.size), np.nan)
+            walk(V, JX, JY, kind, row, src, S, J)
+            walks.append((S, J))
+        assert all(np.array_equal(a, b) for a, b in zip(*walks, strict=True))
+        assert np.all(np.isfinite(walks[0][1]))
+    numba.set_num_threads(before)
+
+
 def test_the_walk_of_chosen_columns_is_those_columns_of_the_whole_walk():
     """A fit asks for its free columns only, in its order: the same numbers."""
     from blockid._kernels.state_space import pnlss_columns

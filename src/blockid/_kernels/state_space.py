@@ -47,6 +47,7 @@ sensitivity is its explicit term, with no walk.
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -60,7 +61,9 @@ __all__ = [
     "SAMPLE_BLOCK",
     "pnlss_columns",
     "pnlss_local_jacobians",
+    "pnlss_local_jacobians_serial",
     "pnlss_sensitivities",
+    "pnlss_sensitivities_serial",
     "pnlss_simulate",
     "pnlss_trajectory",
     "pnlss_walk",
@@ -69,8 +72,13 @@ __all__ = [
 #: Kinds of a parameter's column in :func:`pnlss_sensitivities`.
 STATE, OUTPUT, INITIAL = 0, 1, 2
 #: Columns walked together by one thread: a fixed partition (not one per thread), so
-#: the result is the same with any number of threads.
+#: the result is the same with any number of threads. A walk of one block runs on the
+#: calling thread (:func:`pnlss_sensitivities_serial`).
 COLUMN_BLOCK = 128
+#: Below this ``(nx + ny) (nx + nm)`` (the local Jacobians' size, a measure of their
+#: work per sample) :func:`pnlss_walk` forms them on the calling thread: starting a
+#: parallel region costs more than a small model's samples (measured: docs/performance.md).
+LOCAL_PARALLEL_WORK = 64
 
 
 @njit(cache=True)
@@ -135,12 +143,21 @@ def pnlss_simulate(A, B, C, D, E, F, expo, lo, hi, u, x, y):
     """
     N = u.shape[0]
     nx, nu, nm = A.shape[0], B.shape[1], expo.shape[0]
+    count, var, power = _sparse_exponents(expo)
+    top = _powers(count, var, power, nm)
     z = np.empty(nx + nu)
+    zp = np.empty((nx + nu, top + 1))  # each variable's powers, as monomials() takes them
     zeta = np.empty(nm)
     xn = np.empty(nx)
     for k in range(N):
         _stack(x, u[k], z)
-        monomials(z, expo, lo, hi, zeta)
+        for i in range(nx + nu):
+            _power_row(min(max(z[i], lo[i]), hi[i]), top, zp[i])
+        for j in range(nm):  # monomials(z, ...): each one's powers in ascending variable
+            val = 1.0
+            for t in range(count[j]):
+                val *= zp[var[j, t], power[j, t]]
+            zeta[j] = val
         _affine(C, D, F, x, u[k], zeta, y[k])
         _affine(A, B, E, x, u[k], zeta, xn)
         finite = True
@@ -214,6 +231,18 @@ def _powers(count, var, power, nm):
 
 
 @njit(cache=True, nogil=True)
+def _power_row(zi, top, row):
+    """``row[e] = zi ** e`` for ``e = 0 .. top``: the powers 0 and 1 as they are
+    (``zi ** 0`` is 1 and ``zi ** 1`` is ``zi`` exactly), the others by ``**`` as
+    :func:`monomials` takes them, so every monomial is the same number."""
+    row[0] = 1.0
+    if top >= 1:
+        row[1] = zi
+    for e in range(2, top + 1):
+        row[e] = zi**e
+
+
+@njit(cache=True, nogil=True)
 def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
     """The free run over a piece, keeping ``V[k] = [x(k); u(k); ζ(k)]`` per sample
     ``k`` (the sequential part of the walk: :func:`pnlss_local_jacobians` then works on
@@ -230,9 +259,7 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
     for k in range(N):
         _stack(x, u[k], z)
         for i in range(nx + nu):
-            zi = min(max(z[i], lo[i]), hi[i])
-            for e in range(top + 1):
-                zp[i, e] = zi**e
+            _power_row(min(max(z[i], lo[i]), hi[i]), top, zp[i])
             V[k, i] = z[i]
         for j in range(nm):
             val = 1.0
@@ -250,6 +277,37 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
 SAMPLE_BLOCK = 256
 
 
+@njit(cache=True, nogil=True)
+def _local_block(A, C, E, F, count, var, power, top, lo, hi, V, JX, JY, k0, k1):
+    """:func:`pnlss_local_jacobians` over samples ``k0:k1`` (one task)."""
+    nx, ny, nm = A.shape[0], C.shape[0], count.shape[0]
+    nz = V.shape[1] - nm
+    zp = np.empty((nz, top + 1))
+    for k in range(k0, k1):
+        for i in range(nz):
+            _power_row(min(max(V[k, i], lo[i]), hi[i]), top, zp[i])
+        for i in range(ny):
+            for j in range(nx):
+                JY[k, i, j] = C[i, j]
+        for i in range(nx):
+            for j in range(nx):
+                JX[k, i, j] = A[i, j]
+        for m in range(nm):
+            for t in range(count[m]):
+                i = var[m, t]
+                if i >= nx or not (lo[i] < V[k, i] < hi[i]):
+                    continue
+                p = power[m, t]
+                d = p * zp[i, p - 1]  # z_i is inside its range: clip(z_i) = z_i
+                for t2 in range(count[m]):
+                    if t2 != t:
+                        d *= zp[var[m, t2], power[m, t2]]
+                for r in range(nx):
+                    JX[k, r, i] += E[r, m] * d
+                for r in range(ny):
+                    JY[k, r, i] += F[r, m] * d
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY):
     """``JX[k] = A + E ∂ζ/∂x`` and ``JY[k] = C + F ∂ζ/∂x`` at every sample of a
@@ -258,38 +316,21 @@ def pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY):
     only, the terms added monomial by monomial in ascending order (the dense sums'
     order, their zero terms left out: the same numbers)."""
     N = V.shape[0]
-    nx, ny, nm = A.shape[0], C.shape[0], expo.shape[0]
-    nz = expo.shape[1]
     count, var, power = _sparse_exponents(expo)
-    top = _powers(count, var, power, nm)
+    top = _powers(count, var, power, expo.shape[0])
     blocks = (N + SAMPLE_BLOCK - 1) // SAMPLE_BLOCK
     for b in prange(blocks):
-        zp = np.empty((nz, top + 1))
-        for k in range(b * SAMPLE_BLOCK, min(N, (b + 1) * SAMPLE_BLOCK)):
-            for i in range(nz):
-                zi = min(max(V[k, i], lo[i]), hi[i])
-                for e in range(top + 1):
-                    zp[i, e] = zi**e
-            for i in range(ny):
-                for j in range(nx):
-                    JY[k, i, j] = C[i, j]
-            for i in range(nx):
-                for j in range(nx):
-                    JX[k, i, j] = A[i, j]
-            for m in range(nm):
-                for t in range(count[m]):
-                    i = var[m, t]
-                    if i >= nx or not (lo[i] < V[k, i] < hi[i]):
-                        continue
-                    p = power[m, t]
-                    d = p * zp[i, p - 1]  # z_i is inside its range: clip(z_i) = z_i
-                    for t2 in range(count[m]):
-                        if t2 != t:
-                            d *= zp[var[m, t2], power[m, t2]]
-                    for r in range(nx):
-                        JX[k, r, i] += E[r, m] * d
-                    for r in range(ny):
-                        JY[k, r, i] += F[r, m] * d
+        k1 = min(N, (b + 1) * SAMPLE_BLOCK)
+        _local_block(A, C, E, F, count, var, power, top, lo, hi, V, JX, JY, b * SAMPLE_BLOCK, k1)
+
+
+@njit(cache=True, nogil=True)
+def pnlss_local_jacobians_serial(A, C, E, F, expo, lo, hi, V, JX, JY):
+    """:func:`pnlss_local_jacobians` on the calling thread: the same numbers, without
+    a parallel region's start (which costs more than a small model's samples)."""
+    count, var, power = _sparse_exponents(expo)
+    top = _powers(count, var, power, expo.shape[0])
+    _local_block(A, C, E, F, count, var, power, top, lo, hi, V, JX, JY, 0, V.shape[0])
 
 
 @njit(cache=True, nogil=True)
@@ -366,6 +407,15 @@ def pnlss_sensitivities(V, JX, JY, kind, row, src, S, J):
         _walk_block(V, JX, JY, kind, row, src, S, J, c0, min(P, c0 + COLUMN_BLOCK))
 
 
+@njit(cache=True, nogil=True)
+def pnlss_sensitivities_serial(V, JX, JY, kind, row, src, S, J):
+    """:func:`pnlss_sensitivities` on the calling thread, block after block: the same
+    numbers (one block's columns never meet another's)."""
+    P = S.shape[1]
+    for c0 in range(0, P, COLUMN_BLOCK):
+        _walk_block(V, JX, JY, kind, row, src, S, J, c0, min(P, c0 + COLUMN_BLOCK))
+
+
 def pnlss_columns(nx: int, nu: int, ny: int, nm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(kind, row, src)`` of every column of ``[A, B, C, D, E, F, x(0)]`` (each matrix
     row-major, the order of the models' free parameters); a caller selects the ones it
@@ -406,5 +456,12 @@ def pnlss_walk(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J, columns=None):
     JX = np.empty((n, nx, nx))
     JY = np.empty((n, ny, nx))
     pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V)
-    pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY)
-    pnlss_sensitivities(V, JX, JY, *columns, S, J)
+    threads = numba.get_num_threads() > 1
+    if threads and (nx + ny) * (nx + nm) >= LOCAL_PARALLEL_WORK:
+        pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY)
+    else:
+        pnlss_local_jacobians_serial(A, C, E, F, expo, lo, hi, V, JX, JY)
+    if threads and S.shape[1] > COLUMN_BLOCK:
+        pnlss_sensitivities(V, JX, JY, *columns, S, J)
+    else:
+        pnlss_sensitivities_serial(V, JX, JY, *columns, S, J)
