@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import json
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -234,9 +233,9 @@ def refuse_figures(folder: Path | None, names: Sequence[str], force: bool) -> No
 
 def print_json(doc: Any) -> None:
     """One JSON document on standard output (no markup, no wrapping)."""
-    from blockid.data.io import json_safe
+    from blockid.data.io import json_text
 
-    sys.stdout.write(json.dumps(json_safe(doc), indent=2, allow_nan=False) + "\n")
+    sys.stdout.write(json_text(doc))
     sys.stdout.flush()
 
 

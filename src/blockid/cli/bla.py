@@ -194,12 +194,9 @@ def bla(
             raise type(exc)(f"{exc} (option --fit)") from None
         doc["fit"] = fitted.to_dict()
     if out is not None:
-        import json
+        from blockid.data.io import json_text, write_text_atomic
 
-        from blockid.data.io import json_safe, write_text_atomic
-
-        write_text_atomic(json.dumps(json_safe(doc), indent=2, allow_nan=False) + "\n", out,
-                          overwrite=force)  # fmt: skip
+        write_text_atomic(json_text(doc), out, overwrite=force)
     if json_out:
         print_json({**doc, "figure": None if figure is None else str(figure),
                     "out": None if out is None else str(out)})  # fmt: skip

@@ -16,6 +16,7 @@ Every error names the file; errors in a cell also name the column, the data row
 from __future__ import annotations
 
 import csv
+import json
 import math
 import os
 import re
@@ -54,6 +55,7 @@ __all__ = [
     "is_stream",
     "READ_SUFFIXES",
     "json_safe",
+    "json_text",
     "WRITE_SUFFIXES",
     "read_data",
     "write_table",
@@ -602,3 +604,15 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def json_text(doc: Any) -> str:
+    """``doc`` as the JSON text the commands print and write: :func:`json_safe` (an
+    undefined number is ``null``), indented by two spaces, ending in a newline.
+
+    >>> print(json_text({"fit_percent": float("nan")}), end="")
+    {
+      "fit_percent": null
+    }
+    """
+    return json.dumps(json_safe(doc), indent=2, allow_nan=False) + "\n"
