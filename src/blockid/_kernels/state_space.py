@@ -336,57 +336,82 @@ def pnlss_local_jacobians_serial(A, C, E, F, expo, lo, hi, V, JX, JY):
 @njit(cache=True, nogil=True)
 def _walk_block(V, JX, JY, kind, row, src, S, J, c0, c1):
     """Columns ``c0:c1`` of :func:`pnlss_sensitivities` (one thread's block): the
-    state sensitivities in two local buffers, each output row summed in a third, the
-    innermost loops over the block's columns (vectorised)."""
+    columns that move the state (every one but an output equation's whose state
+    sensitivity is zero) walked in two local buffers, each output row summed in a third,
+    the innermost loops over those columns (vectorised); the others get their explicit
+    terms alone. The explicit terms are added from lists made once per block, not by a
+    test of every column at every sample."""
     N, ny, nx = JY.shape
     w = c1 - c0
-    moves = False
+    moving = np.empty(w, dtype=np.int64)
+    still = np.empty(w, dtype=np.int64)
+    n_moving, n_still = 0, 0
     for q in range(w):
-        if kind[c0 + q] != OUTPUT:
-            moves = True
+        moves = kind[c0 + q] != OUTPUT
         for j in range(nx):
             if S[j, c0 + q] != 0.0:
                 moves = True
-    if not moves:  # the output equation's columns alone: their explicit terms
+        if moves:
+            moving[n_moving] = q
+            n_moving += 1
+        else:
+            still[n_still] = q
+            n_still += 1
+    if n_moving == 0:  # the output equation's columns alone: their explicit terms
         for k in range(N):
             for i in range(ny):
                 for q in range(w):
                     p = c0 + q
                     J[k * ny + i, p] = V[k, src[p]] if row[p] == i else 0.0
         return
-    Sb = np.empty((nx, w))
-    Sn = np.empty((nx, w))
-    acc = np.empty(w)
+    # explicit terms of the moving columns: (their place among them, row, source)
+    terms = np.empty((6, n_moving), dtype=np.int64)
+    out_t, out_row, out_src = terms[0], terms[1], terms[2]
+    st_t, st_row, st_src = terms[3], terms[4], terms[5]
+    n_out, n_st = 0, 0
+    for t in range(n_moving):
+        p = c0 + moving[t]
+        if kind[p] == OUTPUT:
+            out_t[n_out], out_row[n_out], out_src[n_out] = t, row[p], src[p]
+            n_out += 1
+        elif kind[p] == STATE:
+            st_t[n_st], st_row[n_st], st_src[n_st] = t, row[p], src[p]
+            n_st += 1
+    Sb = np.empty((nx, n_moving))
+    Sn = np.empty((nx, n_moving))
+    acc = np.empty(n_moving)
     for j in range(nx):
-        for q in range(w):
-            Sb[j, q] = S[j, c0 + q]
+        for t in range(n_moving):
+            Sb[j, t] = S[j, c0 + moving[t]]
     for k in range(N):
         for i in range(ny):
+            r = k * ny + i
             acc[:] = 0.0
             for j in range(nx):
                 c = JY[k, i, j]
-                for q in range(w):
-                    acc[q] += c * Sb[j, q]
-            for q in range(w):
-                p = c0 + q
-                if kind[p] == OUTPUT and row[p] == i:
-                    acc[q] += V[k, src[p]]
-            J[k * ny + i, c0:c1] = acc
+                for t in range(n_moving):
+                    acc[t] += c * Sb[j, t]
+            for e in range(n_out):
+                if out_row[e] == i:
+                    acc[out_t[e]] += V[k, out_src[e]]
+            for t in range(n_moving):
+                J[r, c0 + moving[t]] = acc[t]
+            for e in range(n_still):  # a zero sensitivity: 0 + the explicit term, as walked
+                p = c0 + still[e]
+                J[r, p] = 0.0 + V[k, src[p]] if row[p] == i else 0.0
         for i in range(nx):
-            for q in range(w):
-                Sn[i, q] = 0.0
+            for t in range(n_moving):
+                Sn[i, t] = 0.0
             for j in range(nx):
                 c = JX[k, i, j]
-                for q in range(w):
-                    Sn[i, q] += c * Sb[j, q]
-        for q in range(w):
-            p = c0 + q
-            if kind[p] == STATE:
-                Sn[row[p], q] += V[k, src[p]]
+                for t in range(n_moving):
+                    Sn[i, t] += c * Sb[j, t]
+        for e in range(n_st):
+            Sn[st_row[e], st_t[e]] += V[k, st_src[e]]
         Sb, Sn = Sn, Sb
     for j in range(nx):
-        for q in range(w):
-            S[j, c0 + q] = Sb[j, q]
+        for t in range(n_moving):
+            S[j, c0 + moving[t]] = Sb[j, t]
 
 
 @njit(cache=True, nogil=True, parallel=True)
