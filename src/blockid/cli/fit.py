@@ -52,7 +52,12 @@ from blockid.cli._options import (
     structures_help,
     with_fit_options,
 )
-from blockid.cli.report import compare_ranges, structure_names, write_report_option
+from blockid.cli.report import (
+    REPORT_OPTIONS,
+    compare_ranges,
+    structure_names,
+    write_report_option,
+)
 
 __all__ = ["compare", "fit", "fit_network"]
 
@@ -178,18 +183,17 @@ def compare(
     check_compared(names.get("structures", COMPARED_BY_DEFAULT), method)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
     opts = given(options)
-    if report is not None:  # trajectories and standard errors for the report's figures
-        opts = {"record_history": True, "standard_errors": True, **opts}
+    if report is not None:
+        opts = {**REPORT_OPTIONS, **opts}
     est, val, result = compare_ranges(
         data, estimation, validation, names, method, opts, quiet or json_out
     )
     if report is not None:
-        with busy("writing the report", quiet or json_out):
-            write_report_option(
-                report, data_paths=data_paths, compare=result, data=data, estimation=est,
-                validation=val, estimation_range=estimation, validation_range=validation,
-                force=force,
-            )  # fmt: skip
+        write_report_option(
+            report, data_paths=data_paths, compare=result, data=data, estimation=est,
+            validation=val, estimation_range=estimation, validation_range=validation,
+            force=force, quiet=quiet or json_out,
+        )  # fmt: skip
     if json_out:
         print_json(result.to_dict())
         return

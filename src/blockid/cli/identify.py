@@ -13,7 +13,6 @@ from typing import Annotated, Any
 import typer
 
 from blockid.cli._common import (
-    busy,
     cli_errors,
     metrics_table,
     print_json,
@@ -191,12 +190,12 @@ def identify(
 
         fit_figures(result.fit, est, plot, overwrite=force)
     if report is not None:
-        with busy("writing the report", quiet or json_out):
-            write_report_option(
-                report, data_paths=[*data_paths, *(validation_data or [])], identify=result,
-                data=None if validation_data else whole, estimation=est, validation=val,
-                estimation_range=estimation, validation_range=validation, force=force,
-            )  # fmt: skip
+        write_report_option(
+            report, data_paths=[*data_paths, *(validation_data or [])], identify=result,
+            data=None if validation_data else whole, estimation=est, validation=val,
+            estimation_range=estimation, validation_range=validation, force=force,
+            quiet=quiet or json_out,
+        )  # fmt: skip
     for note in result.warnings:  # with --json too: stderr (and in the document)
         stderr.print(f"warning: {note}", markup=False)
     if json_out:

@@ -35,7 +35,18 @@ from blockid.cli._options import (
     with_fit_options,
 )
 
-__all__ = ["command_words", "compare_ranges", "report", "structure_names", "write_report_option"]
+__all__ = [
+    "REPORT_OPTIONS",
+    "command_words",
+    "compare_ranges",
+    "report",
+    "structure_names",
+    "write_report_option",
+]
+
+#: What the report's figures need of every fit: the parameter trajectories of the
+#: recursive methods and the standard errors (confidence bands of the blocks).
+REPORT_OPTIONS = {"record_history": True, "standard_errors": True}
 
 
 def command_words() -> list[str]:
@@ -89,8 +100,10 @@ def write_report_option(
     validation_range: str | None = None,
     force: bool = False,
     announce: bool = True,
+    quiet: bool = False,
 ) -> Path:
-    """Build the report of a ``compare`` / ``identify`` run and write it to ``path``.
+    """Build the report of a ``compare`` / ``identify`` run and write it to ``path``,
+    with a spinner unless ``quiet``.
 
     Call :func:`~blockid.cli._common.refuse_to_overwrite` on ``path`` before the work;
     this writes atomically and replaces an existing file only with ``force``. With
@@ -98,20 +111,21 @@ def write_report_option(
     """
     from blockid.reporting import build_report, collect_provenance, write_report
 
-    provenance = collect_provenance(data_paths, command_words())
-    html = build_report(
-        compare=compare,
-        identify=identify,
-        data=data,
-        estimation=estimation,
-        validation=validation,
-        estimation_range=estimation_range,
-        validation_range=validation_range,
-        provenance=provenance,
-    )
-    written = write_report(html, path, overwrite=force)
-    if announce:
-        stderr.print(f"report written to {written}", markup=False)
+    with busy("writing the report", quiet):
+        provenance = collect_provenance(data_paths, command_words())
+        html = build_report(
+            compare=compare,
+            identify=identify,
+            data=data,
+            estimation=estimation,
+            validation=validation,
+            estimation_range=estimation_range,
+            validation_range=validation_range,
+            provenance=provenance,
+        )
+        written = write_report(html, path, overwrite=force)
+        if announce:
+            stderr.print(f"report written to {written}", markup=False)
     return written
 
 
@@ -179,24 +193,23 @@ def report(
     check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
     check_disjoint(estimation, validation)
     data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
-    # trajectories of the recursive methods and standard errors, for the figures
-    opts = {"record_history": True, "standard_errors": True, **given(options)}
+    opts = {**REPORT_OPTIONS, **given(options)}
     est, val, result = compare_ranges(
         data, estimation, validation, structure_names(structures), method, opts, quiet or json_out
     )
-    with busy("writing the report", quiet or json_out):
-        path = write_report_option(
-            out,
-            data_paths=data_paths,
-            compare=result,
-            data=data,
-            estimation=est,
-            validation=val,
-            estimation_range=estimation,
-            validation_range=validation,
-            force=force,
-            announce=False,
-        )
+    path = write_report_option(
+        out,
+        data_paths=data_paths,
+        compare=result,
+        data=data,
+        estimation=est,
+        validation=val,
+        estimation_range=estimation,
+        validation_range=validation,
+        force=force,
+        announce=False,
+        quiet=quiet or json_out,
+    )
     if json_out:
         print_json({"report": str(path), "bytes": path.stat().st_size, **result.to_dict()})
         return
