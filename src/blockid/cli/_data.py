@@ -11,7 +11,14 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["check_arguments", "data_label", "load_data", "model_rate", "select_range"]
+__all__ = [
+    "check_arguments",
+    "data_label",
+    "load_data",
+    "load_model_data",
+    "model_rate",
+    "select_range",
+]
 
 
 def check_arguments(
@@ -72,6 +79,25 @@ def load_data(
         experiment_column=experiment_column,
     )
     return select_range(data, rng, what)
+
+
+def load_model_data(
+    model_path: Path,
+    paths: Sequence[Path],
+    ts: float | None,
+    time_column: str | None,
+    experiment_column: str | None,
+    rng: str | None,
+) -> tuple[Any, Any]:
+    """The model of ``model_path`` and the samples of ``--range`` ``rng`` of the data
+    files, read with the model's signals at its rate (:func:`model_rate`)."""
+    from blockid.models import load_model
+
+    model = load_model(model_path)
+    rate = model_rate(model, ts, model_path)  # --ts 0 is refused, not dropped
+    inputs, outputs = list(model.inputs), list(model.outputs)
+    data = load_data(paths, inputs, outputs, rate, time_column, experiment_column, rng, "--range")
+    return model, data
 
 
 def select_range(data: Any, rng: str | None, what: str) -> Any:

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from blockid.cli._common import cli_errors, flagged, print_json, refuse_figures, stdout
-from blockid.cli._data import check_arguments, data_label, load_data, model_rate
+from blockid.cli._data import check_arguments, data_label, load_model_data
 from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
@@ -60,16 +60,10 @@ def residuals(
         raise ParameterError(f"--mode {mode!r}: choose one-step or simulation", parameter="mode")
     check_arguments(data_paths, ranges={"--range": rng}, model=model_path)
     from blockid.evaluation.residuals import residual_analysis
-    from blockid.models import load_model
     from blockid.plotting.residuals import RESIDUAL_FIGURE
 
     refuse_figures(plot, [RESIDUAL_FIGURE], force)
-    model = load_model(model_path)
-    data = load_data(
-        data_paths, list(model.inputs), list(model.outputs),
-        model_rate(model, ts, model_path), time_column, experiment_column,
-        rng, "--range",
-    )  # fmt: skip
+    model, data = load_model_data(model_path, data_paths, ts, time_column, experiment_column, rng)
     with flagged({"max_lag": "--lags", "confidence": "--confidence"}.get):
         analysis = residual_analysis(model, data, mode, max_lag=lags, confidence=confidence)
     where = data_label(data_paths, rng)

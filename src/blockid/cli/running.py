@@ -17,7 +17,7 @@ from blockid.cli._common import (
     stderr,
     stdout,
 )
-from blockid.cli._data import check_arguments, data_label, load_data, model_rate
+from blockid.cli._data import check_arguments, data_label, load_model_data
 from blockid.cli._flags import (
     DataPaths,
     ExperimentColumn,
@@ -121,20 +121,11 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         check_arguments(data_paths, ranges={"--range": rng}, model=model_path, table=out)
         from blockid.data import write_table
         from blockid.evaluation import evaluate
-        from blockid.models import load_model
         from blockid.plotting.runs import RUN_FIGURES
 
         refuse_figures(plot, [RUN_FIGURES[mode]], force)
-        model = load_model(model_path)
-        data = load_data(
-            data_paths,
-            list(model.inputs),
-            list(model.outputs),
-            model_rate(model, ts, model_path),  # --ts 0 is refused, not dropped
-            time_column,
-            experiment_column,
-            rng,
-            "--range",
+        model, data = load_model_data(
+            model_path, data_paths, ts, time_column, experiment_column, rng
         )
         if band is not None and initial_samples is not None and initial_samples > model.max_lag:
             raise ParameterError(
