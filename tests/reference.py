@@ -11,9 +11,12 @@ import numpy as np
 from numba import njit
 
 from blockid._kernels.state_space import monomials
-from blockid.blocks import Polynomial
+from blockid.blocks import DeadZone, Polynomial, TwoSegmentPolynomial
 from blockid.blocks.base import StaticBlock
 from blockid.data import Dataset
+from blockid.models import ARX, Hammerstein, HammersteinWiener
+from blockid.models.state_space import StateSpace
+from blockid.workflows.effort import Effort
 
 
 def rls(Phi, Y, lam, mu, theta0=0.0, trace_max=np.inf):
@@ -492,3 +495,153 @@ def fourth_order_arx_halves(n=2000, seed=3):
         y[t] = -a[1:] @ y[t - 4 : t][::-1] + u[t - 1] + 0.5 * u[t - 2] + e[t]
     data = Dataset.from_arrays(u, y, ["u"], ["y"])
     return data.select(0, n // 2), data.select(n // 2, n)
+
+
+#: A small search for tests: 3 folds, orders up to 3, delays up to 2, 3 block families.
+SMALL = Effort("small", 3, 2, 3, 2, 1, 3, 15, 10_000, 2, 40, 1)
+
+
+def dead_zone_record(n=1200, seed=0, noise=0.01):
+    """A Hammerstein plant with a dead zone, driven by a staircase (identify's tests)."""
+    plant = Hammerstein("u", "y", input_block=DeadZone(-0.3, 0.3, 1.0, 1.0),
+                        na=2, nb=2, nk=1, a=[-1.2, 0.5], b=[1.0, 0.4])  # fmt: skip
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.uniform(-1, 1, n // 4), 4)
+    y = plant.simulate(u)[:, 0] + noise * rng.standard_normal(u.size)
+    return Dataset.from_arrays(u, y, ["u"], ["y"])
+
+
+def scored(structure, relative, **options):
+    """A Score with the given folds' relative errors (no fit behind it)."""
+    from blockid.workflows.identify import FoldScore, Score
+    from blockid.workflows.search_space import Candidate
+
+    folds = [FoldScore(rmse=r, relative=r, n_parameters=4) for r in relative]
+    return Score(Candidate(structure, {"na": 2, "nb": 2, "nk": 1, **options}), "structures",
+                 folds, rmse=float(np.exp(np.mean(np.log(relative)))), n_parameters=4)  # fmt: skip
+
+
+#: Linear state spaces whose matrices are known (the state-space fitting tests).
+STATE_SPACES = {
+    "siso, 2 states": StateSpace(
+        ["u"], ["y"], A=[[1.2, -0.35], [1.0, 0.0]], B=[[1.0], [0.0]], C=[[1.0, 0.4]], D=[[0.0]]
+    ),  # fmt: skip
+    "2 in, 2 out, 3 states": StateSpace(
+        ["u1", "u2"],
+        ["y1", "y2"],
+        A=[[0.8, 0.2, 0.0], [-0.2, 0.8, 0.1], [0.0, 0.0, 0.5]],
+        B=[[1.0, 0.0], [0.0, 1.0], [0.5, 0.5]],
+        C=[[1.0, 0.0, 0.3], [0.0, 1.0, 0.0]],
+        D=[[0.0, 0.0], [0.0, 0.0]],
+    ),  # fmt: skip
+    "1 in, 2 out, 4 states, feedthrough": StateSpace(
+        ["u"],
+        ["y1", "y2"],
+        A=np.diag([0.9, -0.5, 0.3, 0.6]) + np.diag([0.2, 0.1, 0.0], 1),
+        B=[[1.0], [1.0], [0.5], [-1.0]],
+        C=[[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0]],
+        D=[[0.5], [0.0]],
+    ),  # fmt: skip
+}
+
+
+def state_space_record(plant, n, seed=0, snr_db=None, mean=0.3):
+    """``n`` samples of ``plant`` driven by white noise around ``mean`` (and output noise
+    at ``snr_db``)."""
+    rng = np.random.default_rng(seed)
+    u = mean + rng.standard_normal((n, len(plant.inputs)))
+    y = plant.simulate(u)
+    if snr_db is not None:
+        y = y + rng.standard_normal(y.shape) * y.std(axis=0) * 10 ** (-snr_db / 20)
+    return Dataset.from_arrays(u, y, list(plant.inputs), list(plant.outputs))
+
+
+def free_run_error(model, plant, n=3000, seed=99):
+    """RMSE of ``model``'s free run against the noise-free plant on a fresh record."""
+    u = state_space_record(plant, n, seed=seed).experiments[0].u
+    return float(np.sqrt(np.mean((model.simulate(u) - plant.simulate(u)) ** 2)))
+
+
+#: The orders of the fleet's records; the record with a non-numeric cell; how many.
+FLEET_ORDERS = {"na": 2, "nb": 2, "nk": 1}
+CORRUPT = 7
+N_RECORDS = 20
+
+
+def fleet_records(folder):
+    """Twenty small ARX records in ``folder`` (loop00.csv ...), record :data:`CORRUPT` with
+    a non-numeric cell; their paths, sorted."""
+    import pandas as pd
+
+    from blockid.models import ARX
+
+    plant = ARX(["u"], ["y"], **FLEET_ORDERS, a={"y": {"y": [-1.2, 0.35]}},
+                b={"y": {"u": [1.0, 0.4]}})  # fmt: skip
+    for i in range(N_RECORDS):
+        rng = np.random.default_rng(i)
+        u = rng.uniform(-1, 1, 400)
+        y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(400)
+        frame = pd.DataFrame({"u": u, "y": y}).astype(object)
+        if i == CORRUPT:
+            frame.loc[100, "u"] = "abc"
+        frame.to_csv(folder / f"loop{i:02d}.csv", index=False)
+    return sorted(folder.glob("*.csv"))
+
+
+def key_term_hw_plant() -> HammersteinWiener:
+    """Paper B's kind of Hammerstein-Wiener plant (na = nb = 3, nk = 8): the stream's claim."""
+    n1 = TwoSegmentPolynomial.from_segments(
+        positive=[0, 0.3, 0.1, -0.05], negative=[0, 0.15, -0.05, 0.03]
+    )
+    return HammersteinWiener(
+        "u",
+        "y",
+        input_block=n1,
+        output_block=Polynomial([1.0, 0.2, 0.05], constant=False),
+        na=3,
+        nb=3,
+        nk=8,
+        a=np.real(np.poly([0.7, 0.5, -0.3]))[1:],
+        b=[1.0, 0.5, 0.2],
+    )
+
+
+def key_term_hw_record(n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1.0, 1.0, (n, 1))
+    return u, key_term_hw_plant().simulate(u) + 0.001 * rng.standard_normal((n, 1))
+
+
+def csv_text(u: np.ndarray, y: np.ndarray) -> str:
+    """A record of one input and one output as the CSV text a stream reads (u, y)."""
+    rows = [f"{a!r},{b!r}" for a, b in zip(u[:, 0].tolist(), y[:, 0].tolist(), strict=True)]
+    return "u,y\n" + "\n".join(rows) + "\n"
+
+
+def arx_csv_text(n: int = 300) -> str:
+    """``n`` samples of a first-order ARX plant as stream text."""
+    plant = ARX(["u"], ["y"], na=1, nb=1, nk=1, a={"y": {"y": [-0.5]}}, b={"y": {"u": [2.0]}})
+    u = np.random.default_rng(5).uniform(-1, 1, (n, 1))
+    return csv_text(u, plant.simulate(u))
+
+
+def flat_parameters(parameters) -> np.ndarray:
+    """A model document's parameters (nested dicts of lists) as one flat array."""
+    if isinstance(parameters, dict):
+        return np.concatenate([flat_parameters(v) for v in parameters.values()])
+    return np.atleast_1d(np.asarray(parameters, dtype=float))
+
+
+#: An ARX plant of orders (2, 2, 1): the stream's live plant (issue 37).
+PLANT_221 = ARX(
+    ["u"], ["y"], na=2, nb=2, nk=1, a={"y": {"y": [-1.5, 0.7]}}, b={"y": {"u": [1.0, 0.5]}}
+)
+
+
+GLITCH_ROW = 70  # the row of the issue ("diverged at sample 71")
+
+
+def record_221(n: int = 400, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n, 1))
+    return u, PLANT_221.simulate(u) + 0.01 * rng.standard_normal((n, 1))

@@ -21,27 +21,18 @@ from blockid.models import ARX, ChainModel, Hammerstein
 from blockid.workflows.identify import EFFORTS, LONG_RECORD, Effort, identify
 
 from reference import (
+    SMALL,
     cubic_state_record,
+    dead_zone_record,
     mimo_delays_record,
     mimo_hw_record,
     mimo_lure_record,
     mimo_orders_record,
     mimo_wiener_hammerstein_record,
+    scored,
     squared_state_record,
     tank_overflow_record,
 )
-
-#: A small search for tests: 3 folds, orders up to 3, delays up to 2, 3 block families.
-SMALL = Effort("small", 3, 2, 3, 2, 1, 3, 15, 10_000, 2, 40, 1)
-
-
-def dead_zone_record(n=1200, seed=0, noise=0.01):
-    plant = Hammerstein("u", "y", input_block=DeadZone(-0.3, 0.3, 1.0, 1.0),
-                        na=2, nb=2, nk=1, a=[-1.2, 0.5], b=[1.0, 0.4])  # fmt: skip
-    rng = np.random.default_rng(seed)
-    u = np.repeat(rng.uniform(-1, 1, n // 4), 4)
-    y = plant.simulate(u)[:, 0] + noise * rng.standard_normal(u.size)
-    return Dataset.from_arrays(u, y, ["u"], ["y"])
 
 
 def _fits(result):
@@ -468,78 +459,6 @@ def test_a_static_block_on_a_state_gets_a_loop_block_which_no_chain_holds():
     assert np.linalg.norm(ys - y) / np.linalg.norm(y - y.mean()) < 0.01
 
 
-def test_the_nonlinearity_stage_keeps_a_state_space_degree_within_the_effort():
-    """The folds lie inside the estimation range, so they cannot show how a higher
-    monomial degree extrapolates beyond it: growth stops at the effort's largest planned
-    degree (and within its parameter budget)."""
-    from blockid.workflows.search_space import Candidate
-    from blockid.workflows.stages import _affordable
-
-    standard = EFFORTS["standard"]  # plans degrees 2 and 3, 300 parameters
-    pnlss = Candidate("polynomial-state-space", {"nx": 2, "degree": 3, "monomials": "full"})
-    assert _affordable(pnlss, (1, 1), standard)
-    assert not _affordable(pnlss.with_options(degree=4), (1, 1), standard)
-    assert _affordable(pnlss.with_options(degree=4), (1, 1), EFFORTS["thorough"])
-    assert not _affordable(pnlss.with_options(nx=8), (1, 1), standard)  # 494 > 300
-    assert _affordable(Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1}), (1, 1), standard)
-
-
-def test_a_refit_stopped_short_of_the_cross_validated_score_is_fitted_longer():
-    """A refit on all data that stopped at max_nfev and simulates its own data more than
-    10 % worse than the candidate's cross-validated score is fitted again with three
-    times the evaluations (Silverbox: PNLSS stopped at 150 evaluations at 0.56 mV on its
-    own data against 0.22 cross-validated; 245 evaluations reach 0.22)."""
-    from blockid.workflows.refit import _refit
-    from blockid.workflows.search_space import Candidate
-
-    data = dead_zone_record()
-    short = Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1, "input_block": "dead-zone",
-                                      "max_nfev": 1})  # fmt: skip
-    notes = []
-    first, _ = _refit(short, data, 0.0098, 10, notes)  # 0.0106 on its own data: within 10 %
-    assert notes == []
-    notes = []
-    longer, _ = _refit(short, data, 0.009, 10, notes)  # 0.0106 > 1.1 x 0.009
-    assert len(notes) == 1 and "max_nfev = 3" in notes[0]
-    own = longer.estimation_metrics["rmse"]["y"]
-    assert own < 0.95 * first.estimation_metrics["rmse"]["y"]  # measured 0.00982 vs 0.01057
-
-
-def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stopped_it():
-    """Own-data error more than twice the cross-validated one after every retry: the
-    refit did not find what the folds found (Bouc-Wen: 164 um against 15 um, stopped by
-    ftol at its linear start), so it is refused with the numbers, whatever stopped it;
-    identify then fits the next candidate."""
-    from blockid.errors import EstimationError
-    from blockid.workflows.refit import _fell_short, _refit
-    from blockid.workflows.search_space import Candidate
-
-    data = dead_zone_record()
-    converged = Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1, "input_block": "dead-zone",
-                                          "max_nfev": 30})  # fmt: skip
-    fit, own = _refit(converged, data, 0.0098, 10, [])
-    assert "max_nfev" not in str(fit.settings.get("stop_reason"))  # it converged
-    assert own == pytest.approx(fit.estimation_metrics["rmse"]["y"], rel=0.05)
-    with pytest.raises(EstimationError, match="did not find what the folds found"):
-        _fell_short(fit, own, own / 2.5)
-    _fell_short(fit, own, own / 1.5)  # within the factor: no error
-
-
-def test_when_every_refit_falls_short_the_first_is_returned_with_a_note(monkeypatch):
-    """The refusal must not turn a search into an error: with the factor set so that every
-    refit falls short, the best candidate's refit comes back, said so in the notes."""
-    from blockid.workflows import refit as module
-
-    monkeypatch.setattr(module, "REFIT_FAILED", 1e-9)
-    data = dead_zone_record(600)
-    result = identify(data, structures=["hammerstein"], effort=SMALL, jobs=1)
-    refused = [n for n in result.notes if "did not find what the folds found" in n]
-    assert refused[0].startswith(result.selected.candidate.label)  # the first one tried
-    assert result.selected.candidate.structure == "hammerstein"
-    assert any("every candidate's refit failed" in n for n in result.notes)
-    assert sum("did not find what the folds found" in n for n in result.notes) >= 2
-
-
 def test_a_two_input_two_output_hammerstein_wiener_plant_gets_blocks_per_channel():
     """Several inputs and outputs: the block state-space candidates are searched, and on
     a Hammerstein-Wiener plant (a cubic per input, a cubic per output, 40 dB) one with
@@ -559,39 +478,29 @@ def test_a_two_input_two_output_hammerstein_wiener_plant_gets_blocks_per_channel
     assert result.fit.model.kind == "hammerstein-wiener"
 
 
-def _scored(structure, relative, **options):
-    """A Score with the given folds' relative errors (no fit behind it)."""
-    from blockid.workflows.identify import FoldScore, Score
-    from blockid.workflows.search_space import Candidate
-
-    folds = [FoldScore(rmse=r, relative=r, n_parameters=4) for r in relative]
-    return Score(Candidate(structure, {"na": 2, "nb": 2, "nk": 1, **options}), "structures",
-                 folds, rmse=float(np.exp(np.mean(np.log(relative)))), n_parameters=4)  # fmt: skip
-
-
 def test_a_model_beyond_linear_is_chosen_only_when_the_folds_agree():
     from blockid.workflows.identify import _earned
 
-    arx = _scored("arx", [0.49, 0.07, 0.27])
+    arx = scored("arx", [0.49, 0.07, 0.27])
     # EMPS's pattern: the best score, but one fold far worse than the linear model's
-    lucky = _scored("hammerstein", [0.12, 0.28, 0.16], input_block="polynomial:degree=3")
+    lucky = scored("hammerstein", [0.12, 0.28, 0.16], input_block="polynomial:degree=3")
     order, info = _earned([lucky, arx])
     assert order == [arx, lucky] and info["linear_chosen"] and info["folds_won"] == 2
     assert info["mean_log_ratio"] < 0 < info["mean_log_ratio"] + info["standard_error"]
     # better on every fold by a steady margin: it stays first
-    steady = _scored("hammerstein", [0.30, 0.05, 0.20], input_block="polynomial:degree=3")
+    steady = scored("hammerstein", [0.30, 0.05, 0.20], input_block="polynomial:degree=3")
     order, info = _earned([steady, arx])
     assert order == [steady, arx] and not info["linear_chosen"]
     # within one standard error but beyond LINEAR_MARGIN (0.75) of them: kept
-    base = _scored("arx", [0.2, 0.2, 0.2, 0.2])
-    near = _scored("hammerstein", 0.2 * np.exp([-0.6, -0.1, 0.3, -0.2]),
+    base = scored("arx", [0.2, 0.2, 0.2, 0.2])
+    near = scored("hammerstein", 0.2 * np.exp([-0.6, -0.1, 0.3, -0.2]),
                    input_block="polynomial:degree=3")  # fmt: skip
     order, info = _earned([near, base])
     t = info["mean_log_ratio"] / info["standard_error"]
     assert -1.0 < t < -0.75 and info["margin"] == 0.75
     assert order == [near, base] and not info["linear_chosen"]
     # an integrator is beyond linear too; a linear best, or no linear model, stands
-    drifting = _scored("output-error", [0.1, 0.5, 0.2], integrator=1)
+    drifting = scored("output-error", [0.1, 0.5, 0.2], integrator=1)
     assert _earned([drifting, arx])[0] == [arx, drifting]
     assert _earned([arx, lucky]) == ([arx, lucky], None)
     assert _earned([lucky, steady]) == ([lucky, steady], None)
@@ -672,127 +581,6 @@ def test_multivariable_feedback_and_wiener_hammerstein_plants_get_a_polynomial_s
     assert min(fit.values()) > 99.5
 
 
-def test_a_refit_worse_than_a_start_from_a_folds_model_is_replaced(monkeypatch):
-    """The refit on all data is one start of a nonconvex fit; the folds' models refined
-    on all data are others, and the lowest free-run error on the estimation data wins.
-    Here the direct fit is made to stop after one evaluation: a warm start replaces it,
-    with a note and the numbers in the JSON."""
-    import json
-
-    from blockid.workflows import refit as module
-
-    real = module._refit
-
-    def stunted(candidate, data, cv_rmse, n_init, notes):
-        return real(candidate.with_options(max_nfev=1), data, math.inf, n_init, notes)
-
-    monkeypatch.setattr(module, "_refit", stunted)
-    data = dead_zone_record(600)
-    result = identify(data, structures=["hammerstein"], effort=SMALL, jobs=1)
-    warm = result.search["warm_starts"][0]
-    assert warm["chosen"].startswith("the model fitted without fold")
-    direct, *starts = warm["starts"]
-    assert direct["start"] == "the direct fit"
-    assert len(starts) == len(result.search["folds"])  # SMALL allows 4, 3 folds
-    # chosen by the free run from every fold's start, the search's geometry
-    best = min(starts, key=lambda s: s["fold_starts_rmse"])
-    assert warm["chosen"] == best["start"] and best["fold_starts_rmse"] == warm["fold_starts_rmse"]
-    assert warm["fold_starts_rmse"] < 0.5 * direct["fold_starts_rmse"]
-    note = next(n for n in result.notes if "refined on all of them from its models" in n)
-    assert note.endswith(f"{warm['chosen']} is returned")
-    assert result.fit.settings["initial"] == warm["chosen"]
-    own = result.fit.model.simulate(data.experiments[0].u)[:, 0] - data.experiments[0].y[:, 0]
-    assert np.sqrt(np.mean(own[10:] ** 2)) < 0.02  # the plant's noise is 0.01
-    json.dumps(result.to_dict(), allow_nan=False)
-    # the warm starts in two workers (the direct fit stays here): the same model, bit for bit
-    two = identify(data, structures=["hammerstein"], effort=SMALL, jobs=2)
-    assert two.search["warm_starts"] == result.search["warm_starts"]
-    assert np.array_equal(two.fit.model.free_parameters(), result.fit.model.free_parameters())
-
-
-def test_least_squares_is_refitted_once():
-    data = dead_zone_record(600)
-    result = identify(data, structures=["arx"], effort=SMALL, jobs=1)
-    refit = [s for s in result.search["stages"] if s["stage"] == "refit"]
-    assert [s["fits"] for s in refit] == [1] and result.search["warm_starts"] == []
-
-
-EMPS = Path(__file__).parents[2] / ".." / "shared" / "data" / "emps" / "DATA_EMPS.csv"
-
-
-@pytest.mark.benchdata
-@pytest.mark.skipif(not EMPS.exists(), reason="EMPS data (../shared/data) absent")
-def test_on_emps_a_start_from_a_folds_model_finds_what_the_direct_refit_misses():
-    """The real record of the fault: the chosen block state space (a dead zone in the
-    loop) fitted on all 24 841 samples stalls at 10.1 mm on its own data, while the
-    folds reached 5.2 mm on data they never saw; refined on all data from the model
-    fitted without fold 1 it reaches 3.0 mm (and tests 3.4 mm on DATA_EMPS_PULSES
-    against the published linear model's 5.53)."""
-    import pandas as pd
-
-    from blockid.data.folds import fold_plan
-    from blockid.workflows.refit import _final_fit, _segment_rmse, _Start
-    from blockid.workflows.search_space import Candidate
-
-    frame = pd.read_csv(EMPS)
-    data = Dataset.from_arrays(frame["vir"].to_numpy(), frame["qm"].to_numpy(), ["vir"], ["qm"])
-    # as the standard search chose it: a candidate of the block state-space stage
-    cand = Candidate("block-state-space", {"nx": 2, "loop_block": "dead-zone", "max_nfev": 30})
-    plan = fold_plan(data, 3)  # a long record: 3 folds; the search's 50 samples
-    parts = tuple(s for f in plan.folds for s in f.test)
-    direct = _final_fit(data, _Start(cand, None, None, 50, 0.0051))
-    warm = _final_fit(data, _Start(cand, plan.folds[0], None, 50, 0.0051, parts))
-    assert not direct.reason and not warm.reason
-    # measured 0.0101 against 0.0030 over the whole record; from the folds' starts (the
-    # comparison identify makes) 0.0085 against 0.0032
-    assert direct.rmse > 0.008 and warm.rmse < 0.5 * direct.rmse
-    assert warm.segment_rmse < 0.5 * _segment_rmse(direct.fit.model, data, parts, 50)
-
-
-def test_a_warm_start_replaces_the_direct_fit_only_when_better_by_more_than_the_tie():
-    """Silverbox: a warm start 0.12 % better than the direct fit from the folds' starts
-    tested 0.563 mV on the arrow (extrapolation) against the direct fit's 0.396; within
-    the search's tie the direct fit stays, beyond it the warm start wins."""
-    from dataclasses import dataclass
-    from types import SimpleNamespace
-
-    from blockid.workflows.refit import _final, _Started
-
-    @dataclass
-    class Fit:
-        settings: dict
-
-    fits = {name: Fit({"who": name}) for name in ("direct", "warm")}
-
-    def search(warm_error):
-        results = [
-            ("the direct fit", _Started(fits["direct"], 1.0, 1.0)),
-            ("the model fitted without fold 1", _Started(fits["warm"], 0.5, warm_error)),
-        ]
-        return SimpleNamespace(final_fits=lambda score: results, tie=0.02)  # fmt: skip
-
-    score = _scored("hammerstein", [1.0, 1.0, 1.0], max_nfev=30)
-    near = 1.0 / 1.019  # 1.9 % better: within the tie
-    fit, info = _final(search(near), score, notes := [])
-    assert fit is fits["direct"] and info["chosen"] == "the direct fit" and notes == []
-    fit, info = _final(search(1.0 / 1.021), score, notes := [])
-    assert fit.settings == {"who": "warm", "initial": "the model fitted without fold 1"}
-    assert info["chosen"] == "the model fitted without fold 1" and len(notes) == 1
-
-
-@pytest.fixture(scope="module")
-def cluster():
-    distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
-        n_workers=2,
-        threads_per_worker=1,
-        processes=True,
-        dashboard_address=":0",
-        silence_logs=50,
-    ) as running:
-        yield running.scheduler_address
-
-
 def test_a_dask_cluster_gives_the_model_of_one_worker_bit_for_bit(cluster):
     data = dead_zone_record(500)
     one = identify(data, structures=["arx", "hammerstein"], effort=SMALL, jobs=1)
@@ -816,45 +604,6 @@ def test_an_unreachable_scheduler_is_named(monkeypatch):
     with pytest.raises(errors.ParameterError, match="cannot reach the dask scheduler"):
         identify(dead_zone_record(300), structures=["arx"], effort=SMALL,
                  scheduler="tcp://127.0.0.1:9")  # fmt: skip
-
-
-def test_a_stage_is_one_class_in_the_list_of_stages(monkeypatch):
-    """A new stage is a class with a name and a run(search, context) put in STAGES: it
-    sees what the stages before it left (the delays, the ARX orders) and its candidates
-    are scored, ranked and recorded like every other."""
-    from blockid.workflows import stages
-    from blockid.workflows.search_space import Candidate
-
-    seen = {}
-
-    class Wider(stages.Stage):
-        name = "wider arx"
-
-        def run(self, search, context):
-            seen.update(delays=list(context.delays), orders=list(context.orders))
-            na, nb, nk = context.orders[0]
-            wider = Candidate("arx", {"na": na + 5, "nb": nb, "nk": nk, "center": True})
-            search.run(self.name, [wider], False)
-
-    monkeypatch.setattr(stages, "STAGES", (*stages.STAGES[:2], Wider()))
-    result = identify(dead_zone_record(400), structures=["arx"], effort=SMALL, jobs=1)
-    assert seen["delays"] and seen["orders"]
-    assert any(s.stage == "wider arx" for s in result.ranked + result.rejected)
-    assert [s["stage"] for s in result.search["stages"]][-2:] == ["wider arx", "refit"]
-
-
-def test_the_tables_list_candidates_by_their_score_and_keep_the_chosen_one():
-    """The candidate tables once said "best first" and listed the choice's order (the
-    fewer parameters first among near-ties): 0.0009372 shown third, after 0.0009386.
-    Now by cross-validated RMSE, lowest first, the selected one kept."""
-    result = identify(dead_zone_record(500), structures=["arx", "hammerstein"], effort=SMALL,
-                      jobs=1)  # fmt: skip
-    for n in (3, len(result.ranked)):
-        rows = result.best_scored(n)
-        scores = [s.rmse for s in rows[:n]]
-        assert scores == sorted(scores) and result.selected in rows
-        best = sorted(s.rmse for s in result.ranked)[: min(n, len(result.ranked))]
-        assert scores[: len(best)] == best
 
 
 def test_a_race_on_a_long_record_scores_the_leaders_as_the_full_stage_would():
@@ -896,40 +645,6 @@ def test_a_race_on_a_long_record_scores_the_leaders_as_the_full_stage_would():
     linear = [s for s in b.ranked + b.rejected if s.stage == "structures"
               and s.candidate.structure == "output-error"]  # fmt: skip
     assert linear and not any(r["candidate"].startswith("output-error") for r in left_out)
-
-
-def test_warm_starts_begin_beyond_the_slack_and_come_from_the_best_folds(monkeypatch):
-    """The refit's own-data error is held against the folds' pooled error: within
-    REFIT_SLACK of it the direct fit stands alone; beyond it the candidate is refined
-    from its models of its ``warm_starts`` best folds (by held-back error), not others."""
-    from dataclasses import replace
-
-    from blockid.workflows import refit as module
-    from blockid.workflows.refit import REFIT_SLACK, _fold_rmse
-
-    data = dead_zone_record(600)
-    effort = replace(SMALL, warm_starts=1)
-    options = dict(structures=["hammerstein"], effort=effort, jobs=1)
-    plain = identify(data, **options)
-    pooled = _fold_rmse(plain.selected)
-    real = module._refit
-
-    def reporting(factor):
-        def refit(candidate, data, cv_rmse, n_init, notes):
-            fit, _ = real(candidate, data, cv_rmse, n_init, notes)
-            return fit, factor * pooled  # the own-data error the trigger reads
-
-        return refit
-
-    monkeypatch.setattr(module, "_refit", reporting(0.98 * REFIT_SLACK))
-    assert identify(data, **options).search["warm_starts"] == []
-    monkeypatch.setattr(module, "_refit", reporting(1.02 * REFIT_SLACK))
-    warm = identify(data, **options).search["warm_starts"][0]
-    (_, start) = [s["start"] for s in warm["starts"]]
-    relative = [f.relative for f in plain.selected.folds]
-    best = int(np.argmin(relative))
-    assert relative.count(relative[best]) == 1 and max(relative) > relative[best]
-    assert start == f"the model fitted without {plain.search['folds'][best]['name']}"
 
 
 def _state_record(n, seed=2):

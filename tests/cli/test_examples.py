@@ -1,3 +1,6 @@
+"""blockid.cli.examples: ``demo``, ``reproduce`` and ``example-data`` driven as a user
+would (typer's CliRunner)."""
+
 import json
 
 import numpy as np
@@ -7,6 +10,8 @@ from typer.testing import CliRunner
 
 from blockid.cli.main import app
 from blockid.models import load_model
+
+runner = CliRunner()
 
 
 def test_demo_keeps_data_models_figures_and_results(tmp_path):
@@ -66,3 +71,23 @@ def test_demo_refuses_a_non_empty_folder(tmp_path, monkeypatch):
     r = CliRunner().invoke(app, ["demo", "--plot", "out"])
     assert r.exit_code == 2 and "not empty" in r.stderr
     assert (tmp_path / "out" / "mine.txt").read_text() == "keep"
+
+
+def test_a_negative_seed_is_one_readable_line(tmp_path):
+    """``example-data --seed -1`` once ended in NumPy's traceback from the random
+    generator; nothing is written."""
+    out = tmp_path / "x.csv"
+    r = runner.invoke(app, ["example-data", "electrohydraulic", "-o", str(out), "--seed", "-1"])
+    assert r.exit_code == 2 and "--seed" in r.stderr and "Traceback" not in r.output
+    assert not out.exists()
+
+
+def test_example_data_gives_the_ranges_it_prints(tmp_path):
+    out = tmp_path / "wt.csv"
+    r = runner.invoke(app, ["example-data", "windtunnel-110kPa", "-o", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "estimation record 0:1200, validation record 1200:2400" in r.stdout
+    frame = pd.read_csv(out)
+    assert list(frame.columns) == ["t", "u1", "u2", "v1", "v2", "y1", "y2"] and len(frame) == 2400
+    r = runner.invoke(app, ["example-data", "windtunnel-110kPa", "-o", str(out)])
+    assert r.exit_code == 2 and "exists" in r.stderr
