@@ -34,7 +34,9 @@ runs the model over a piece once and keeps, per sample, ``v(k) = [x(k); u(k); ζ
 (the only sequential part); :func:`pnlss_local_jacobians` forms the two local
 Jacobians of every sample, fixed blocks of samples in parallel, and
 :func:`pnlss_sensitivities` walks fixed blocks of ``COLUMN_BLOCK`` columns in parallel
-(``prange``). A parameter's column is described by its kind (``STATE``: it enters row
+(``prange``). A small model's passes run on the calling thread instead
+(``*_serial``, the same arithmetic: :func:`pnlss_walk` chooses by size), where
+starting a parallel region would cost more than the work. A parameter's column is described by its kind (``STATE``: it enters row
 ``row`` of the state equation as ``v_src``; ``OUTPUT``: row ``row`` of the output
 equation; ``INITIAL``: an initial state, no explicit term), so a caller asks for
 exactly the columns it fits, in its order. Each column's arithmetic is the same, in the
