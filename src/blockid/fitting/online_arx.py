@@ -51,11 +51,10 @@ class _OnlineARX(OnlineEstimator):
 
     def __init__(self, structure, method, opts, names, scales, initial) -> None:
         super().__init__(names)
-        keys = ("na", "nb", "nk", "forgetting", "initial_covariance", "eps1", "eps2")
         if initial is not None:
             given = {"na": initial.na, "nb": initial.nb, "nk": initial.nk}
             opts = {**{k: v.tolist() for k, v in given.items()}, **opts}
-        opts = _defaults(fit_arx, opts, keys)
+        opts = _defaults(fit_arx, opts)
         self.method = method
         self.schedule = ForgettingSchedule.parse(opts["forgetting"])
         self._last_factor = np.full(1, self.schedule.values[-1])
@@ -327,7 +326,7 @@ class _OnlineBlockARX(_OnlineARX):
         opts = dict(opts)
         self.basis = input_basis(opts.pop("input_block", None), opts.pop("output_block", None))
         inputs, outputs = (tuple(n) for n in names)
-        orders = _defaults(fit_block_arx, opts, ("na", "nb", "nk"))
+        orders = _defaults(fit_block_arx, opts)
         na, nb, nk = scalar_orders(orders["na"], orders["nb"], orders["nk"])
         NA, NB, NK = regression_orders(len(outputs), len(inputs), self.basis.size, na, nb, nk)
         opts.update(na=NA.tolist(), nb=NB.tolist(), nk=NK.tolist())

@@ -14,6 +14,7 @@ import numpy as np
 
 from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.estimators.forgetting import ForgettingSchedule
+from blockid.fitting.options import OPTIONS
 from blockid.fitting.recursive import (
     positive_number,
 )
@@ -74,7 +75,7 @@ def _refuse_whole_record(opts: dict[str, Any]) -> None:
             "use passes=1 (or fit for several passes over a finished record)",
             parameter="passes",
         )
-    for key in ("center", "refine", "record_history"):
+    for key in _WHOLE_RECORD[1:]:
         if opts.pop(key, False):
             what = {
                 "center": "the means of the whole record",
@@ -115,9 +116,23 @@ def _paper_scales(scales: Any) -> Any:
     )
 
 
-def _defaults(function: Any, opts: dict[str, Any], keys: tuple[str, ...]) -> dict[str, Any]:
-    """``opts`` completed with the offline fitter's defaults (one source of truth)."""
+#: Options of an offline fit whose meaning needs the whole record: refused when set
+#: (:func:`_refuse_whole_record`), never read online.
+_WHOLE_RECORD = ("passes", "center", "refine", "record_history")
+
+
+def _defaults(function: Any, opts: dict[str, Any]) -> dict[str, Any]:
+    """``opts`` completed with the offline fitter's defaults (one source of truth): a
+    value for each of ``function``'s keyword parameters that is a declared option
+    (:data:`~blockid.fitting.options.OPTIONS`) online learning can use (not
+    :data:`_NOT_USED`, not :data:`_WHOLE_RECORD`). Which of them a learner reads is its
+    own business; no learner lists the options it takes a second time."""
     params = inspect.signature(function).parameters
+    keys = [
+        k
+        for k, p in params.items()
+        if p.default is not p.empty and k in OPTIONS and k not in _NOT_USED + _WHOLE_RECORD
+    ]
     return {k: opts[k] if k in opts else params[k].default for k in keys}
 
 

@@ -161,10 +161,12 @@ def _signals(scales: Any) -> Signals:
     return Signals([("online", one, one)], (0.0, su), (0.0, sy), scales is not None)
 
 
-def _orders_from(initial: Any, opts: dict[str, Any], keys: tuple[str, ...]) -> dict[str, Any]:
-    """Orders not given in ``opts`` taken from the starting model."""
+def _orders_from(initial: Any, opts: dict[str, Any], fitter: Any) -> dict[str, Any]:
+    """Orders not given in ``opts`` taken from the starting model: those of ``fitter``'s
+    options (a block degree only where the fitter has one)."""
     if initial is None:
         return opts
+    keys = tuple(_defaults(fitter, {}))
     found = {"na": initial.na, "nb": initial.nb, "nk": initial.nk}
     for key, side, size in (("r1", "input", "order"), ("r2", "output", "degree")):
         block = getattr(initial, f"{side}_block", None)
@@ -193,9 +195,7 @@ class _OnlineKeyTerm(_PaperOnline):
     def __init__(self, structure, method, opts, names, scales, initial) -> None:
         super().__init__(names)
         scales = _paper_scales(scales)
-        keys = ("na", "nb", "nk", "r1", "r2", "forgetting", "initial_covariance")
-        keys += ("initial_parameters",)
-        opts = _defaults(fit_key_term_rls, _orders_from(initial, opts, keys), keys)
+        opts = _defaults(fit_key_term_rls, _orders_from(initial, opts, fit_key_term_rls))
         has_in, has_out = KEY_TERM_STRUCTURES[structure]
         na, nb, nk = orders_at_least(KEY_TERM_AT_LEAST, na=opts["na"], nb=opts["nb"],
                                      nk=opts["nk"])  # fmt: skip
@@ -332,14 +332,12 @@ class _OnlineKeyTermChannels(OnlineEstimator):
                 "(Hammerstein, several outputs)",
                 parameter="outputs",
             )
-        keys = ("input_block", "output_block", "na", "nb", "nk", "forgetting")
-        keys += ("initial_covariance", "initial_parameters")
         from blockid.fitting.key_term_channels import fit_key_term_channels
 
-        values = _defaults(fit_key_term_channels, opts, keys)
+        values = _defaults(fit_key_term_channels, opts)
         if structure in KEY_TERM_STRUCTURES:  # a chain structure: paper B's blocks
             has_in, has_out = KEY_TERM_STRUCTURES[structure]
-            r = _defaults(fit_key_term_rls, opts, ("r1", "r2"))
+            r = _defaults(fit_key_term_rls, opts)
             values["input_block"] = f"two-segment-polynomial:degree={r['r1']}" if has_in else None
             values["output_block"] = f"polynomial:degree={r['r2']}" if has_out else None
         elif "input_block" not in opts and "output_block" not in opts:
@@ -426,8 +424,7 @@ class _OnlineBacklash(_PaperOnline):
     def __init__(self, structure, method, opts, names, scales, initial) -> None:
         super().__init__(names)
         scales = _paper_scales(scales)
-        keys = ("na", "nb", "nk", "eps1", "eps2", "initial_covariance", "initial_parameters")
-        opts = _defaults(fit_backlash_aw_rls, _orders_from(initial, opts, keys), keys)
+        opts = _defaults(fit_backlash_aw_rls, _orders_from(initial, opts, fit_backlash_aw_rls))
         na, nb, nk = orders_at_least(BACKLASH_AT_LEAST, na=opts["na"], nb=opts["nb"],
                                      nk=opts["nk"])  # fmt: skip
         eps = (checked("eps1", opts["eps1"]), checked("eps2", opts["eps2"]))
