@@ -38,6 +38,7 @@ SCRIPT = textwrap.dedent(
         "aw_rls_run": rls.aw_rls_run,
         "pnlss_simulate": state_space.pnlss_simulate,
         "pnlss_trajectory": state_space.pnlss_trajectory,
+        "pnlss_trajectory_jacobians": state_space.pnlss_trajectory_jacobians,
         "pnlss_local_jacobians": state_space.pnlss_local_jacobians,
         "pnlss_local_jacobians_serial": state_space.pnlss_local_jacobians_serial,
         "pnlss_sensitivities": state_space.pnlss_sensitivities,
@@ -64,11 +65,12 @@ def test_the_kernels_of_fits_simulations_and_estimators_are_compiled_for_one_typ
     out = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True,
                          env=env, check=True, timeout=600)  # fmt: skip
     counts = eval(out.stdout.strip().splitlines()[-1])  # noqa: S307 - our own dict literal
-    # the local Jacobians and the walk run on the calling thread or in a parallel region
-    # by the model's size (pnlss_walk): this small model reaches one of each pair
-    for name in ("pnlss_local_jacobians", "pnlss_sensitivities"):
-        pair = counts.pop(name) + counts.pop(f"{name}_serial")
-        assert pair == 1, (name, pair)
+    # a small model's walk runs on the calling thread (pnlss_walk chooses by size): the
+    # one-pass trajectory with its Jacobians and the serial walk, never the parallel forms
+    assert counts.pop("pnlss_trajectory_jacobians") == counts.pop("pnlss_sensitivities_serial") == 1
+    parallel = ("pnlss_trajectory", "pnlss_local_jacobians", "pnlss_local_jacobians_serial",
+                "pnlss_sensitivities")  # fmt: skip
+    assert [counts.pop(name) for name in parallel] == [0, 0, 0, 0]
     assert counts == dict.fromkeys(counts, 1)
 
 

@@ -102,7 +102,8 @@ def test_the_parallel_passes_are_their_serial_twins_bit_for_bit():
     block on the calling thread, a larger one's in parallel regions: both forms of each
     pass give the same numbers (each called here directly, over several sample blocks
     and column blocks, in a region of one thread or two), and the free run's sparse
-    powers give the trajectory's outputs."""
+    powers give the trajectory's outputs (and the one-pass trajectory with its Jacobians
+    the two passes' numbers)."""
     import numba
 
     from blockid._kernels.state_space import (
@@ -115,6 +116,7 @@ def test_the_parallel_passes_are_their_serial_twins_bit_for_bit():
         pnlss_sensitivities_serial,
         pnlss_simulate,
         pnlss_trajectory,
+        pnlss_trajectory_jacobians,
     )
 
     rng = np.random.default_rng(7)
@@ -138,7 +140,13 @@ def test_the_parallel_passes_are_their_serial_twins_bit_for_bit():
             JX, JY = np.full((n, nx, nx), np.nan), np.full((n, ny, nx), np.nan)
             local(A, C, E, F, expo, lo, hi, V, JX, JY)
             jacobians.append((JX, JY))
-        assert all(np.array_equal(a, b) for a, b in zip(*jacobians, strict=True))
+        JX, JY, V1 = np.empty((n, nx, nx)), np.empty((n, ny, nx)), np.empty_like(V)
+        y1, x1 = np.zeros((n, ny)), 0.2 * np.ones(nx)
+        pnlss_trajectory_jacobians(*arrays, u, x1, y1, V1, JX, JY)  # both passes in one
+        jacobians.append((JX, JY))
+        assert np.array_equal(V1, V) and np.array_equal(y1, y)
+        for other in jacobians[1:]:
+            assert all(np.array_equal(a, b) for a, b in zip(jacobians[0], other, strict=True))
         assert np.all(np.isfinite(jacobians[0][0]))
         JX, JY = jacobians[0]
         walks = []

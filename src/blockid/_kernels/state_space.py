@@ -35,11 +35,13 @@ runs the model over a piece once and keeps, per sample, ``v(k) = [x(k); u(k); ζ
 Jacobians of every sample, fixed blocks of samples in parallel, and
 :func:`pnlss_sensitivities` walks fixed blocks of ``COLUMN_BLOCK`` columns in parallel
 (``prange``). A small model's passes run on the calling thread instead
-(``*_serial``, the same arithmetic: :func:`pnlss_walk` chooses by size), where
-starting a parallel region would cost more than the work. A parameter's column is described by its kind (``STATE``: it enters row
-``row`` of the state equation as ``v_src``; ``OUTPUT``: row ``row`` of the output
-equation; ``INITIAL``: an initial state, no explicit term), so a caller asks for
-exactly the columns it fits, in its order. Each column's arithmetic is the same, in the
+(``*_serial``, and the trajectory and local Jacobians in one pass,
+:func:`pnlss_trajectory_jacobians`; the same arithmetic: :func:`pnlss_walk` chooses by
+size), where starting a parallel region would cost more than the work. A parameter's
+column is described by its kind (``STATE``: it enters row ``row`` of the state
+equation as ``v_src``; ``OUTPUT``: row ``row`` of the output equation; ``INITIAL``: an
+initial state, no explicit term), so a caller asks for exactly the columns it fits, in
+its order. Each column's arithmetic is the same, in the
 same order, whichever thread walks it and however many there are: the result does not
 depend on the number of threads, bit for bit, and equals that of the one-pass walk of
 the equations above, sample by sample (its slow twin in the tests' ``reference.py``).
@@ -68,6 +70,7 @@ __all__ = [
     "pnlss_sensitivities_serial",
     "pnlss_simulate",
     "pnlss_trajectory",
+    "pnlss_trajectory_jacobians",
     "pnlss_walk",
 ]
 
@@ -275,6 +278,37 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
             x[i] = xn[i]
 
 
+@njit(cache=True, nogil=True)
+def pnlss_trajectory_jacobians(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY):
+    """:func:`pnlss_trajectory` and :func:`pnlss_local_jacobians` in one pass on the
+    calling thread (a small model's walk: each sample's Jacobians from the powers the
+    free run has just taken; the same numbers as the two passes)."""
+    N = u.shape[0]
+    nx, nu, nm = A.shape[0], B.shape[1], expo.shape[0]
+    count, var, power = _sparse_exponents(expo)
+    top = _powers(count, var, power, nm)
+    z = np.empty(nx + nu)
+    zp = np.empty((nx + nu, top + 1))
+    zeta = np.empty(nm)
+    xn = np.empty(nx)
+    for k in range(N):
+        _stack(x, u[k], z)
+        for i in range(nx + nu):
+            _power_row(min(max(z[i], lo[i]), hi[i]), top, zp[i])
+            V[k, i] = z[i]
+        for j in range(nm):
+            val = 1.0
+            for t in range(count[j]):
+                val *= zp[var[j, t], power[j, t]]
+            zeta[j] = val
+            V[k, nx + nu + j] = val
+        _local_sample(A, C, E, F, count, var, power, lo, hi, V, zp, JX, JY, k)
+        _affine(C, D, F, x, u[k], zeta, y[k])
+        _affine(A, B, E, x, u[k], zeta, xn)
+        for i in range(nx):
+            x[i] = xn[i]
+
+
 #: Samples per task of :func:`pnlss_local_jacobians` (each sample's Jacobians stand alone).
 SAMPLE_BLOCK = 256
 
@@ -282,32 +316,39 @@ SAMPLE_BLOCK = 256
 @njit(cache=True, nogil=True)
 def _local_block(A, C, E, F, count, var, power, top, lo, hi, V, JX, JY, k0, k1):
     """:func:`pnlss_local_jacobians` over samples ``k0:k1`` (one task)."""
-    nx, ny, nm = A.shape[0], C.shape[0], count.shape[0]
-    nz = V.shape[1] - nm
+    nz = V.shape[1] - count.shape[0]
     zp = np.empty((nz, top + 1))
     for k in range(k0, k1):
         for i in range(nz):
             _power_row(min(max(V[k, i], lo[i]), hi[i]), top, zp[i])
-        for i in range(ny):
-            for j in range(nx):
-                JY[k, i, j] = C[i, j]
-        for i in range(nx):
-            for j in range(nx):
-                JX[k, i, j] = A[i, j]
-        for m in range(nm):
-            for t in range(count[m]):
-                i = var[m, t]
-                if i >= nx or not (lo[i] < V[k, i] < hi[i]):
-                    continue
-                p = power[m, t]
-                d = p * zp[i, p - 1]  # z_i is inside its range: clip(z_i) = z_i
-                for t2 in range(count[m]):
-                    if t2 != t:
-                        d *= zp[var[m, t2], power[m, t2]]
-                for r in range(nx):
-                    JX[k, r, i] += E[r, m] * d
-                for r in range(ny):
-                    JY[k, r, i] += F[r, m] * d
+        _local_sample(A, C, E, F, count, var, power, lo, hi, V, zp, JX, JY, k)
+
+
+@njit(cache=True, nogil=True)
+def _local_sample(A, C, E, F, count, var, power, lo, hi, V, zp, JX, JY, k):
+    """The local Jacobians of sample ``k`` from its row of ``V`` and its variables'
+    clipped powers ``zp``."""
+    nx, ny, nm = A.shape[0], C.shape[0], count.shape[0]
+    for i in range(ny):
+        for j in range(nx):
+            JY[k, i, j] = C[i, j]
+    for i in range(nx):
+        for j in range(nx):
+            JX[k, i, j] = A[i, j]
+    for m in range(nm):
+        for t in range(count[m]):
+            i = var[m, t]
+            if i >= nx or not (lo[i] < V[k, i] < hi[i]):
+                continue
+            p = power[m, t]
+            d = p * zp[i, p - 1]  # z_i is inside its range: clip(z_i) = z_i
+            for t2 in range(count[m]):
+                if t2 != t:
+                    d *= zp[var[m, t2], power[m, t2]]
+            for r in range(nx):
+                JX[k, r, i] += E[r, m] * d
+            for r in range(ny):
+                JY[k, r, i] += F[r, m] * d
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -482,12 +523,12 @@ def pnlss_walk(A, B, C, D, E, F, expo, lo, hi, u, x, S, y, J, columns=None):
     V = np.empty((n, nx + nu + nm))
     JX = np.empty((n, nx, nx))
     JY = np.empty((n, ny, nx))
-    pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V)
     threads = numba.get_num_threads() > 1
     if threads and (nx + ny) * (nx + nm) >= LOCAL_PARALLEL_WORK:
+        pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V)
         pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY)
     else:
-        pnlss_local_jacobians_serial(A, C, E, F, expo, lo, hi, V, JX, JY)
+        pnlss_trajectory_jacobians(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY)
     if threads and S.shape[1] > COLUMN_BLOCK:
         pnlss_sensitivities(V, JX, JY, *columns, S, J)
     else:
