@@ -14,6 +14,7 @@ it (``identify``'s worker processes, which share the cores already, use one each
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -102,14 +103,19 @@ def kernel_threads(n: int) -> Iterator[None]:
         numba.set_num_threads(before)
 
 
-def _tiles(n: int) -> list[tuple[slice, slice]]:
+def _tiles(n: int) -> tuple[tuple[slice, slice], ...]:
     """The upper triangle of an ``n x n`` matrix in fixed tiles (about ``TILE`` columns;
     at least two column blocks from ``2 * MIN_TILE`` columns on, so that a mid-sized
     problem's three products share two threads)."""
-    count = max(round(n / TILE), 2 if n >= 2 * MIN_TILE else 1)
+    return _tile_cut(n, TILE, MIN_TILE)
+
+
+@functools.lru_cache(maxsize=64)
+def _tile_cut(n: int, tile: int, least: int) -> tuple[tuple[slice, slice], ...]:
+    count = max(round(n / tile), 2 if n >= 2 * least else 1)
     edges = np.linspace(0, n, count + 1).astype(int)
     cuts = [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True)]
-    return [(cuts[i], cuts[j]) for i in range(count) for j in range(i, count)]
+    return tuple((cuts[i], cuts[j]) for i in range(count) for j in range(i, count))
 
 
 class NormalSums:
@@ -126,7 +132,8 @@ class NormalSums:
         self.H = np.zeros((n, n))
         self.g = np.zeros(n)
         self.cost = 0.0
-        self.threads = max(1, int(threads))
+        # one tile (a small problem): summed by the caller, no pool to hand it to
+        self.threads = max(1, int(threads)) if len(_tiles(n)) > 1 else 1
         self.pool: Any = None
         self.blas: Any = None
         self.pending: list[Any] = []
