@@ -377,6 +377,29 @@ def pnlss_local_jacobians_serial(A, C, E, F, expo, lo, hi, V, JX, JY):
 
 
 @njit(cache=True, nogil=True)
+def _combine(c, Sb, out, n):
+    """``out[t] = 0 + c[0] Sb[0, t] + c[1] Sb[1, t] + ...`` for ``t < n``, the terms added
+    in that order (the same number as a running sum), two rows of ``Sb`` per pass over
+    ``out`` (half the loads and stores of one row at a time)."""
+    m = c.shape[0]
+    if m % 2:
+        a = c[0]
+        for t in range(n):
+            out[t] = 0.0 + a * Sb[0, t]
+        j = 1
+    else:
+        a, b = c[0], c[1]
+        for t in range(n):
+            out[t] = (0.0 + a * Sb[0, t]) + b * Sb[1, t]
+        j = 2
+    while j < m:
+        a, b = c[j], c[j + 1]
+        for t in range(n):
+            out[t] = (out[t] + a * Sb[j, t]) + b * Sb[j + 1, t]
+        j += 2
+
+
+@njit(cache=True, nogil=True)
 def _walk_block(V, JX, JY, kind, row, src, S, J, c0, c1):
     """Columns ``c0:c1`` of :func:`pnlss_sensitivities` (one thread's block): the
     columns that move the state (every one but an output equation's whose state
@@ -429,11 +452,7 @@ def _walk_block(V, JX, JY, kind, row, src, S, J, c0, c1):
     for k in range(N):
         for i in range(ny):
             r = k * ny + i
-            acc[:] = 0.0
-            for j in range(nx):
-                c = JY[k, i, j]
-                for t in range(n_moving):
-                    acc[t] += c * Sb[j, t]
+            _combine(JY[k, i], Sb, acc, n_moving)
             for e in range(n_out):
                 if out_row[e] == i:
                     acc[out_t[e]] += V[k, out_src[e]]
@@ -443,12 +462,7 @@ def _walk_block(V, JX, JY, kind, row, src, S, J, c0, c1):
                 p = c0 + still[e]
                 J[r, p] = 0.0 + V[k, src[p]] if row[p] == i else 0.0
         for i in range(nx):
-            for t in range(n_moving):
-                Sn[i, t] = 0.0
-            for j in range(nx):
-                c = JX[k, i, j]
-                for t in range(n_moving):
-                    Sn[i, t] += c * Sb[j, t]
+            _combine(JX[k, i], Sb, Sn[i], n_moving)
         for e in range(n_st):
             Sn[st_row[e], st_t[e]] += V[k, st_src[e]]
         Sb, Sn = Sn, Sb
