@@ -79,20 +79,23 @@ PNLSS_TARGETS = {
 
 #: What this run was: edited by the session that runs it.
 RUN_NOTE = (
-    "This run (2026-11-28, session 16): WH 2009 again at `57e1da8`, where a stage's last "
-    "fits take the cores the others left ([performance](performance.md#how-one-fit-uses-"
-    "every-core)), with nothing else running (load 2.0 at its start, the previous run's "
-    "own): 303.6 s against 316.0 s at `1ad8e3f` just before, the same model and errors "
-    "bit for bit. The other records are session 15's: this session's changes (a climb "
-    "continued from the fold's model below, the threads of the last fits) give the same "
-    "models bit for bit (tests; the heat exchanger checked by a run), so only their search "
-    "times would differ, and those were not measured again. Session 15's note: the "
-    "state-space candidates of a short record stop early on a held-back tail "
-    "([identify](identify.md#state-space-candidates-stop-early-on-short-records-the-study-"
-    "session-15)); its 17 short and several-output records at `6d77a6c`, beside other "
-    "work (busy-machine times); its five long records at `6d57cf8`. The quick effort on "
-    "the long records, the direct PNLSS fits and the fold-rule study are session 14's "
-    "and 13's. The before-and-after table compares with session 14's results."
+    "This run (2026-11-28, session 17): WH 2009 (standard and quick), the Silverbox and "
+    "the evaporator again at `61d401e` (`bbccb13` adds docs only), one after the other "
+    "with nothing else running "
+    "(loads 1.3-2.3 at their starts, the previous run's own), after this session's "
+    "state-space kernel work ([performance](performance.md#where-a-fits-time-goes-and-one-"
+    "fit-on-every-core-issue-36)): the same models, cross-validated scores and test errors "
+    "bit for bit as the runs they replace; WH 2009's search 288.5 s against 303.6 s at "
+    "`57e1da8` (session 16), the Silverbox's 102.4 s against 108.9 s, the evaporator's "
+    "22.0 s against 121.6 s (session 15's run shared the machine with other work), the "
+    "quick WH 2009 73.9 s against 70.9 s. The other records are session 15's and 16's "
+    "(the same models bit for bit by construction and by the tests; their search times "
+    "not measured again). Session 15's note: the state-space candidates of a short record "
+    "stop early on a held-back tail ([identify](identify.md#state-space-candidates-stop-"
+    "early-on-short-records-the-study-session-15)); its 17 short and several-output records "
+    "at `6d77a6c`, beside other work (busy-machine times); its five long records at "
+    "`6d57cf8`. The direct PNLSS fits and the fold-rule study are session 14's and 13's. "
+    "The before-and-after table compares with session 14's results."
 )
 
 
