@@ -291,6 +291,8 @@ def pnlss_trajectory_jacobians(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, J
     zp = np.empty((nx + nu, top + 1))
     zeta = np.empty(nm)
     xn = np.empty(nx)
+    At, Ct, Et, Ft = _transposed(A, C, E, F)
+    Lx, Ly = np.empty((nx, nx)), np.empty((nx, C.shape[0]))
     for k in range(N):
         _stack(x, u[k], z)
         for i in range(nx + nu):
@@ -302,7 +304,7 @@ def pnlss_trajectory_jacobians(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, J
                 val *= zp[var[j, t], power[j, t]]
             zeta[j] = val
             V[k, nx + nu + j] = val
-        _local_sample(A, C, E, F, count, var, power, lo, hi, V, zp, JX, JY, k)
+        _local_sample(At, Ct, Et, Ft, count, var, power, lo, hi, V, zp, Lx, Ly, JX, JY, k)
         _affine(C, D, F, x, u[k], zeta, y[k])
         _affine(A, B, E, x, u[k], zeta, xn)
         for i in range(nx):
@@ -316,25 +318,36 @@ SAMPLE_BLOCK = 256
 @njit(cache=True, nogil=True)
 def _local_block(A, C, E, F, count, var, power, top, lo, hi, V, JX, JY, k0, k1):
     """:func:`pnlss_local_jacobians` over samples ``k0:k1`` (one task)."""
+    nx, ny = A.shape[0], C.shape[0]
     nz = V.shape[1] - count.shape[0]
     zp = np.empty((nz, top + 1))
+    At, Ct, Et, Ft = _transposed(A, C, E, F)
+    Lx, Ly = np.empty((nx, nx)), np.empty((nx, ny))
     for k in range(k0, k1):
         for i in range(nz):
             _power_row(min(max(V[k, i], lo[i]), hi[i]), top, zp[i])
-        _local_sample(A, C, E, F, count, var, power, lo, hi, V, zp, JX, JY, k)
+        _local_sample(At, Ct, Et, Ft, count, var, power, lo, hi, V, zp, Lx, Ly, JX, JY, k)
 
 
 @njit(cache=True, nogil=True)
-def _local_sample(A, C, E, F, count, var, power, lo, hi, V, zp, JX, JY, k):
+def _transposed(A, C, E, F):
+    """``A, C, E, F`` transposed, contiguous: the local Jacobians add a monomial's
+    column of ``E`` (``F``) into a column of ``JX`` (``JY``), contiguous this way."""
+    return A.T.copy(), C.T.copy(), E.T.copy(), F.T.copy()
+
+
+@njit(cache=True, nogil=True)
+def _local_sample(At, Ct, Et, Ft, count, var, power, lo, hi, V, zp, Lx, Ly, JX, JY, k):
     """The local Jacobians of sample ``k`` from its row of ``V`` and its variables'
-    clipped powers ``zp``."""
-    nx, ny, nm = A.shape[0], C.shape[0], count.shape[0]
-    for i in range(ny):
-        for j in range(nx):
-            JY[k, i, j] = C[i, j]
+    clipped powers ``zp``: built transposed in ``Lx`` (nx, nx) and ``Ly`` (nx, ny) from
+    the transposed matrices (:func:`_transposed`), then written to ``JX[k]``, ``JY[k]``;
+    each entry's terms added in the same order as into ``JX`` itself."""
+    nx, ny, nm = At.shape[0], Ct.shape[1], count.shape[0]
     for i in range(nx):
-        for j in range(nx):
-            JX[k, i, j] = A[i, j]
+        for r in range(nx):
+            Lx[i, r] = At[i, r]
+        for r in range(ny):
+            Ly[i, r] = Ct[i, r]
     for m in range(nm):
         for t in range(count[m]):
             i = var[m, t]
@@ -346,9 +359,15 @@ def _local_sample(A, C, E, F, count, var, power, lo, hi, V, zp, JX, JY, k):
                 if t2 != t:
                     d *= zp[var[m, t2], power[m, t2]]
             for r in range(nx):
-                JX[k, r, i] += E[r, m] * d
+                Lx[i, r] += Et[m, r] * d
             for r in range(ny):
-                JY[k, r, i] += F[r, m] * d
+                Ly[i, r] += Ft[m, r] * d
+    for r in range(nx):
+        for i in range(nx):
+            JX[k, r, i] = Lx[i, r]
+    for r in range(ny):
+        for i in range(nx):
+            JY[k, r, i] = Ly[i, r]
 
 
 @njit(cache=True, nogil=True, parallel=True)
