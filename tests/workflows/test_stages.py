@@ -24,10 +24,11 @@ def test_the_nonlinearity_stage_keeps_a_state_space_degree_within_the_effort():
     assert _affordable(Candidate("hammerstein", {"na": 2, "nb": 2, "nk": 1}), (1, 1), standard)
 
 
-def test_a_stage_is_one_class_in_the_list_of_stages(monkeypatch):
-    """A new stage is a class with a name and a run(search, context) put in STAGES: it
-    sees what the stages before it left (the delays, the ARX orders) and its candidates
-    are scored, ranked and recorded like every other."""
+def test_a_stage_is_one_class_in_the_list_of_stages():
+    """A new stage is a class with a name and a run(search, context), given to identify
+    in its list of stages (``stages=``, no patched module): it sees what the stages
+    before it left (the delays, the ARX orders) and its candidates are scored, ranked
+    and recorded like every other."""
     from blockid.workflows import stages
     from blockid.workflows.search_space import Candidate
 
@@ -42,8 +43,8 @@ def test_a_stage_is_one_class_in_the_list_of_stages(monkeypatch):
             wider = Candidate("arx", {"na": na + 5, "nb": nb, "nk": nk, "center": True})
             search.run(self.name, [wider], False)
 
-    monkeypatch.setattr(stages, "STAGES", (*stages.STAGES[:2], Wider()))
-    result = identify(dead_zone_record(400), structures=["arx"], effort=SMALL, jobs=1)
+    wider = (*stages.STAGES[:2], Wider())
+    result = identify(dead_zone_record(400), structures=["arx"], effort=SMALL, jobs=1, stages=wider)
     assert seen["delays"] and seen["orders"]
     assert any(s.stage == "wider arx" for s in result.ranked + result.rejected)
     assert [s["stage"] for s in result.search["stages"]][-2:] == ["wider arx", "refit"]

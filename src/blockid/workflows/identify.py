@@ -151,7 +151,7 @@ from blockid.workflows.search_space import (
     keeps_fold_models,
     unique,
 )
-from blockid.workflows.stages import INTEGRATING_POLE, run_stages
+from blockid.workflows.stages import INTEGRATING_POLE, Stage, run_stages
 
 __all__ = [
     "EFFORTS",
@@ -640,6 +640,7 @@ def identify(
     tie: float = TIE,
     use_orders_test: bool = True,
     progress: Progress | None = None,
+    stages: Sequence[Stage] | None = None,
 ) -> IdentifyResult:
     """Choose and fit a model for ``data`` by cross-validated free-run simulation (module
     docstring).
@@ -676,6 +677,11 @@ def identify(
         Add the false-nearest-neighbours delay and centre the order grid on its orders.
     progress : callable, optional
         ``progress(stage, done, total, label)`` after every fit.
+    stages : sequence of Stage, optional
+        The search's stages, run in order (default:
+        :data:`blockid.workflows.stages.STAGES`): a search of one's own adds or leaves
+        out a :class:`~blockid.workflows.stages.Stage`. Every candidate a stage scores is
+        ranked, chosen among and reported like the others.
 
     Returns
     -------
@@ -726,7 +732,7 @@ def identify(
     short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
     with TaskRunner(data, jobs, scheduler) as runner:
         search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
-        run_stages(search, chosen, recommended, notes, asked=bool(asked))
+        run_stages(search, chosen, recommended, notes, asked=bool(asked), stages=stages)
         for raced in (r["raced"] for r in search.stages if "raced" in r):
             notes.append(
                 f"a long record: the structures were raced, each scored on "
