@@ -81,6 +81,9 @@ def test_margin_notes_only_for_fitted_poles_near_the_circle():
     assert margin_notes(ChainModel("u", "y", [inside, Integrator(1)]), m) == []
     (note,) = margin_notes(ChainModel("u", "y", [near, Integrator(1)]), m)
     assert "integrator=2" in note  # one integrator already: suggest the second
+    assert note.endswith("with a structure that takes one")  # none named by the caller
+    (named,) = margin_notes(ChainModel("u", "y", [near, Integrator(1)]), m, ["output-error"])
+    assert named.endswith("with output-error")
     (note,) = margin_notes(ChainModel("u", "y", [ringing]), m)
     assert "integrates" not in note and "nearly undamped" in note
     arx = ARX(["u"], ["y"], 1, 1, 1, a={"y": {"y": [-0.9995]}}, b={"y": {"u": [1.0]}})

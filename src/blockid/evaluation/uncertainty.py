@@ -583,7 +583,7 @@ def named_standard_errors(model: Any, cov: ParameterCovariance | np.ndarray) -> 
         if se.size != model.free_parameters().size:
             raise ParameterError(
                 f"a covariance of {se.size} free parameters does not fit the "
-                f"{model.structure} model's {model.free_parameters().size}"
+                f"{model.structure} model's {model.free_parameters().size} free parameters"
             )
         shaped = model.shaped(se)
         return _unflatten(shaped, [_finite_or_none(v) for v in _flatten(shaped)])
@@ -598,23 +598,6 @@ def named_standard_errors(model: Any, cov: ParameterCovariance | np.ndarray) -> 
     for k, v in zip(positions, se, strict=True):
         values[k] = _finite_or_none(v)
     return _unflatten(template, values)
-
-
-def _state_space_shaped(model: Any, se: np.ndarray) -> dict[str, Any]:
-    mats = [getattr(model, k) for k in "ABCDEF"]
-    sizes = [m.size for m in mats]
-    if se.size != sum(sizes):
-        raise ParameterError(
-            f"a covariance of {se.size} free parameters does not fit the "
-            f"{model.structure} model's {sum(sizes)} parameters"
-        )
-    parts = np.split(se, np.cumsum(sizes)[:-1])
-    keys = "ABCDEF" if model.n_monomials else "ABCD"
-    return {
-        k: [[_finite_or_none(v) for v in row] for row in part.reshape(m.shape)]
-        for k, part, m in zip("ABCDEF", parts, mats, strict=True)
-        if k in keys
-    }
 
 
 def standard_errors(model: Any, data: Dataset, method: str | None = None) -> dict[str, Any]:

@@ -313,7 +313,8 @@ def margin_notes(model: Any, margin: float, integrating: Sequence[str] = ()) -> 
             text += (
                 "The plant probably integrates (position from force, level from flow), and "
                 "a pole held just inside 1 leaks, so a simulation drifts: try an explicit "
-                f"integrator, integrator={n} (--integrator {n}), with {', '.join(integrating)}"
+                f"integrator, integrator={n} (--integrator {n}), with "
+                + (", ".join(integrating) or "a structure that takes one")
             )
         else:
             text += (

@@ -90,12 +90,13 @@ def resolve_structure(structure: str | type[BlockModel]) -> type[BlockModel]:
     known = [name for name, cls in MODEL_TYPES.items() if issubclass(cls, BlockModel)]
     if isinstance(structure, type) and issubclass(structure, BlockModel):
         if structure.structure not in known:
-            raise ParameterError(f"{structure.__name__} is not a block-oriented structure")
+            raise ParameterError(f"{structure.__name__} is not a chain these fits start")
         return structure
     if structure not in known:
         raise ParameterError(
-            f"structure={structure!r} is not a block-oriented structure; choose one of "
-            f"{', '.join(known)}"
+            f"structure={structure!r} is not a chain of one linear block between static "
+            f"blocks, which these fits start; choose one of {', '.join(known)} (the others "
+            "through fit_model)"
         )
     return MODEL_TYPES[structure]  # type: ignore[return-value]
 
