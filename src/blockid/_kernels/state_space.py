@@ -45,8 +45,9 @@ its order. Each column's arithmetic is the same, in the
 same order, whichever thread walks it and however many there are: the result does not
 depend on the number of threads, bit for bit, and equals that of the one-pass walk of
 the equations above, sample by sample (its slow twin in the tests' ``reference.py``).
-A column of the output equation alone (``C``, ``D``, ``F``) never moves the state: its
-sensitivity is its explicit term, with no walk.
+A column of the output equation alone (``C``, ``D``, ``F``) never moves the state: while
+its state sensitivity is zero (as every walk starts it) its sensitivity is its explicit
+term, with no walk; one handed a nonzero start is walked like the others.
 """
 
 from __future__ import annotations
