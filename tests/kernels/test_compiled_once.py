@@ -40,7 +40,6 @@ SCRIPT = textwrap.dedent(
         "pnlss_trajectory": state_space.pnlss_trajectory,
         "pnlss_trajectory_jacobians": state_space.pnlss_trajectory_jacobians,
         "pnlss_local_jacobians": state_space.pnlss_local_jacobians,
-        "pnlss_local_jacobians_serial": state_space.pnlss_local_jacobians_serial,
         "pnlss_sensitivities": state_space.pnlss_sensitivities,
         "pnlss_sensitivities_serial": state_space.pnlss_sensitivities_serial,
         "feedback_simulate": feedback.feedback_simulate,
@@ -68,9 +67,8 @@ def test_the_kernels_of_fits_simulations_and_estimators_are_compiled_for_one_typ
     # a small model's walk runs on the calling thread (pnlss_walk chooses by size): the
     # one-pass trajectory with its Jacobians and the serial walk, never the parallel forms
     assert counts.pop("pnlss_trajectory_jacobians") == counts.pop("pnlss_sensitivities_serial") == 1
-    parallel = ("pnlss_trajectory", "pnlss_local_jacobians", "pnlss_local_jacobians_serial",
-                "pnlss_sensitivities")  # fmt: skip
-    assert [counts.pop(name) for name in parallel] == [0, 0, 0, 0]
+    parallel = ("pnlss_trajectory", "pnlss_local_jacobians", "pnlss_sensitivities")
+    assert [counts.pop(name) for name in parallel] == [0, 0, 0]
     assert counts == dict.fromkeys(counts, 1)
 
 

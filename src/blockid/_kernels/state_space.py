@@ -34,9 +34,9 @@ runs the model over a piece once and keeps, per sample, ``v(k) = [x(k); u(k); ζ
 (the only sequential part); :func:`pnlss_local_jacobians` forms the two local
 Jacobians of every sample, fixed blocks of samples in parallel, and
 :func:`pnlss_sensitivities` walks fixed blocks of ``COLUMN_BLOCK`` columns in parallel
-(``prange``). A small model's passes run on the calling thread instead
-(``*_serial``, and the trajectory and local Jacobians in one pass,
-:func:`pnlss_trajectory_jacobians`; the same arithmetic: :func:`pnlss_walk` chooses by
+(``prange``). A small model's passes run on the calling thread instead (the
+trajectory and local Jacobians in one pass, :func:`pnlss_trajectory_jacobians`, and
+:func:`pnlss_sensitivities_serial`; the same arithmetic: :func:`pnlss_walk` chooses by
 size), where starting a parallel region would cost more than the work. A parameter's
 column is described by its kind (``STATE``: it enters row ``row`` of the state
 equation as ``v_src``; ``OUTPUT``: row ``row`` of the output equation; ``INITIAL``: an
@@ -66,7 +66,6 @@ __all__ = [
     "SAMPLE_BLOCK",
     "pnlss_columns",
     "pnlss_local_jacobians",
-    "pnlss_local_jacobians_serial",
     "pnlss_sensitivities",
     "pnlss_sensitivities_serial",
     "pnlss_simulate",
@@ -254,29 +253,8 @@ def pnlss_trajectory(A, B, C, D, E, F, expo, lo, hi, u, x, y, V):
     ``k`` (the sequential part of the walk: :func:`pnlss_local_jacobians` then works on
     every sample at once). ``x`` is updated in place to the state after the last sample;
     ``y`` (N, ny) receives the output."""
-    N = u.shape[0]
-    nx, nu, nm = A.shape[0], B.shape[1], expo.shape[0]
-    count, var, power = _sparse_exponents(expo)
-    top = _powers(count, var, power, nm)
-    z = np.empty(nx + nu)
-    zp = np.empty((nx + nu, top + 1))  # zp[i, e] = clip(z_i) ** e (the same power)
-    zeta = np.empty(nm)
-    xn = np.empty(nx)
-    for k in range(N):
-        _stack(x, u[k], z)
-        for i in range(nx + nu):
-            _power_row(min(max(z[i], lo[i]), hi[i]), top, zp[i])
-            V[k, i] = z[i]
-        for j in range(nm):
-            val = 1.0
-            for t in range(count[j]):
-                val *= zp[var[j, t], power[j, t]]
-            zeta[j] = val
-            V[k, nx + nu + j] = val
-        _affine(C, D, F, x, u[k], zeta, y[k])
-        _affine(A, B, E, x, u[k], zeta, xn)
-        for i in range(nx):
-            x[i] = xn[i]
+    none = np.empty((0, 0, 0))
+    _run_keeping(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, none, none, False)
 
 
 @njit(cache=True, nogil=True)
@@ -284,12 +262,19 @@ def pnlss_trajectory_jacobians(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, J
     """:func:`pnlss_trajectory` and :func:`pnlss_local_jacobians` in one pass on the
     calling thread (a small model's walk: each sample's Jacobians from the powers the
     free run has just taken; the same numbers as the two passes)."""
+    _run_keeping(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY, True)
+
+
+@njit(cache=True, nogil=True)
+def _run_keeping(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, JY, jacobians):
+    """The free run keeping ``V``; with ``jacobians``, each sample's local Jacobians
+    into ``JX``, ``JY`` as it goes."""
     N = u.shape[0]
     nx, nu, nm = A.shape[0], B.shape[1], expo.shape[0]
     count, var, power = _sparse_exponents(expo)
     top = _powers(count, var, power, nm)
     z = np.empty(nx + nu)
-    zp = np.empty((nx + nu, top + 1))
+    zp = np.empty((nx + nu, top + 1))  # zp[i, e] = clip(z_i) ** e (the same power)
     zeta = np.empty(nm)
     xn = np.empty(nx)
     At, Ct, Et, Ft = _transposed(A, C, E, F)
@@ -305,7 +290,8 @@ def pnlss_trajectory_jacobians(A, B, C, D, E, F, expo, lo, hi, u, x, y, V, JX, J
                 val *= zp[var[j, t], power[j, t]]
             zeta[j] = val
             V[k, nx + nu + j] = val
-        _local_sample(At, Ct, Et, Ft, count, var, power, lo, hi, V, zp, Lx, Ly, JX, JY, k)
+        if jacobians:
+            _local_sample(At, Ct, Et, Ft, count, var, power, lo, hi, V, zp, Lx, Ly, JX, JY, k)
         _affine(C, D, F, x, u[k], zeta, y[k])
         _affine(A, B, E, x, u[k], zeta, xn)
         for i in range(nx):
@@ -385,15 +371,6 @@ def pnlss_local_jacobians(A, C, E, F, expo, lo, hi, V, JX, JY):
     for b in prange(blocks):
         k1 = min(N, (b + 1) * SAMPLE_BLOCK)
         _local_block(A, C, E, F, count, var, power, top, lo, hi, V, JX, JY, b * SAMPLE_BLOCK, k1)
-
-
-@njit(cache=True, nogil=True)
-def pnlss_local_jacobians_serial(A, C, E, F, expo, lo, hi, V, JX, JY):
-    """:func:`pnlss_local_jacobians` on the calling thread: the same numbers, without
-    a parallel region's start (which costs more than a small model's samples)."""
-    count, var, power = _sparse_exponents(expo)
-    top = _powers(count, var, power, expo.shape[0])
-    _local_block(A, C, E, F, count, var, power, top, lo, hi, V, JX, JY, 0, V.shape[0])
 
 
 @njit(cache=True, nogil=True)
