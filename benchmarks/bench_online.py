@@ -14,18 +14,22 @@ within about 5 us per sample. The estimates of both paths are checked to be equa
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from _report import machine, write_section
 
-from blockid.blocks import Polynomial, TwoSegmentPolynomial
 from blockid.data import Dataset
 from blockid.errors import EstimationError
 from blockid.fitting.arx import fit_arx
 from blockid.fitting.key_term import fit_key_term_rls
 from blockid.fitting.online import online_estimator
-from blockid.models import ARX, HammersteinWiener
+from blockid.models import ARX
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+from reference import key_term_hw_plant as hw_plant  # noqa: E402  (the stream tests' plant)
 
 
 def best_of(fn, repeats):
@@ -35,24 +39,6 @@ def best_of(fn, repeats):
         fn()
         times.append(time.perf_counter() - t0)
     return min(times)
-
-
-def hw_plant() -> HammersteinWiener:
-    """The Hammerstein-Wiener plant of the online and stream benchmarks (paper B's orders)."""
-    n1 = TwoSegmentPolynomial.from_segments(
-        positive=[0, 0.3, 0.1, -0.05], negative=[0, 0.15, -0.05, 0.03]
-    )
-    return HammersteinWiener(
-        "u",
-        "y",
-        input_block=n1,
-        output_block=Polynomial([1.0, 0.2, 0.05], constant=False),
-        na=3,
-        nb=3,
-        nk=8,
-        a=np.real(np.poly([0.7, 0.5, -0.3]))[1:],
-        b=[1.0, 0.5, 0.2],
-    )
 
 
 def hw_case(N):
