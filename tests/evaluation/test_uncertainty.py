@@ -762,3 +762,19 @@ def test_free_positions_keep_close_knees_apart():
     assert _free_positions(model) == [0, 1, 2, 3]
     se = named_standard_errors(model, np.diag([1.0, 4.0, 9.0, 16.0]))
     assert se == {"lower": 1.0, "upper": 2.0, "slope": 3.0, "a": [4.0], "b": [0.0]}
+
+
+def test_a_band_of_a_model_without_sensitivities_is_refused_by_name():
+    """simulation_band asks the model for its output sensitivities; a network of
+    subsystems gives none, and gets a ParameterError naming it, not an AttributeError."""
+    from blockid.evaluation.uncertainty import simulation_band
+    from blockid.models import ARX, Network
+
+    net = Network(
+        [
+            ("A", ARX(["u"], ["v"], 1, 1, 1, a={"v": {"v": [-0.5]}}, b={"v": {"u": [1.0]}})),
+            ("B", ARX(["v"], ["y"], 1, 1, 1, a={"y": {"y": [-0.3]}}, b={"y": {"v": [2.0]}})),
+        ]
+    )
+    with pytest.raises(ParameterError, match="Network gives no output sensitivities"):
+        simulation_band(net, np.eye(4), np.zeros((50, 1)))
