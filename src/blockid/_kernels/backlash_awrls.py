@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit
 
 from blockid._kernels.backlash import backlash_step
-from blockid._kernels.rls import OK, rls_step
+from blockid._kernels.rls import OK, recorded_step, rls_step
 
 __all__ = [
     "OK",
@@ -109,7 +109,6 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist, err=Non
     phi = np.empty(n)
     g = np.empty(n)
     out = np.empty(2)
-    n_hist = hist.shape[0]
     row = 0
     # the backlash starts at rest in the middle of its (estimated) dead band at u(0)
     x_rest = backlash_rest(theta, u[0]) if N > 0 else 0.0
@@ -129,14 +128,9 @@ def backlash_aw_rls_run(theta, P, u, v, orders, params, x, f1, f2, hist, err=Non
             target = v[t] - x_before * (1.0 - f1[d]) * (1.0 - f2[d])  # (A6)
             # AW-RLS (A8): d = lambda(t) + s, lambda(t) = eps1 s + eps2
             ok = rls_step(theta, P, phi, target, g, eps2, 1.0 + eps1, 1.0, np.inf, out)
-            if not ok or not np.isfinite(out[0]):
+            row = recorded_step(ok, theta, out, err, hist, t, n0, stride, row)
+            if row < 0:
                 return t, REASON_STEP
-            if err is not None:
-                err[t] = out[0]
-            if row < n_hist and (t - n0 + 1) % stride == 0:
-                for i in range(n):
-                    hist[row, i] = theta[i]
-                row += 1
         # internal variables with the newest estimates                      (A7)
         m_left, m_right = theta[0], theta[2]
         if m_left == 0.0 or m_right == 0.0:

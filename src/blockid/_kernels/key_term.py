@@ -45,7 +45,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from blockid._kernels.rls import OK, rls_step
+from blockid._kernels.rls import OK, recorded_step, rls_step
 
 __all__ = [
     "OK",
@@ -175,9 +175,10 @@ def minus_ar(xk, theta, x, k, na, ia):
 def output_step(theta, P, phi, g, out, x, yk, k, lk, sizes, has_out, trace_max, err, hist, row):
     """The end of one sample of the key-term recursions (this module's and
     :mod:`blockid._kernels.key_term_channels`): the regressor's output part (``-x(k-j)``,
-    ``x(k)^m``), the RLS step (B5), the a-priori error into ``err`` (if given) and
-    ``theta`` into ``hist`` every ``stride``-th update. ``sizes = (na, ia, iq, r2, n0,
-    stride)``. Returns the next history row, or -1 when the step failed."""
+    ``x(k)^m``), the RLS step (B5) and its record (:func:`~blockid._kernels.rls.recorded_step`:
+    the a-priori error into ``err`` if given, ``theta`` into ``hist`` every ``stride``-th
+    update). ``sizes = (na, ia, iq, r2, n0, stride)``. Returns the next history row, or
+    -1 when the step failed."""
     na, ia, iq, r2, n0, stride = sizes
     for j in range(1, na + 1):
         phi[ia + j - 1] = -x[k - j]
@@ -188,15 +189,7 @@ def output_step(theta, P, phi, g, out, x, yk, k, lk, sizes, has_out, trace_max, 
             phi[iq + m - 2] = pw
     bound = trace_max if lk < 1.0 else np.inf
     ok = rls_step(theta, P, phi, yk, g, lk, 1.0, 1.0 / lk, bound, out)
-    if not ok or not np.isfinite(out[0]):
-        return -1
-    if err is not None:
-        err[k] = out[0]
-    if row < hist.shape[0] and (k - n0 + 1) % stride == 0:
-        for i in range(theta.shape[0]):
-            hist[row, i] = theta[i]
-        row += 1
-    return row
+    return recorded_step(ok, theta, out, err, hist, k, n0, stride, row)
 
 
 @njit(cache=True)

@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["OK", "rls_step", "rls_run", "aw_rls_run", "hierarchical_rls_run"]
+__all__ = ["OK", "recorded_step", "rls_step", "rls_run", "aw_rls_run", "hierarchical_rls_run"]
 
 #: Status value returned by the ``*_run`` kernels when every sample was processed.
 OK = -1
@@ -87,6 +87,24 @@ def rls_step(theta, P, phi, y, g, rho0, s_coef, inv_lam, trace_max, out):
             for j in range(n):
                 P[i, j] *= c
     return True
+
+
+@njit(cache=True)
+def recorded_step(ok, theta, out, err, hist, k, n0, stride, row):
+    """The bookkeeping after :func:`rls_step` at sample ``k`` of a recursion over a record
+    (the key-term and backlash kernels): the a-priori error ``out[0]`` into ``err[k]``
+    (if given), ``theta`` into ``hist`` every ``stride``-th update from ``n0``. Returns
+    the next history row, or -1 when the step failed (``ok`` False or a non-finite
+    error)."""
+    if not ok or not np.isfinite(out[0]):
+        return -1
+    if err is not None:
+        err[k] = out[0]
+    if row < hist.shape[0] and (k - n0 + 1) % stride == 0:
+        for i in range(theta.shape[0]):
+            hist[row, i] = theta[i]
+        row += 1
+    return row
 
 
 @njit(cache=True)
