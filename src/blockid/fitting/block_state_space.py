@@ -43,8 +43,7 @@ from blockid.defaults import (
 from blockid.errors import ParameterError
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space import (
-    _check,
-    _solver_settings,
+    _refined_from_linear,
     fit_state_space,
     refine_state_space,
 )
@@ -424,28 +423,11 @@ def fit_block_state_space(
         tail_fraction=tail_fraction, patience=patience, ftol=ftol, xtol=xtol, gtol=gtol,
     )  # fmt: skip
     model = with_block_ranges(model, data)
-    method = f"subspace+block-state-space ({model.kind})"
-    metrics = _check(model, data, method)  # type: ignore[arg-type]
-    settings = {
-        **{k: v for k, v in linear.settings.items() if k != "refinement"},
-        **_solver_settings(info, max_nfev),
+    own = {
         "kind": model.kind,
         "input_blocks": [None if b is None else b.kind for b in model.input_blocks],
         "output_blocks": [None if b is None else b.kind for b in model.output_blocks],
         "loop_blocks": [b.kind for b in model.loop_blocks],
-        "refinement": info,
-        "linear_simulation_metrics": linear.estimation_metrics,
     }
-    notes = [f"the linear start: {w}" for w in linear.settings.get("warnings", [])]
-    notes += info.get("warnings", [])
-    if notes:
-        settings["warnings"] = notes
-    return FitResult(
-        model=model,
-        method=method,
-        settings=settings,
-        estimation_metrics=metrics,
-        n_samples=int(sum(e.n_samples for e in data.experiments)),
-        history={"seconds": time.perf_counter() - t0},
-        metrics_mode="simulation",
-    )
+    method = f"subspace+block-state-space ({model.kind})"
+    return _refined_from_linear(model, data, method, linear, info, max_nfev, own, t0)

@@ -656,11 +656,7 @@ def fit_polynomial_state_space(
         rungs.append({"degree": d, **_solver_settings(info, limit)})
     expo = model.exponents
     model = with_observed_range(model, data)
-    method = "subspace+polynomial-state-space"
-    metrics = _check(model, data, method)
-    settings = {
-        **{k: v for k, v in linear.settings.items() if k != "refinement"},
-        **_solver_settings(info, limit),
+    own = {
         "linear_refinement": linear.settings.get("refinement"),
         "degree": degree,
         "monomials": monomials,
@@ -668,6 +664,32 @@ def fit_polynomial_state_space(
         "margin": margin,
         "start_degree": first,
         **({"rungs": rungs} if len(rungs) > 1 else {}),
+    }
+    return _refined_from_linear(
+        model, data, "subspace+polynomial-state-space", linear, info, limit, own, t0
+    )
+
+
+def _refined_from_linear(
+    model: Any,
+    data: Dataset,
+    method: str,
+    linear: FitResult,
+    info: dict[str, Any],
+    limit: int,
+    own: dict[str, Any],
+    t0: float,
+) -> FitResult:
+    """The result of a model refined from the linear fit ``linear`` (the PNLSS's and the
+    block state-space model's): its free run checked; its settings those of the linear
+    fit (less its refinement), of the solver (at most ``limit`` simulations), the
+    model's ``own``, the refinement ``info`` and the linear fit's metrics; the linear
+    start's warnings, then the refinement's."""
+    metrics = _check(model, data, method)
+    settings = {
+        **{k: v for k, v in linear.settings.items() if k != "refinement"},
+        **_solver_settings(info, limit),
+        **own,
         "refinement": info,
         "linear_simulation_metrics": linear.estimation_metrics,
     }
