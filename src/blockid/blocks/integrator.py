@@ -149,15 +149,8 @@ class Integrator(LinearBlock):
         """Output for input ``w``: from rest, or with the first ``len(x_init)`` (at most
         ``order``) outputs set to ``x_init`` (as :meth:`LinearBlock.simulate`)."""
         w = np.asarray(w, dtype=float).reshape(-1)
-        N = w.shape[0]
-        x = np.zeros(N)
-        start = 0
-        if x_init is not None:
-            x0 = np.asarray(x_init, dtype=float).reshape(-1)
-            start = min(self.max_lag, N)
-            k = min(start, x0.size)
-            x[:k] = x0[:k]
-        return self._integrate(w, x, start)
+        x = np.zeros(w.shape[0])
+        return self._integrate(w, x, self._initial_outputs(x, x_init))
 
     def forward(
         self, w: np.ndarray, S_in: np.ndarray, own: np.ndarray, init: Any = None
@@ -166,15 +159,9 @@ class Integrator(LinearBlock):
         as the signal is (the block has no parameters of its own); ``init = (x0, S0)``
         sets the first ``min(order, len(x0))`` outputs and their sensitivities."""
         w = np.asarray(w, dtype=float).reshape(-1)
-        N = w.shape[0]
-        x = np.zeros(N)
+        x = np.zeros(w.shape[0])
         S = np.zeros_like(S_in, dtype=float)
-        start = 0
-        if init is not None:
-            x0, S0 = init
-            start = min(self.max_lag, np.shape(x0)[0], N)
-            x[:start] = np.asarray(x0, dtype=float)[:start]
-            S[:start] = np.asarray(S0, dtype=float)[:start]
+        start = self._initial_sensitivities(x, S, init)
         return self._integrate(w, x, start), self._integrate(S_in, S, start)
 
     def _integrate(self, w: np.ndarray, x: np.ndarray, start: int) -> np.ndarray:

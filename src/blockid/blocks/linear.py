@@ -184,14 +184,8 @@ class LinearBlock(Block):
         """Output for input ``w``; the first ``len(x_init)`` (at most ``max_lag``) outputs
         are set to ``x_init``, else the block starts at rest (zero before ``k = 0``)."""
         w = np.ascontiguousarray(np.asarray(w, dtype=float).reshape(-1, 1))
-        N = w.shape[0]
-        x = np.zeros((N, 1))
-        n0 = 0
-        if x_init is not None:
-            x0 = np.asarray(x_init, dtype=float).reshape(-1)
-            n0 = min(self.max_lag, N)
-            k = min(n0, x0.size)
-            x[:k, 0] = x0[:k]
+        x = np.zeros((w.shape[0], 1))
+        n0 = self._initial_outputs(x[:, 0], x_init)
         A, B = self._lag_arrays()
         arx_simulate(A, B, writable(w), x, n0)
         return x[:, 0]
@@ -213,17 +207,35 @@ class LinearBlock(Block):
     ) -> tuple[np.ndarray, np.ndarray]:
         """Output and sensitivities (see :meth:`sensitivity`); ``init = (x0, S0)`` sets the
         first ``min(max_lag, len(x0))`` outputs and their sensitivities, else from rest."""
-        N = w.shape[0]
-        x = np.zeros(N)
+        x = np.zeros(w.shape[0])
         S = np.zeros_like(S_in)
-        start = 0
-        if init is not None:
-            x0, S0 = init
-            start = min(self.max_lag, x0.shape[0], N)
-            x[:start] = x0[:start]
-            S[:start] = S0[:start]
+        start = self._initial_sensitivities(x, S, init)
         self.sensitivity(np.asarray(w, dtype=float), S_in, own, x, S, start)
         return x, S
+
+    def _initial_outputs(self, x: np.ndarray, x_init: Any) -> int:
+        """Set the first outputs ``x`` (N,) to ``x_init`` as :meth:`simulate` takes it (at
+        most ``max_lag`` of them, the rest of the first ``max_lag`` left at rest) and
+        return the sample the run starts at: ``min(max_lag, N)``, 0 without ``x_init``."""
+        if x_init is None:
+            return 0
+        x0 = np.asarray(x_init, dtype=float).reshape(-1)
+        start = min(self.max_lag, x.shape[0])
+        k = min(start, x0.size)
+        x[:k] = x0[:k]
+        return start
+
+    def _initial_sensitivities(self, x: np.ndarray, S: np.ndarray, init: Any) -> int:
+        """Set the first outputs ``x`` and their sensitivities ``S`` to ``init = (x0, S0)``
+        as :meth:`forward` takes it and return the sample the run starts at: ``min(max_lag,
+        len(x0), N)``, 0 without ``init``."""
+        if init is None:
+            return 0
+        x0, S0 = init
+        start = min(self.max_lag, np.shape(x0)[0], x.shape[0])
+        x[:start] = np.asarray(x0, dtype=float)[:start]
+        S[:start] = np.asarray(S0, dtype=float)[:start]
+        return start
 
     def sensitivity(
         self,
