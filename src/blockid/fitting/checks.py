@@ -62,6 +62,7 @@ __all__ = [
     "STABILITY_MARGIN",
     "margin_for",
     "stability_margin",
+    "refuse_unstable",
     "simulation_mse",
     "linear_baseline",
     "check_model",
@@ -126,6 +127,17 @@ def stability_margin(data: Dataset) -> float:
     return margin_for(max((e.n_samples for e in data.experiments), default=0))
 
 
+def refuse_unstable(model: Any, data: Dataset, message: str, **fields: Any) -> None:
+    """Raise :class:`EstimationError` with ``message`` unless ``model`` is stable within
+    the :func:`stability_margin` of ``data``. ``message`` is a :meth:`str.format`
+    template: ``{rho}`` the largest pole magnitude, ``{limit}`` the limit ``1 - margin``
+    and the ``fields`` by name (``{method}``)."""
+    margin = stability_margin(data)
+    if not model.is_stable(margin):
+        rho = float(np.max(np.abs(model.poles())))
+        raise EstimationError(message.format(rho=rho, limit=1 - margin, **fields))
+
+
 #: A static block whose largest deviation from its best affine fit over the estimation
 #: data is below this fraction of its output spread counts as linear.
 LINEARITY_TOLERANCE = 1e-6
@@ -181,14 +193,14 @@ def check_model(
     theta = model.free_parameters()
     if not np.all(np.isfinite(theta)):
         raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
-    margin = stability_margin(data)
-    if not model.is_stable(margin):
-        rho = float(np.max(np.abs(model.poles())))
-        raise EstimationError(
-            f"{method} returned a linear block that is unstable or on the edge of stability "
-            f"(largest pole magnitude {rho:.10g}, limit {1 - margin:.10g}); its "
-            "simulation would diverge or ring, so no model is returned. See docs/convergence.md"
-        )
+    refuse_unstable(
+        model,
+        data,
+        "{method} returned a linear block that is unstable or on the edge of stability "
+        "(largest pole magnitude {rho:.10g}, limit {limit:.10g}); its "
+        "simulation would diverge or ring, so no model is returned. See docs/convergence.md",
+        method=method,
+    )
     mse = simulation_mse(model, data)
     y_all = np.vstack([e.y for e in data.experiments])
     if not np.isfinite(mse) or mse > 1e6 * (float(np.var(y_all)) + 1e-300):

@@ -78,7 +78,7 @@ from blockid.blocks.base import Block
 from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE, MAX_NFEV, PATIENCE, TAIL_FRACTION, TOLERANCE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
-from blockid.fitting.checks import check_model, margin_for, simulation_mse, stability_margin
+from blockid.fitting.checks import check_model, margin_for, refuse_unstable, simulation_mse
 from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.levenberg_marquardt import EarlyStop, levenberg_marquardt, note_tail
 from blockid.fitting.options import checked
@@ -465,17 +465,16 @@ def refine(
         raise EstimationError(
             "refinement cannot start: the starting model's parameters are not finite"
         )
-    margin = stability_margin(data)
-    if not model.is_stable(margin):
-        rho = float(np.max(np.abs(model.poles())))
-        raise EstimationError(
-            "refinement cannot start: the starting model's linear block is unstable or "
-            f"beyond the stability margin (largest pole magnitude {rho:.10g}, limit "
-            f"{1 - margin:.10g} on these data: 0.999, or 1 - 1/n on an experiment of "
-            "n > 1000 samples), so its simulation error is not defined or not allowed. "
-            "Start from the default initial estimate (method simulation-error) instead, "
-            "or refine on a record longer than the pole's time constant"
-        )
+    refuse_unstable(
+        model,
+        data,
+        "refinement cannot start: the starting model's linear block is unstable or "
+        "beyond the stability margin (largest pole magnitude {rho:.10g}, limit "
+        "{limit:.10g} on these data: 0.999, or 1 - 1/n on an experiment of "
+        "n > 1000 samples), so its simulation error is not defined or not allowed. "
+        "Start from the default initial estimate (method simulation-error) instead, "
+        "or refine on a record longer than the pole's time constant",
+    )
     t_start = time.perf_counter()
     tracker = _Tracker(patience=int(patience))
     segments = _segments(data, model.max_lag, float(tail_fraction), n_par)

@@ -77,7 +77,7 @@ from blockid.defaults import (
 )
 from blockid.errors import DataError, EstimationError, OrderError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
-from blockid.fitting.checks import stability_margin
+from blockid.fitting.checks import refuse_unstable, stability_margin
 from blockid.fitting.options import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space_refinement import (
@@ -366,14 +366,14 @@ def _check(model: PolynomialStateSpace, data: Dataset, method: str) -> dict[str,
     """Finite, stable, a finite free run on the estimation data; its metrics."""
     if not np.all(np.isfinite(model.free_parameters())):
         raise EstimationError(f"{method} diverged: the parameter estimates are not finite")
-    margin = stability_margin(data)
-    if not model.is_stable(margin):
-        rho = float(np.max(np.abs(model.poles())))
-        raise EstimationError(
-            f"{method} returned an unstable state matrix, or one beyond the stability "
-            f"margin (largest eigenvalue magnitude {rho:.10g}, limit {1 - margin:.10g}); "
-            "no model is returned: try another order"
-        )
+    refuse_unstable(
+        model,
+        data,
+        "{method} returned an unstable state matrix, or one beyond the stability "
+        "margin (largest eigenvalue magnitude {rho:.10g}, limit {limit:.10g}); "
+        "no model is returned: try another order",
+        method=method,
+    )
     ys, sims = [], []
     for e in data.experiments:
         with np.errstate(all="ignore"):
