@@ -46,7 +46,7 @@ per-pair delays by cross-validation beside one common delay), not a decision.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
@@ -58,8 +58,25 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["ChannelDelays", "ChannelOrders", "channel_delays", "channel_orders"]
 
 
+class _PerPair:
+    """A result of one number per input-output pair: the matrix the attribute ``_matrix``
+    names (``nk`` or ``nb``), which is also ``fit``'s option of that name."""
+
+    _matrix: ClassVar[str]
+
+    @property
+    def common(self) -> bool:
+        """True when every pair has the same value."""
+        return isinstance(self.as_option(), int)
+
+    def as_option(self) -> int | tuple[tuple[int, ...], ...]:
+        """The matrix as ``fit``'s option of that name: one number when every pair
+        agrees, else nested tuples (rows: outputs)."""
+        return _option(getattr(self, self._matrix))
+
+
 @dataclass(frozen=True)
-class ChannelDelays:
+class ChannelDelays(_PerPair):
     """Per-pair delays and the losses they were chosen on.
 
     Attributes
@@ -81,15 +98,7 @@ class ChannelDelays:
     evidence: np.ndarray
     outputs: tuple[str, ...]
     inputs: tuple[str, ...]
-
-    @property
-    def common(self) -> bool:
-        """True when every pair has the same delay."""
-        return isinstance(self.as_option(), int)
-
-    def as_option(self) -> int | tuple[tuple[int, ...], ...]:
-        """The delays as ``fit``'s ``nk`` option: one number when they agree."""
-        return _option(self.nk)
+    _matrix: ClassVar[str] = "nk"
 
 
 def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2) -> ChannelDelays:
@@ -105,11 +114,7 @@ def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2)
     >>> channel_delays(Dataset.from_arrays(u, y, ["a", "b"], ["y"])).nk.tolist()
     [[1, 5]]
     """
-    for name, value, low in (("max_delay", max_delay, 0), ("na", na, 0), ("nb", nb, 1)):
-        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
-            raise ParameterError(
-                f"{name} must be a whole number >= {low}, got {value!r}", parameter=name
-            )
+    _whole_numbers(("max_delay", max_delay, 0), ("na", na, 0), ("nb", nb, 1))
     start = max(na, max_delay + nb - 1)
     if all(e.n_samples <= start + 1 for e in data.experiments):
         raise DataError(
@@ -144,7 +149,7 @@ def channel_delays(data: Dataset, max_delay: int = 10, na: int = 2, nb: int = 2)
 
 
 @dataclass(frozen=True)
-class ChannelOrders:
+class ChannelOrders(_PerPair):
     """Per-pair numbers of input coefficients and the losses they were chosen on.
 
     Attributes
@@ -162,15 +167,7 @@ class ChannelOrders:
     loss: np.ndarray
     outputs: tuple[str, ...]
     inputs: tuple[str, ...]
-
-    @property
-    def common(self) -> bool:
-        """True when every pair has the same ``nb``."""
-        return isinstance(self.as_option(), int)
-
-    def as_option(self) -> int | tuple[tuple[int, ...], ...]:
-        """The orders as ``fit``'s ``nb`` option: one number when they agree."""
-        return _option(self.nb)
+    _matrix: ClassVar[str] = "nb"
 
 
 def channel_orders(data: Dataset, nk: object, na: int, nb_max: int) -> ChannelOrders:
@@ -188,11 +185,7 @@ def channel_orders(data: Dataset, nk: object, na: int, nb_max: int) -> ChannelOr
     >>> channel_orders(Dataset.from_arrays(u, y, ["a", "b"], ["y"]), 1, 1, 3).nb.tolist()
     [[2, 1]]
     """
-    for name, value, low in (("na", na, 0), ("nb_max", nb_max, 1)):
-        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
-            raise ParameterError(
-                f"{name} must be a whole number >= {low}, got {value!r}", parameter=name
-            )
+    _whole_numbers(("na", na, 0), ("nb_max", nb_max, 1))
     ny, nu = data.n_outputs, data.n_inputs
     delays = np.broadcast_to(np.asarray(nk, dtype=int), (ny, nu))
     if np.any(delays < 0):
@@ -213,6 +206,16 @@ def channel_orders(data: Dataset, nk: object, na: int, nb_max: int) -> ChannelOr
             i = int(np.argmin(best))
             nb[j, i] = 1 + int(np.argmin(_mdl(loss[j, i], scan.target.size)[1:]))
     return ChannelOrders(nb, loss, tuple(data.outputs), tuple(data.inputs))
+
+
+def _whole_numbers(*checks: tuple[str, object, int]) -> None:
+    """Refuse, by name, a value of ``(name, value, low)`` that is not a whole number
+    ``>= low``."""
+    for name, value, low in checks:
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
+            raise ParameterError(
+                f"{name} must be a whole number >= {low}, got {value!r}", parameter=name
+            )
 
 
 def _option(matrix: np.ndarray) -> int | tuple[tuple[int, ...], ...]:
