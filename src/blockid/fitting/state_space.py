@@ -607,18 +607,15 @@ def fit_polynomial_state_space(
             parameter="start_degree",
         )
     t0 = time.perf_counter()
+    # the options of the linear fits: those that choose the order and the linear start
+    linear_options: dict[str, Any] = dict(
+        horizon=horizon, weighting=weighting, feedthrough=feedthrough, max_nfev=max_nfev,
+        tail_fraction=tail_fraction, patience=PATIENCE, ftol=ftol, xtol=xtol, gtol=gtol,
+    )  # fmt: skip
     order_scores: list[dict[str, Any]] | None = None
     if nx is None:
-        nx, order_scores = order_by_validation(
-            data, max_order, horizon=horizon, weighting=weighting, feedthrough=feedthrough,
-            max_nfev=max_nfev, tail_fraction=tail_fraction, patience=PATIENCE, ftol=ftol,
-            xtol=xtol, gtol=gtol,
-        )  # fmt: skip
-    linear = fit_state_space(
-        data, nx=nx, max_order=max_order, horizon=horizon, weighting=weighting,
-        feedthrough=feedthrough, max_nfev=max_nfev, tail_fraction=tail_fraction,
-        patience=PATIENCE, ftol=ftol, xtol=xtol, gtol=gtol,
-    )  # fmt: skip
+        nx, order_scores = order_by_validation(data, max_order, **linear_options)
+    linear = fit_state_space(data, nx=nx, max_order=max_order, **linear_options)
     if order_scores:
         linear = replace(linear, settings={
             **linear.settings,
