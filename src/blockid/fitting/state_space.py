@@ -480,12 +480,19 @@ def fit_subspace(
 def with_observed_range(model: PolynomialStateSpace, data: Dataset) -> PolynomialStateSpace:
     """``model`` with the range its ``z = [x; u_n]`` covers on ``data`` (each experiment
     from the state its first outputs give) recorded for the extrapolation checks."""
+    lower, upper = _observed_range(model, data)
+    return model.replace(observed_lower=lower, observed_upper=upper)
+
+
+def _observed_range(model: PolynomialStateSpace, data: Dataset) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest ``z = [x; u_n]`` of ``model`` run over ``data``, each
+    experiment from the state its first outputs give."""
     z = []
     for e in data.experiments:
         x0 = model.initial_state(e.u, e.y[: 4 * model.nx])
         z.append(np.hstack((model.states(e.u, x0), model.normalised_input(e.u))))
     zz = np.vstack(z)
-    return model.replace(observed_lower=zz.min(axis=0), observed_upper=zz.max(axis=0))
+    return zz.min(axis=0), zz.max(axis=0)
 
 
 def order_by_validation(
@@ -628,13 +635,7 @@ def fit_polynomial_state_space(
     if degree == 1:
         return linear
     expo = monomial_exponents(n, len(data.inputs), first, monomials, constant=True)
-    states, inputs = [], []
-    for e in data.experiments:
-        x0 = start.initial_state(e.u, e.y[: 4 * n])
-        states.append(start.states(e.u, x0))
-        inputs.append(start.normalised_input(e.u))
-    z = np.hstack((np.vstack(states), np.vstack(inputs)))
-    lo, hi = z.min(axis=0), z.max(axis=0)
+    lo, hi = _observed_range(start, data)
     span = np.maximum(hi - lo, 1e-12)
     template = PolynomialStateSpace(
         start.inputs, start.outputs, start.A, start.B, start.C, start.D,
