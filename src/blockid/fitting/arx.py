@@ -468,5 +468,5 @@ def fit_arx(
         method=method,
         settings=settings,
         estimation_metrics=metrics,
-        n_samples=int(sum(e.n_samples for e in data.experiments)),
+        n_samples=data.n_samples,
     )

@@ -318,7 +318,7 @@ def fit_block_arx(
         method=f"block-arx-{method}",
         settings=settings,
         estimation_metrics=metrics,
-        n_samples=int(sum(e.n_samples for e in data.experiments)),
+        n_samples=data.n_samples,
         history=dict(inner.history),
         metrics_mode="simulation",
     )

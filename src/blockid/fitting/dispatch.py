@@ -217,7 +217,7 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
                 **({"warnings": info["warnings"]} if info.get("warnings") else {}),
             },
             estimation_metrics=_check(fitted, data, how),
-            n_samples=int(sum(e.n_samples for e in data.experiments)),
+            n_samples=data.n_samples,
             history={"seconds": info["seconds"]},
             metrics_mode="simulation",
         )

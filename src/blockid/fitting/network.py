@@ -138,6 +138,6 @@ def fit_network(data: Dataset, specs: list[SubsystemSpec]) -> FitResult:
         method="network",
         settings={"subsystems": settings},
         estimation_metrics=metrics_by_output(y, y_sim, network.outputs),
-        n_samples=int(sum(e.n_samples for e in data.experiments)),
+        n_samples=data.n_samples,
         metrics_mode="simulation",
     )

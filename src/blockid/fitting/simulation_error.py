@@ -554,7 +554,7 @@ def refine(
         method=METHOD,
         settings=settings,
         estimation_metrics=metrics,
-        n_samples=int(sum(e.n_samples for e in data.experiments)),
+        n_samples=data.n_samples,
         history={
             "fit_mse": np.array(tracker.cost),
             "tail_mse": np.array(tracker.tail),

@@ -707,7 +707,7 @@ def _result(
         method=method,
         settings=settings,
         estimation_metrics=metrics,
-        n_samples=int(sum(e.n_samples for e in data.experiments)),
+        n_samples=data.n_samples,
         history={"seconds": time.perf_counter() - t0},
         metrics_mode="simulation",
     )
