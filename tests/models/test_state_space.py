@@ -151,3 +151,14 @@ def test_the_initial_state_search_never_returns_a_worse_state_than_it_has_seen()
     y, _ = model.run(u[:, None], np.array([1.0]))
     x0 = model.initial_state(u, y[:10])
     np.testing.assert_allclose(x0, [1.0], atol=1e-8)
+
+
+def test_output_sensitivities_without_measured_outputs_start_at_rest_for_several_outputs():
+    """Without ``y_initial`` the run starts at ``x(0) = 0`` and no output is copied (the
+    copy once reshaped the missing outputs and failed for more than one output)."""
+    rng = np.random.default_rng(3)
+    model = _pnlss(rng, ny=2)
+    u = rng.standard_normal((40, 2))
+    y, dy = model.output_sensitivities(u)
+    np.testing.assert_array_equal(y, model.simulate(u))
+    assert dy.shape == (40, 2, model.free_parameters().size)

@@ -812,9 +812,7 @@ class BlockStateSpace(ForwardSensitivities, Model):
             x0 = self.initial_state(u, y0[:n])
         yn, _, _ = self.run(un, x0)
         y = yn * self.output_scale + self.output_offset
-        k = min(n, self.max_lag)
-        if k:
-            y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, len(self.outputs))[:k]
+        self._measured_head(y, y_initial, n)
         return y
 
     def predict(self, u: Any, y: Any) -> np.ndarray:

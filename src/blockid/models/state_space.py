@@ -283,10 +283,17 @@ class ForwardSensitivities:
             dy[k0 : k0 + out.shape[0]] = J[:, :p].reshape(out.shape[0], ny, p)
         scale = np.asarray(self.output_scale, dtype=float).reshape(-1)
         y, dy = y * scale + self.output_offset, dy * scale[None, :, None]
-        k = min(n, self.max_lag)
-        y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, ny)[:k]
-        dy[:k] = 0.0
+        dy[: self._measured_head(y, y_initial, n)] = 0.0
         return y, dy
+
+    def _measured_head(self, y: np.ndarray, y_initial: Any, n: int) -> int:
+        """Set the first ``min(n, max_lag)`` outputs of a run ``y`` to the measured ones
+        ``y_initial`` (``n`` of them gave the initial state), as every model's free run
+        starts; return how many."""
+        k = min(n, self.max_lag)
+        if k:
+            y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, len(self.outputs))[:k]
+        return k
 
 
 class PolynomialStateSpace(ForwardSensitivities, Model):
@@ -666,9 +673,7 @@ class PolynomialStateSpace(ForwardSensitivities, Model):
             x0 = self.initial_state(u, y0[:n])
         yn, _ = self.run(un, x0)
         y = yn * self.output_scale + self.output_offset
-        k = min(n, self.max_lag)
-        if k:
-            y[:k] = np.asarray(y_initial, dtype=float).reshape(-1, len(self.outputs))[:k]
+        self._measured_head(y, y_initial, n)
         return y
 
     def predict(self, u: Any, y: Any) -> np.ndarray:
