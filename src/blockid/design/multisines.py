@@ -145,9 +145,7 @@ def multisine(
     start = np.empty(realisations)
     for r in range(realisations):
         phases = design_rng(seed, r + 1).uniform(0.0, 2.0 * np.pi, size=lines.size)
-        spectrum = np.zeros(samples // 2 + 1, dtype=complex)
-        spectrum[lines] = amplitude * np.exp(1j * phases)
-        period = np.fft.irfft(spectrum, n=samples)
+        period = _period(samples, lines, amplitude, phases)
         start[r] = crest_factor(period)
         one_period[r] = _clip_and_restore(period, lines, amplitude, crest_iterations)
     settings = {
@@ -185,10 +183,17 @@ def _clip_and_restore(
     for _ in range(iterations):
         level = np.quantile(np.abs(u), CLIP_QUANTILE)
         phases = np.angle(np.fft.rfft(np.clip(u, -level, level))[lines])
-        spectrum = np.zeros(period.size // 2 + 1, dtype=complex)
-        spectrum[lines] = amplitude * np.exp(1j * phases)
-        u = np.fft.irfft(spectrum, n=period.size)
+        u = _period(period.size, lines, amplitude, phases)
         crest = crest_factor(u)
         if crest < best_crest:
             best, best_crest = u, crest
     return best
+
+
+def _period(samples: int, lines: np.ndarray, amplitude: float, phases: np.ndarray) -> np.ndarray:
+    """The period of ``samples`` samples whose spectrum is ``amplitude`` (numpy's unscaled
+    rfft) with ``phases`` on ``lines`` and zero elsewhere: the design's and every
+    restoring round's."""
+    spectrum = np.zeros(samples // 2 + 1, dtype=complex)
+    spectrum[lines] = amplitude * np.exp(1j * phases)
+    return np.fft.irfft(spectrum, n=samples)
