@@ -56,8 +56,9 @@ def _multisine(rng: np.random.Generator, lines: int = 60) -> np.ndarray:
     return np.clip(4.0 + 2.6 * u / u.std(), 0.0, 10.0)
 
 
-def _levels(u: np.ndarray, rng: np.random.Generator, steps: int = 40) -> np.ndarray:
-    """The lower tank's level at each sample (RK4, ``steps`` per sample, input held)."""
+def _levels(u: np.ndarray, rng: np.random.Generator, steps: int = 40, tank: int = 1) -> np.ndarray:
+    """A tank's level at each sample (``tank`` 1: the lower, measured one; 0: the upper);
+    RK4, ``steps`` per sample, the input held."""
 
     def rate(x: np.ndarray, uk: float) -> np.ndarray:
         s1, s2 = np.sqrt(max(x[0], 0.0)), np.sqrt(max(x[1], 0.0))
@@ -65,7 +66,7 @@ def _levels(u: np.ndarray, rng: np.random.Generator, steps: int = 40) -> np.ndar
 
     h, x, out = TS / steps, np.array([4.0, 4.0]), np.empty(len(u))
     for k, uk in enumerate(u):
-        out[k] = x[1]
+        out[k] = x[tank]
         for _ in range(steps):
             a = rate(x, uk)
             b = rate(x + h / 2 * a, uk)
@@ -90,7 +91,13 @@ def records(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return ue, ye, ut, yt
 
 
-def test_rmse(model: Any, u: np.ndarray, y: np.ndarray) -> float:
+def upper_levels(u: np.ndarray, seed: int = 0) -> np.ndarray:
+    """The upper tank's level driven by ``u`` (process noise of ``seed``): where it
+    sits at 10, it overflows."""
+    return _levels(u, np.random.default_rng(seed), tank=0)
+
+
+def test_error(model: Any, u: np.ndarray, y: np.ndarray) -> float:
     with np.errstate(all="ignore"):
         sim = np.asarray(model.simulate(u[:, None], y[:N_INIT, None])).reshape(-1)
     err = y[N_INIT:] - sim[N_INIT:]
@@ -112,7 +119,7 @@ def study(seed: int, efforts: list[str]) -> list[dict[str, Any]]:
         seconds = time.perf_counter() - t0
         rows.append({
             "seed": seed, "what": f"identify, {effort}", "model": result.selected.candidate.label,
-            "cv": result.selected.rmse, "test": test_rmse(result.model, ut, yt),
+            "cv": result.selected.rmse, "test": test_error(result.model, ut, yt),
             "seconds": seconds, "load": load,
         })  # fmt: skip
         print(rows[-1], flush=True)
@@ -121,7 +128,7 @@ def study(seed: int, efforts: list[str]) -> list[dict[str, Any]]:
         try:
             with np.errstate(all="ignore"):
                 model = fit_model(data, structure, **options).model
-            err = test_rmse(model, ut, yt)
+            err = test_error(model, ut, yt)
         except Exception as exc:  # noqa: BLE001 - a study: a failed fit is reported
             model, err = None, float("inf")
             print(f"seed {seed}: {structure} {options} failed: {exc}", flush=True)

@@ -50,3 +50,20 @@ def test_state_space_profile_runs_on_a_short_record():
     for threads in (1, 2):
         assert all(seconds > 0 for seconds in out[threads].values())
     assert out["whole 1"] > 0 and out["whole 2"] > 0
+
+
+def test_tanks_study_records_are_the_documented_plant():
+    """The study's records (``docs/identify.md``): the same per seed, two different
+    multisine realisations, levels in the tanks' range, and the upper tank overflowing
+    in some samples (the nonlinearity the study is about)."""
+    study = _load(BENCHMARKS / "tanks_study.py")
+    ue, ye, ut, yt = study.records(1)
+    again = study.records(1)
+    assert all(np.array_equal(a, b) for a, b in zip((ue, ye, ut, yt), again, strict=True))
+    assert ue.shape == ye.shape == ut.shape == yt.shape == (study.N,)
+    assert not np.allclose(ue, ut)
+    assert 0.0 <= ue.min() and ue.max() <= 10.0
+    assert 0.5 < ye.min() and ye.max() < 10.5  # the lower level, measured with noise
+    upper = study.upper_levels(ue)
+    full = upper >= 9.95  # at the brim (process noise moves it by about 0.01)
+    assert 0.0 < np.mean(full) < 0.2  # it overflows, now and then
