@@ -98,3 +98,29 @@ def test_linear_models_have_nothing_to_leave_and_trust_combines_the_worst():
     worse = trust.worst(Trust(0.7, float("inf"), ["x"]))
     assert worse.range_excess == 0.7 and not np.isfinite(worse.rest_ratio)
     assert len(worse.reasons) == 2 and worse.to_dict()["rest_ratio"] is None
+
+
+def test_large_coefficients_are_judged_against_the_gain_on_the_data_in_its_units():
+    """The flag compares sum |b| with 100 times the block's gain on the data (output
+    spread over input spread): a differencing block b = [25, -25] on a slow input of
+    spread 7 passes 0.4 % of it, far below its coefficients; a product of the spreads
+    in place of their ratio would put the limit above 50 and miss it."""
+    diff = ChainModel("u", "y", [LinearBlock(0, 2, 0, a=[], b=[25.0, -25.0])])
+    t = np.arange(2000)
+    data = _record(diff, 10.0 * np.sin(2 * np.pi * t / 2000))
+    (flag,) = assess(diff, data).flags
+    assert "sum |b| = 50" in flag and "times its gain on the data (0.0" in flag
+    plain = ChainModel("u", "y", [LinearBlock(0, 2, 0, a=[], b=[0.5, 0.5])])
+    assert assess(plain, _record(plain, 10.0 * np.sin(2 * np.pi * t / 2000))).flags == []
+
+
+def test_an_unbounded_excursion_is_named_so_and_the_reasons_are_in_the_record():
+    trust = Trust(range_excess=float("inf"))
+    (reason,) = trust.reasons
+    assert "by an unbounded amount of that range" in reason and "inf" not in reason
+    record = trust.to_dict()
+    assert record["reasons"] == trust.reasons and record["range_excess"] is None
+    assert Trust(0.6).to_dict()["reasons"] == [
+        "on held-back data an internal signal leaves its estimation range by 60 % of that "
+        "range more than the input leaves its own (limit 50 %)"
+    ]
