@@ -156,3 +156,21 @@ def test_hierarchical_rls_without_forgetting_ignores_the_trace_bound():
     # group 1 sees phi = 1: P = 100 - 100^2 / 101; group 2 sees phi = 0: unchanged
     np.testing.assert_allclose(np.diag(P), [100.0 / 101.0, 100.0])
     assert E[0] == 1.0
+
+
+def test_recorded_step_keeps_its_record_inside_the_history_and_fails_with_minus_one():
+    """The bookkeeping after an RLS step (the key-term and backlash kernels): the error
+    into ``err[k]``, ``theta`` into the next history row every ``stride``-th update, no
+    row past the history's end, and -1 (the callers test the sign) on a failed step or a
+    non-finite error."""
+    theta, out = np.array([1.0, 2.0]), np.array([0.5, 0.0])
+    hist, err = np.zeros((2, 2)), np.zeros(6)
+    assert k.recorded_step(True, theta, out, err, hist, 1, 0, 2, 0) == 1  # (1 - 0 + 1) % 2
+    assert hist[0].tolist() == [1.0, 2.0] and err[1] == 0.5
+    assert k.recorded_step(True, theta, out, err, hist, 2, 0, 2, 1) == 1  # not its turn
+    assert k.recorded_step(True, theta, out, err, hist, 3, 0, 2, 1) == 2
+    assert k.recorded_step(True, theta, out, err, hist, 5, 0, 2, 2) == 2  # history full
+    assert k.recorded_step(False, theta, out, err, hist, 4, 0, 2, 2) == -1
+    out[0] = np.nan
+    assert k.recorded_step(True, theta, out, err, hist, 4, 0, 2, 2) == -1
+    assert err[4] == 0.0  # a failed step records nothing
