@@ -222,3 +222,19 @@ def test_a_pass_continued_from_carried_history_equals_one_pass(rng, structure):
     np.testing.assert_array_equal(Pc, P)
     np.testing.assert_array_equal(x2[L:], x[cut:])
     assert np.all(np.isnan(err[:L])) and np.all(np.isfinite(err[L:]))
+
+
+def test_key_term_step_without_forgetting_ignores_the_trace_bound():
+    """lam = 1 exactly: no anti-wind-up, whatever trace_max says (SPEC A2), in the step
+    the key-term kernels share (the RLS kernels' own test holds rls_run to the same)."""
+    from blockid._kernels.key_term import output_step
+
+    theta, P = np.zeros(2), 100.0 * np.eye(2)
+    phi, g, out = np.array([1.0, 0.0]), np.zeros(2), np.zeros(2)
+    hist, err = np.zeros((1, 2)), np.zeros(1)
+    sizes = (0, 2, 2, 1, 0, 1)  # na, ia, iq, r2, n0, stride: no output part
+    row = output_step(theta, P, phi, g, out, np.zeros(1), 1.0, 0, 1.0, sizes, False, 1e-3,
+                      err, hist, 0)  # fmt: skip
+    assert row == 1 and err[0] == 1.0
+    np.testing.assert_allclose(P, [[100.0 / 101.0, 0.0], [0.0, 100.0]])
+    np.testing.assert_allclose(theta, [100.0 / 101.0, 0.0])
