@@ -159,6 +159,10 @@ def test_standard_errors_in_the_shape_of_the_parameters_are_matched(hammerstein)
     assert np.all(free_standard_errors(_with_errors(hammerstein[3], by_name).models[0].fit) == 0.25)
     assert free_standard_errors(_with_errors(hammerstein[3], [1.0, 2.0]).models[0].fit) is None
     assert free_standard_errors(fit) is None
+    # a parameter the data did not determine (null, as a fit's JSON stores it): no draws,
+    # and no TypeError (blockid identify --report on a Hammerstein-Wiener chain ended so)
+    shaped["a"] = [0.1, None, 0.3]
+    assert free_standard_errors(_with_errors(hammerstein[3], shaped).models[0].fit) is None
 
 
 def test_report_of_an_identify_result(hammerstein):

@@ -54,7 +54,8 @@ def _flatten(value: Any) -> list[float]:
         return [x for v in value for x in _flatten(v)]
     if isinstance(value, bool):
         return []
-    return [float(value)]
+    # a parameter the data did not determine (an infinite standard error, null in JSON)
+    return [np.nan if value is None else float(value)]
 
 
 def free_standard_errors(fit: Any) -> np.ndarray | None:
