@@ -56,6 +56,9 @@ def test_a_dead_zone_plant_gets_its_structure_and_beats_the_linear_model():
     )
     assert result.on == "estimation" and any("optimistic" in n for n in result.notes)
     assert result.search["effort"] == "dz" and len(result.search["folds"]) == 3
+    # beyond linear on one short record: the note asks for more experiments
+    (note,) = [n for n in result.notes if n.startswith("chosen beyond linear")]
+    assert "3 folds of one record of 1200 samples" in note and "--experiment-column" in note
 
 
 @pytest.mark.parametrize("kind", ["saturation", "dead-zone"])
@@ -526,6 +529,23 @@ def test_identify_says_when_the_linear_model_is_chosen_over_a_better_score(monke
     assert result.selected.candidate.structure == "arx"
     assert any("linear model is chosen" in n for n in result.notes)
     assert result.to_dict()["search"]["beyond_linear"]["linear_chosen"] is True
+    assert not any(n.startswith("chosen beyond linear") for n in result.notes)
+
+
+def test_the_one_record_note_is_for_one_short_record_only():
+    from blockid.workflows.identify import one_record_note
+
+    short = dead_zone_record(400)
+    assert "4 folds of one record of 400 samples" in one_record_note(short, 4)[0]
+    from blockid.data.dataset import Experiment
+
+    e = short.experiments[0]
+    parts = [slice(0, 130), slice(130, 260), slice(260, 400)]
+    three = Dataset(("u",), ("y",), None,
+                    [Experiment(f"part {i}", e.u[p], e.y[p]) for i, p in enumerate(parts)])  # fmt: skip
+    assert len(three.experiments) == 3 and one_record_note(three, 3) == []
+    long = Dataset.from_arrays(np.zeros(LONG_RECORD), np.zeros(LONG_RECORD), ["u"], ["y"])
+    assert one_record_note(long, 3) == []
 
 
 def test_a_plant_whose_inputs_act_with_different_delays_gets_each_pairs_delay():

@@ -627,6 +627,22 @@ def _long_horizon(
     ], info
 
 
+def one_record_note(data: Dataset, folds: int) -> list[str]:
+    """The note of a model beyond linear chosen on the folds of one short record: more
+    experiments would test the choice on records it has not seen (``docs/identify.md``,
+    the tanks study)."""
+    n = data.experiments[0].n_samples
+    if len(data.experiments) > 1 or n >= LONG_RECORD:
+        return []
+    return [
+        f"chosen beyond linear on {folds} folds of one record of {n} samples: on a short "
+        "record, one record's folds can favour a model that does worse on another record "
+        "of the same plant (docs/identify.md, the tanks study); give every estimation "
+        "experiment you have (several files, or --experiment-column): with three or more, "
+        "each fold holds a whole experiment back"
+    ]
+
+
 def identify(
     data: Dataset,
     validation: Dataset | None = None,
@@ -786,6 +802,8 @@ def identify(
                 else "the linear model was put first, but its refit failed"
             )  # fmt: skip
         )
+    if _beyond_linear(selected):
+        notes += one_record_note(data, len(plan))
     if progress is not None:
         progress("refit", 1, 1, selected.candidate.label)
 
