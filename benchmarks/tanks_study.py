@@ -109,48 +109,66 @@ def test_error(model: Any, u: np.ndarray, y: np.ndarray) -> float:
     return float(np.sqrt(np.mean(err**2))) if np.all(np.isfinite(err)) else float("inf")
 
 
-def study(seed: int, efforts: list[str]) -> list[dict[str, Any]]:
-    from blockid.data.dataset import Dataset
-    from blockid.fitting.dispatch import fit_model
+def _label(structure: str, options: dict[str, Any]) -> str:
+    return f"{structure}({', '.join(f'{k}={v}' for k, v in options.items())})"
+
+
+def _identified(seed: int, what: str, data: Any, ut: np.ndarray, yt: np.ndarray,
+                **kwargs: Any) -> dict[str, Any]:  # fmt: skip
+    """``identify`` on ``data`` (its keywords ``kwargs``) and the chosen model's test error."""
     from blockid.workflows.identify import identify
 
-    ue, ye, ut, yt = records(seed)
-    data = Dataset.from_arrays(ue[:, None], ye[:, None], sampling_time=TS)
+    load = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    result = identify(data, **kwargs)
+    row = {
+        "seed": seed, "what": what, "model": result.selected.candidate.label,
+        "cv": result.selected.rmse, "test": test_error(result.model, ut, yt),
+        "seconds": time.perf_counter() - t0, "load": load,
+    }  # fmt: skip
+    print(row, flush=True)
+    return row
+
+
+Reference = tuple[tuple[str, dict[str, Any]], ...]
+
+
+def _direct(seed: int, what: str, data: Any, ut: np.ndarray, yt: np.ndarray,
+            references: Reference) -> list[dict[str, Any]]:  # fmt: skip
+    """Each reference structure fitted directly on ``data`` and its test error (inf when
+    the fit fails: a study reports it)."""
+    from blockid.fitting.dispatch import fit_model
+
     rows = []
-    for effort in efforts:
-        load = os.getloadavg()[0]
-        t0 = time.perf_counter()
-        result = identify(data, effort=effort)
-        seconds = time.perf_counter() - t0
-        rows.append({
-            "seed": seed, "what": f"identify, {effort}", "model": result.selected.candidate.label,
-            "cv": result.selected.rmse, "test": test_error(result.model, ut, yt),
-            "seconds": seconds, "load": load,
-        })  # fmt: skip
-        print(rows[-1], flush=True)
-    for structure, options in REFERENCES:
+    for structure, options in references:
         t0 = time.perf_counter()
         try:
             with np.errstate(all="ignore"):
-                model = fit_model(data, structure, **options).model
-            err = test_error(model, ut, yt)
+                err = test_error(fit_model(data, structure, **options).model, ut, yt)
         except Exception as exc:  # noqa: BLE001 - a study: a failed fit is reported
-            model, err = None, float("inf")
-            print(f"seed {seed}: {structure} {options} failed: {exc}", flush=True)
-        label = f"{structure}({', '.join(f'{k}={v}' for k, v in options.items())})"
+            err = float("inf")
+            print(f"seed {seed}: {_label(structure, options)} failed: {exc}", flush=True)
         rows.append({
-            "seed": seed, "what": "direct fit", "model": label, "cv": None, "test": err,
-            "seconds": time.perf_counter() - t0, "load": None,
+            "seed": seed, "what": what, "model": _label(structure, options), "cv": None,
+            "test": err, "seconds": time.perf_counter() - t0, "load": None,
         })  # fmt: skip
         print(rows[-1], flush=True)
     return rows
 
 
+def study(seed: int, efforts: list[str]) -> list[dict[str, Any]]:
+    """``identify`` at each effort on the seed's estimation record, and the direct fits."""
+    from blockid.data.dataset import Dataset
+
+    ue, ye, ut, yt = records(seed)
+    data = Dataset.from_arrays(ue[:, None], ye[:, None], sampling_time=TS)
+    rows = [_identified(seed, f"identify, {e}", data, ut, yt, effort=e) for e in efforts]
+    return rows + _direct(seed, "direct fit", data, ut, yt, REFERENCES)
+
+
 def study_experiments(seed: int) -> list[dict[str, Any]]:
     """``identify`` on three realisations as three experiments (module docstring)."""
     from blockid.data.dataset import Dataset, Experiment
-    from blockid.fitting.dispatch import fit_model
-    from blockid.workflows.identify import identify
 
     first, second = records(seed), records(seed + 10)
     pairs = [(first[0], first[1]), (first[2], first[3]), (second[0], second[1])]
@@ -159,28 +177,8 @@ def study_experiments(seed: int) -> list[dict[str, Any]]:
     ]
     data = Dataset(("u",), ("y",), TS, exps)
     ut, yt = second[2], second[3]
-    load = os.getloadavg()[0]
-    t0 = time.perf_counter()
-    result = identify(data)
-    rows = [{
-        "seed": seed, "what": "identify, standard, 3 experiments",
-        "model": result.selected.candidate.label, "cv": result.selected.rmse,
-        "test": test_error(result.model, ut, yt), "seconds": time.perf_counter() - t0,
-        "load": load,
-    }]  # fmt: skip
-    for structure, options in REFERENCES[:2]:
-        t0 = time.perf_counter()
-        with np.errstate(all="ignore"):
-            model = fit_model(data, structure, **options).model
-        label = f"{structure}({', '.join(f'{k}={v}' for k, v in options.items())})"
-        rows.append({
-            "seed": seed, "what": "direct fit, 3 experiments", "model": label, "cv": None,
-            "test": test_error(model, ut, yt), "seconds": time.perf_counter() - t0,
-            "load": None,
-        })  # fmt: skip
-    for row in rows:
-        print(row, flush=True)
-    return rows
+    row = _identified(seed, "identify, standard, 3 experiments", data, ut, yt)
+    return [row, *_direct(seed, "direct fit, 3 experiments", data, ut, yt, REFERENCES[:2])]
 
 
 def table(rows: list[dict[str, Any]]) -> list[str]:
@@ -207,31 +205,31 @@ def main() -> None:
     args = ap.parse_args()
     if args.experiments:
         rows = [r for seed in args.seeds for r in study_experiments(seed)]
-        lines = [
-            f"`python benchmarks/tanks_study.py --experiments` (machine: {machine()}): "
-            "three realisations of each seed's plant as three experiments of 1 024 samples "
-            "(the search holds one out per fold), a fourth to test on. Free-run simulation "
-            f"RMSE on it from its first {N_INIT} measured outputs.",
-            "",
-            *table(rows),
-        ]
-        print("\n".join(lines))
-        if args.write_docs:
-            write_section("tanks-experiments", "\n".join(lines), DOC)
-        return
-    rows = [r for seed in args.seeds for r in study(seed, args.efforts)]
-    lines = [
-        f"`python benchmarks/tanks_study.py` (machine: {machine()}): the simulated "
-        "cascaded tanks of the module docstring, one record of 1 024 samples per seed to "
-        "estimate on and one to test on. Free-run simulation RMSE on the test record "
-        f"(level units, 0-10), each model started from its first {N_INIT} measured "
-        "outputs; CV RMSE is the search's cross-validated score of the chosen model.",
-        "",
-        *table(rows),
-    ]
+        section, intro = (
+            "tanks-experiments",
+            (
+                "`python benchmarks/tanks_study.py --experiments` (machine: {machine}): three "
+                "realisations of each seed's plant as three experiments of 1 024 samples (the "
+                "search holds one out per fold), a fourth to test on. Free-run simulation RMSE "
+                "on it from its first {n} measured outputs."
+            ),
+        )
+    else:
+        rows = [r for seed in args.seeds for r in study(seed, args.efforts)]
+        section, intro = (
+            "tanks-study",
+            (
+                "`python benchmarks/tanks_study.py` (machine: {machine}): the simulated cascaded "
+                "tanks of the module docstring, one record of 1 024 samples per seed to estimate "
+                "on and one to test on. Free-run simulation RMSE on the test record (level "
+                "units, 0-10), each model started from its first {n} measured outputs; CV RMSE "
+                "is the search's cross-validated score of the chosen model."
+            ),
+        )
+    lines = [intro.format(machine=machine(), n=N_INIT), "", *table(rows)]
     print("\n".join(lines))
     if args.write_docs:
-        write_section("tanks-study", "\n".join(lines), DOC)
+        write_section(section, "\n".join(lines), DOC)
 
 
 if __name__ == "__main__":

@@ -533,12 +533,11 @@ def test_identify_says_when_the_linear_model_is_chosen_over_a_better_score(monke
 
 
 def test_the_one_record_note_is_for_one_short_record_only():
+    from blockid.data.dataset import Experiment
     from blockid.workflows.identify import one_record_note
 
     short = dead_zone_record(400)
     assert "4 folds of one record of 400 samples" in one_record_note(short, 4)[0]
-    from blockid.data.dataset import Experiment
-
     e = short.experiments[0]
     parts = [slice(0, 130), slice(130, 260), slice(260, 400)]
     three = Dataset(("u",), ("y",), None,
