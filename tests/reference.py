@@ -7,8 +7,11 @@ import ...``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
+from scipy.integrate import solve_ivp
 
 from blockid._kernels.state_space import monomials
 from blockid.blocks import DeadZone, Polynomial, TwoSegmentPolynomial
@@ -16,6 +19,9 @@ from blockid.blocks.base import StaticBlock
 from blockid.data import Dataset
 from blockid.models import ARX, Hammerstein, HammersteinWiener
 from blockid.models.state_space import StateSpace
+from blockid.plants.electrohydraulic import (
+    ElectrohydraulicParameters,
+)
 from blockid.workflows.effort import Effort
 
 
@@ -645,3 +651,145 @@ def record_221(n: int = 400, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
     u = rng.standard_normal((n, 1))
     return u, PLANT_221.simulate(u) + 0.01 * rng.standard_normal((n, 1))
+
+
+# ------------------------------------------------------------------ electrohydraulic twin
+#: The electrohydraulic plant's documented parameters, the twin's default.
+EH_PARAMETERS = ElectrohydraulicParameters()
+
+
+def ref_geometry(h, par=EH_PARAMETERS):
+    """Arm angle by the law of cosines; derivatives by the chain rule."""
+    a, b = par.pin_base_distance, par.pin_rod_distance
+    length = par.retracted_length + h
+    phi = math.acos((a * a + b * b - length * length) / (2 * a * b))
+    dphi = length / (a * b * math.sin(phi))
+    d2phi = 1 / (a * b * math.sin(phi)) - length * math.cos(phi) * dphi / (
+        a * b * math.sin(phi) ** 2
+    )
+    return phi + par.angle_offset, dphi, d2phi
+
+
+def ref_area(xv, par=EH_PARAMETERS):
+    """Metering area: overlap, then a V-notch (quadratic), then the full slot (linear)."""
+    opening = abs(xv) - par.spool_overlap
+    if opening <= 0:
+        return 0.0
+    if opening <= par.notch_length:
+        # V-notch: width W * opening / x_n grows linearly, area is its integral.
+        return 0.5 * par.area_gradient * opening**2 / par.notch_length
+    return 0.5 * par.area_gradient * par.notch_length + par.area_gradient * (
+        opening - par.notch_length
+    )
+
+
+def ref_flow(xv, p1, p2, par=EH_PARAMETERS):
+    """Four-way valve flows into chamber 1 and out of chamber 2."""
+    k = par.discharge_coefficient * ref_area(xv, par) * math.sqrt(2 / par.oil_density)
+
+    def root(dp):
+        return dp / (dp**2 + par.transition_pressure**2) ** 0.25
+
+    ps, pr = par.supply_pressure, par.return_pressure
+    if xv >= 0:
+        return k * root(ps - p1), k * root(p2 - pr)
+    return -k * root(p1 - pr), -k * root(ps - p2)
+
+
+def ref_pilot_setpoint(current, par=EH_PARAMETERS):
+    """Pilot pressure difference the two pilot valves settle to."""
+    if abs(current) <= par.deadband_current:
+        return 0.0
+    level = min(par.pilot_gain * (abs(current) - par.deadband_current), par.pilot_pressure_max)
+    return math.copysign(level, current)
+
+
+def ref_spool_rate(xv, pp, par=EH_PARAMETERS):
+    """Spool: pilot force against the preloaded spring, viscous pilot-flow damping."""
+    drive = par.spool_end_area * pp
+    if xv == 0:
+        if abs(drive) <= par.spool_preload:
+            return 0.0  # held by the spring retainers
+        spring = math.copysign(par.spool_preload, drive)
+    else:
+        spring = par.spool_stiffness * xv + math.copysign(par.spool_preload, xv)
+    rate = (drive - spring) / par.spool_damping
+    if abs(xv) >= par.spool_max and rate * xv > 0:
+        return 0.0  # end cap
+    return rate
+
+
+def ref_rhs(x, current, par=EH_PARAMETERS):
+    h, v, p1, p2, xv, pp = x
+    theta, dth, d2th = ref_geometry(h, par)
+    mass = par.piston_mass + par.arm_inertia * dth**2
+    dmass = 2 * par.arm_inertia * dth * d2th
+    gravity = par.arm_mass * par.gravity * par.arm_com_distance * math.cos(theta) * dth
+    spring = par.spring_stiffness * (h - par.spring_free_position)
+    stribeck = par.coulomb_friction + (par.static_friction - par.coulomb_friction) * math.exp(
+        -((v / par.stribeck_velocity) ** 2)
+    )
+    friction = stribeck * math.tanh(v / par.friction_smoothing_velocity)
+    force = (
+        par.area_head * p1
+        - par.area_rod * p2
+        - friction
+        - par.viscous_friction * v
+        - gravity
+        - spring
+        - par.external_load
+    )
+    q1, q2 = ref_flow(xv, p1, p2, par)
+    v1 = par.dead_volume_head + par.area_head * h
+    v2 = par.dead_volume_rod + par.area_rod * (par.stroke - h)
+    beta1 = par.bulk_modulus * (1 - math.exp(-p1 / par.air_pressure))
+    beta2 = par.bulk_modulus * (1 - math.exp(-p2 / par.air_pressure))
+    leak = par.internal_leakage * (p1 - p2)
+    dp1 = beta1 / v1 * (q1 - par.area_head * v - leak - par.external_leakage * p1)
+    dp2 = beta2 / v2 * (-q2 + par.area_rod * v + leak - par.external_leakage * p2)
+    dxv = ref_spool_rate(xv, pp, par)
+    dpp = (ref_pilot_setpoint(current, par) - pp) / par.pilot_time_constant
+    return np.array([v, (force - 0.5 * dmass * v * v) / mass, dp1, dp2, dxv, dpp])
+
+
+def ref_simulate(current, x0, par=EH_PARAMETERS, ts=0.05):
+    """solve_ivp (DOP853) per sample interval, the delayed current held constant.
+
+    An explicit method: an implicit one's Newton iterates step across ``xv = 0`` onto
+    the wrong branch of the spring's preload when the spool leaves neutral.
+
+    The spool's return to neutral is an event: where it reaches zero the integration
+    restarts from ``xv = 0``, where ``ref_spool_rate`` holds it while the pilot force
+    is below the preload (or lets it pass through when the pilot drives it on).
+    """
+    delay = int(round(par.input_delay / ts))
+    scale = np.array([1e-6, 1e-6, 10.0, 10.0, 1e-9, 10.0])
+    states = [np.asarray(x0, float)]
+    x = np.asarray(x0, float)
+
+    def crossing(t, y):
+        return y[4]
+
+    crossing.terminal = True
+    for k in range(len(current) - 1):
+        u = current[k - delay] if k >= delay else 0.0
+        t, end = k * ts, (k + 1) * ts
+        while t < end:
+            sol = solve_ivp(
+                lambda t, y, u=u: ref_rhs(y, u, par),
+                (t, end),
+                x,
+                method="DOP853",
+                rtol=1e-9,
+                atol=scale,
+                first_step=1e-4,
+                max_step=2e-3,
+                events=crossing if x[4] != 0.0 else None,
+            )
+            if sol.status == 1:  # the spool reached neutral
+                t, x = sol.t_events[0][0], sol.y_events[0][0].copy()
+                x[4] = 0.0
+            else:
+                t, x = end, sol.y[:, -1]
+        states.append(x)
+    return np.array(states)

@@ -6,7 +6,6 @@ import matplotlib
 import numpy as np
 import pytest
 
-from blockid._kernels.backlash import backlash_run, backlash_step
 from blockid.blocks.backlash import Backlash
 from blockid.blocks.base import block_from_dict
 from blockid.errors import DataError, ParameterError
@@ -145,16 +144,6 @@ def test_dead_band_unequal_slopes():
     assert x[0] == pytest.approx(2.03)
     assert x[1] == x[0]
     assert x[2] == pytest.approx(1.3 * (2.03 / 1.3 - 0.1))
-
-
-def test_step_kernel_is_the_run_kernel():
-    u = np.array([0.0, 2.0, 1.0, -3.0])
-    theta = np.array([0.9, 0.8, 0.9, 0.85])
-    x, f1, f2 = backlash_run(u, theta, 0.0)
-    x_prev = 0.0
-    for t in range(u.size):
-        assert backlash_step(u[t], x_prev, *theta) == (x[t], f1[t], f2[t])
-        x_prev = x[t]
 
 
 def test_dict_round_trip():

@@ -12,15 +12,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
 
 from blockid._kernels.electrohydraulic import (
     electrohydraulic_geometry,
     electrohydraulic_integrate,
-    electrohydraulic_metering_area,
-    electrohydraulic_pilot_setpoint,
-    electrohydraulic_rhs,
 )
 from blockid.errors import ParameterError
 from blockid.plants.electrohydraulic import (
@@ -36,150 +32,15 @@ from blockid.plants.electrohydraulic import (
     simulate_electrohydraulic,
 )
 
+from reference import ref_geometry, ref_pilot_setpoint, ref_rhs
+
 P = ElectrohydraulicParameters()
 TS = 0.05
 
 
 # ----------------------------------------------------------------------------------
-# Plain-Python twin of the model, from the documented equations
+# Steady states from the twin of the documented equations (tests/reference.py)
 # ----------------------------------------------------------------------------------
-
-
-def ref_geometry(h, par=P):
-    """Arm angle by the law of cosines; derivatives by the chain rule."""
-    a, b = par.pin_base_distance, par.pin_rod_distance
-    length = par.retracted_length + h
-    phi = math.acos((a * a + b * b - length * length) / (2 * a * b))
-    dphi = length / (a * b * math.sin(phi))
-    d2phi = 1 / (a * b * math.sin(phi)) - length * math.cos(phi) * dphi / (
-        a * b * math.sin(phi) ** 2
-    )
-    return phi + par.angle_offset, dphi, d2phi
-
-
-def ref_area(xv, par=P):
-    """Metering area: overlap, then a V-notch (quadratic), then the full slot (linear)."""
-    opening = abs(xv) - par.spool_overlap
-    if opening <= 0:
-        return 0.0
-    if opening <= par.notch_length:
-        # V-notch: width W * opening / x_n grows linearly, area is its integral.
-        return 0.5 * par.area_gradient * opening**2 / par.notch_length
-    return 0.5 * par.area_gradient * par.notch_length + par.area_gradient * (
-        opening - par.notch_length
-    )
-
-
-def ref_flow(xv, p1, p2, par=P):
-    """Four-way valve flows into chamber 1 and out of chamber 2."""
-    k = par.discharge_coefficient * ref_area(xv, par) * math.sqrt(2 / par.oil_density)
-
-    def root(dp):
-        return dp / (dp**2 + par.transition_pressure**2) ** 0.25
-
-    ps, pr = par.supply_pressure, par.return_pressure
-    if xv >= 0:
-        return k * root(ps - p1), k * root(p2 - pr)
-    return -k * root(p1 - pr), -k * root(ps - p2)
-
-
-def ref_pilot_setpoint(current, par=P):
-    """Pilot pressure difference the two pilot valves settle to."""
-    if abs(current) <= par.deadband_current:
-        return 0.0
-    level = min(par.pilot_gain * (abs(current) - par.deadband_current), par.pilot_pressure_max)
-    return math.copysign(level, current)
-
-
-def ref_spool_rate(xv, pp, par=P):
-    """Spool: pilot force against the preloaded spring, viscous pilot-flow damping."""
-    drive = par.spool_end_area * pp
-    if xv == 0:
-        if abs(drive) <= par.spool_preload:
-            return 0.0  # held by the spring retainers
-        spring = math.copysign(par.spool_preload, drive)
-    else:
-        spring = par.spool_stiffness * xv + math.copysign(par.spool_preload, xv)
-    rate = (drive - spring) / par.spool_damping
-    if abs(xv) >= par.spool_max and rate * xv > 0:
-        return 0.0  # end cap
-    return rate
-
-
-def ref_rhs(x, current, par=P):
-    h, v, p1, p2, xv, pp = x
-    theta, dth, d2th = ref_geometry(h, par)
-    mass = par.piston_mass + par.arm_inertia * dth**2
-    dmass = 2 * par.arm_inertia * dth * d2th
-    gravity = par.arm_mass * par.gravity * par.arm_com_distance * math.cos(theta) * dth
-    spring = par.spring_stiffness * (h - par.spring_free_position)
-    stribeck = par.coulomb_friction + (par.static_friction - par.coulomb_friction) * math.exp(
-        -((v / par.stribeck_velocity) ** 2)
-    )
-    friction = stribeck * math.tanh(v / par.friction_smoothing_velocity)
-    force = (
-        par.area_head * p1
-        - par.area_rod * p2
-        - friction
-        - par.viscous_friction * v
-        - gravity
-        - spring
-        - par.external_load
-    )
-    q1, q2 = ref_flow(xv, p1, p2, par)
-    v1 = par.dead_volume_head + par.area_head * h
-    v2 = par.dead_volume_rod + par.area_rod * (par.stroke - h)
-    beta1 = par.bulk_modulus * (1 - math.exp(-p1 / par.air_pressure))
-    beta2 = par.bulk_modulus * (1 - math.exp(-p2 / par.air_pressure))
-    leak = par.internal_leakage * (p1 - p2)
-    dp1 = beta1 / v1 * (q1 - par.area_head * v - leak - par.external_leakage * p1)
-    dp2 = beta2 / v2 * (-q2 + par.area_rod * v + leak - par.external_leakage * p2)
-    dxv = ref_spool_rate(xv, pp, par)
-    dpp = (ref_pilot_setpoint(current, par) - pp) / par.pilot_time_constant
-    return np.array([v, (force - 0.5 * dmass * v * v) / mass, dp1, dp2, dxv, dpp])
-
-
-def ref_simulate(current, x0, par=P, ts=TS):
-    """solve_ivp (DOP853) per sample interval, the delayed current held constant.
-
-    An explicit method: an implicit one's Newton iterates step across ``xv = 0`` onto
-    the wrong branch of the spring's preload when the spool leaves neutral.
-
-    The spool's return to neutral is an event: where it reaches zero the integration
-    restarts from ``xv = 0``, where ``ref_spool_rate`` holds it while the pilot force
-    is below the preload (or lets it pass through when the pilot drives it on).
-    """
-    delay = int(round(par.input_delay / ts))
-    scale = np.array([1e-6, 1e-6, 10.0, 10.0, 1e-9, 10.0])
-    states = [np.asarray(x0, float)]
-    x = np.asarray(x0, float)
-
-    def crossing(t, y):
-        return y[4]
-
-    crossing.terminal = True
-    for k in range(len(current) - 1):
-        u = current[k - delay] if k >= delay else 0.0
-        t, end = k * ts, (k + 1) * ts
-        while t < end:
-            sol = solve_ivp(
-                lambda t, y, u=u: ref_rhs(y, u, par),
-                (t, end),
-                x,
-                method="DOP853",
-                rtol=1e-9,
-                atol=scale,
-                first_step=1e-4,
-                max_step=2e-3,
-                events=crossing if x[4] != 0.0 else None,
-            )
-            if sol.status == 1:  # the spool reached neutral
-                t, x = sol.t_events[0][0], sol.y_events[0][0].copy()
-                x[4] = 0.0
-            else:
-                t, x = end, sol.y[:, -1]
-        states.append(x)
-    return np.array(states)
 
 
 def steady_speed(current, h, par=P):
@@ -206,92 +67,8 @@ def trimmed(raw, par=P):
 
 
 # ----------------------------------------------------------------------------------
-# Kernel against its twin
+# The plant's responses
 # ----------------------------------------------------------------------------------
-
-
-def test_geometry_matches_law_of_cosines_and_finite_differences():
-    p = P.to_array()
-    for h in np.linspace(0.01, P.stroke - 0.01, 7):
-        theta, dth, d2th = electrohydraulic_geometry(h, p)
-        ref = ref_geometry(h)
-        np.testing.assert_allclose([theta, dth, d2th], ref, rtol=1e-12)
-        eps = 1e-5
-        hp, hm = h + eps, h - eps
-        fd = (electrohydraulic_geometry(hp, p)[0] - electrohydraulic_geometry(hm, p)[0]) / (hp - hm)
-        fd2 = (electrohydraulic_geometry(hp, p)[1] - electrohydraulic_geometry(hm, p)[1]) / (
-            hp - hm
-        )
-        assert fd == pytest.approx(dth, rel=1e-6)
-        assert fd2 == pytest.approx(d2th, rel=1e-4)
-    # Arm roughly horizontal at mid-stroke, about +-50 degrees at the ends.
-    ends = [electrohydraulic_geometry(h, p)[0] for h in (0.0, P.stroke)]
-    assert abs(electrohydraulic_geometry(0.5 * P.stroke, p)[0]) < 0.1
-    assert -1.0 < ends[0] < -0.7 and 0.7 < ends[1] < 1.0
-
-
-def test_rhs_matches_python_reference(rng):
-    p = P.to_array()
-    dx = np.empty(6)
-    for _ in range(300):
-        x = np.array(
-            [
-                rng.uniform(0, P.stroke),
-                rng.uniform(-0.4, 0.4),
-                rng.uniform(0.05e6, 21e6),
-                rng.uniform(0.05e6, 21e6),
-                rng.choice([rng.uniform(-P.spool_max, P.spool_max), 0.0, P.spool_max]),
-                rng.uniform(-3e6, 3e6),
-            ]
-        )
-        current = rng.choice([rng.uniform(-1.2, 1.2), rng.uniform(-0.2, 0.2), 0.0])
-        electrohydraulic_rhs(x, current, p, dx)
-        np.testing.assert_allclose(dx, ref_rhs(x, current), rtol=1e-9, atol=1e-12)
-
-
-def test_metering_area_and_pilot_setpoint_match_reference():
-    p = P.to_array()
-    for xv in np.linspace(-P.spool_max, P.spool_max, 401):
-        assert electrohydraulic_metering_area(xv, p) == pytest.approx(ref_area(xv), abs=1e-15)
-    for current in np.linspace(-1.5, 1.5, 301):
-        assert electrohydraulic_pilot_setpoint(current, p) == pytest.approx(
-            ref_pilot_setpoint(current), abs=1e-6
-        )
-    # Progressive profile: a quarter of the notch's end area at half its length, the
-    # slot's gradient W beyond it, continuous slope at the joint.
-    xn, xo = P.notch_length, P.spool_overlap
-    end = electrohydraulic_metering_area(xo + xn, p)
-    assert end == pytest.approx(0.5 * P.area_gradient * xn)
-    assert electrohydraulic_metering_area(xo + 0.5 * xn, p) == pytest.approx(0.25 * end)
-    eps = 1e-7
-    for x in (xo + xn - eps, xo + xn + eps, P.spool_max - eps):
-        slope = (
-            electrohydraulic_metering_area(x + 0.5 * eps, p)
-            - electrohydraulic_metering_area(x - 0.5 * eps, p)
-        ) / eps
-        assert slope == pytest.approx(P.area_gradient, rel=1e-4)
-    assert electrohydraulic_metering_area(xo, p) == 0.0
-    # Pilot supply limits the pilot pressure.
-    capped = dataclasses.replace(P, pilot_pressure_max=1e6)
-    assert electrohydraulic_pilot_setpoint(-1.0, capped.to_array()) == -1e6
-
-
-def test_kernel_matches_solve_ivp_reference():
-    t = np.arange(80) * TS  # 4 s, the first 0.25 s is the input delay
-    current = 0.6 * np.sin(2 * np.pi * 0.4 * t) + 0.27 * np.sin(2 * np.pi * 1.3 * t + 1.0)
-    x0 = electrohydraulic_equilibrium()
-    fast = electrohydraulic_integrate(x0, P.to_array(), current, TS / 50, 50)
-    slow = ref_simulate(current, x0)
-    assert np.ptp(fast[:, 0]) > 0.05  # the arm really moved
-    assert fast[:, 2:4].min() > 1e5  # no clipping, which the twin does not model
-    assert np.abs(fast[:, 4]).max() < P.spool_max  # no end cap either
-    assert np.sum(np.diff(np.sign(slow[:, 4])) != 0) >= 4  # the spool passed neutral
-    for i in range(6):
-        scale = np.ptp(slow[:, i])
-        # The spool's seat at neutral is a projection (first order in the step, inside
-        # the overlap where it changes no flow); everything else agrees to 1e-5.
-        tol = 1e-3 if i == 4 else 1e-5
-        assert np.abs(fast[:, i] - slow[:, i]).max() < tol * scale, i
 
 
 def test_input_delay_pilot_lag_and_spool_response():
