@@ -145,22 +145,6 @@ def test_no_isinstance_ladder_over_block_types_outside_blocks():
     assert not offenders, offenders
 
 
-def test_the_docs_state_the_floors_of_the_table():
-    """docs/architecture.md's diagram names every package on its floor: the floor in
-    columns 0-6 of a line, the packages in columns 7-25."""
-    import re
-
-    doc = (SRC.parents[1] / "docs" / "architecture.md").read_text()
-    start = doc.index("floor  package")
-    stated, floor = {}, None
-    for line in doc[start : doc.index("```", start)].splitlines()[1:]:
-        if line[:7].strip():
-            floor = int(line[:7])
-        for name in re.findall(r"[_a-z]+", line[7:26]):
-            stated[name] = floor
-    assert stated == FLOORS
-
-
 def _import_graph() -> dict[str, set[str]]:
     """Every import of a blockid module by another, at the top of a module or inside a
     function, less the two kinds that cannot close a circle at run time: imports only for
