@@ -3,68 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pytest
-import typer
-from typer.testing import CliRunner
 
-#: The report of the built-in example: three structures with paper B's key-term RLS
-#: (ARX falls back to least squares), so that it has blocks and parameter trajectories.
-ARGS = [
-    "-u", "current", "-y", "velocity", "--time-column", "t",
-    "--estimation", "0:1100", "--validation", "1100:2200",
-    "--structures", "arx,hammerstein,hammerstein-wiener", "--method", "key-term-rls",
-    "--na", "3", "--nb", "3", "--nk", "8", "--r1", "3", "--r2", "3",
-    "--passes", "60", "--forgetting", "0.98:200,1",
-]  # fmt: skip
-
-
-def cli_app() -> typer.Typer:
-    """The blockid app, with ``report`` registered if main.py does not yet."""
-    from blockid.cli import main
-    from blockid.cli.report import report
-
-    if any(c.name == "report" for c in main.app.registered_commands):
-        return main.app
-    app = typer.Typer(rich_markup_mode=None)
-    app.callback()(lambda: None)
-    app.command("report")(report)
-    return app
-
-
-@pytest.fixture(scope="session")
-def report_app() -> typer.Typer:
-    return cli_app()
-
-
-@pytest.fixture(scope="session")
-def report_args() -> list[str]:
-    """The options of the example's report, after DATA."""
-    return list(ARGS)
-
-
-@dataclass
-class ExampleReport:
-    folder: Path
-    data: Path
-    path: Path
-    html: str
-    output: str
-
-
-@pytest.fixture(scope="session")
-def example_report(tmp_path_factory: pytest.TempPathFactory) -> ExampleReport:
-    from blockid.workflows.examples import example_record
-
-    folder = tmp_path_factory.mktemp("report")
-    data = folder / "arm.csv"
-    example_record("electrohydraulic").frame.to_csv(data, index=False)
-    path = folder / "report.html"
-    result = CliRunner().invoke(cli_app(), ["report", str(data), *ARGS, "-o", str(path)])
-    assert result.exit_code == 0, result.output
-    return ExampleReport(folder, data, path, path.read_text(encoding="utf-8"), result.output)
+from blockid.evaluation import evaluate
+from blockid.workflows.identify import Candidate, IdentifyResult, Score
 
 
 # ------------------------------------------------------------------ library level
@@ -145,3 +89,34 @@ def state_space_report():
     html = build_report(compare=result, data=data, estimation=est, validation=val,
                         estimation_range="0:1000", validation_range="1000:2000")  # fmt: skip
     return model, result, html
+
+
+# ------------------------------------------------------------------ identify
+LONG_REASON = (
+    "its free run from rest strays 22.2 times further from the measured output than its "
+    "start and the output's range explain (limit 5) " * 6
+).strip()
+
+
+@pytest.fixture(scope="module")
+def identified(compared):
+    """An identify result around the example's Hammerstein fit, with an ARX candidate
+    in its search and a rejected one whose reason is long."""
+    fit = compared.result.models[1].fit
+    chosen = Score(Candidate("hammerstein", {"na": 3, "nb": 3, "nk": 8}), stage="finalists",
+                   rmse=0.02, fit_percent=75.0, n_parameters=13)  # fmt: skip
+    arx = Score(Candidate("arx", {"na": 3, "nb": 3, "nk": 8, "center": True}), stage="linear orders",
+                rmse=0.05, fit_percent=40.0, n_parameters=6)  # fmt: skip
+    other = Score(Candidate("wiener", {"na": 2, "nb": 2, "nk": 8}), stage="structures",
+                  rmse=0.03, fit_percent=60.0, n_parameters=8)  # fmt: skip
+    long_label = Candidate("hammerstein-wiener", {"na": 2, "nb": 2, "nk": 10,
+                           "input_block": "two-segment-polynomial:degree=3",
+                           "output_block": "polynomial:degree=3", "center": False})  # fmt: skip
+    rejected = [Score(long_label, stage="nonlinearity", reason=LONG_REASON)]
+    return IdentifyResult(
+        selected=chosen, fit=fit, ranked=[chosen, other, arx], rejected=rejected,
+        simulation=evaluate(fit.model, compared.val, "simulation"),
+        one_step=evaluate(fit.model, compared.val, "one-step"), one_step_error=None,
+        on="validation", seconds=1.5, holdout="3 contiguous folds (blocked cross-validation)",
+        search={"effort": "quick"},
+    )  # fmt: skip

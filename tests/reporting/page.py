@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from html.parser import HTMLParser
 
@@ -77,3 +78,10 @@ class Report(HTMLParser):
     def part(self, section: str, title: str) -> Part:
         (found,) = [p for p in self.sections[section] if p.title == title]
         return found
+
+
+IMG = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+
+
+def _number(text: str) -> float:
+    return float(text)

@@ -8,14 +8,11 @@ import hashlib
 import platform
 import re
 import struct
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-IMG = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+from reporting.page import IMG
 
 
 def _png_size(raw: bytes) -> tuple[int, int]:
@@ -80,30 +77,6 @@ def test_report_sections_and_captions(example_report):
         "recursive estimator key-term-rls, recorded at" in html
     )  # a recursive estimator's trajectories
     assert html.count("<figcaption>") == len(IMG.findall(html))
-
-
-def test_the_command_refuses_to_overwrite_without_force(example_report, report_app, report_args):
-    before = example_report.path.read_bytes()
-    args = ["report", str(example_report.data), *report_args, "-o", str(example_report.path)]
-    refused = CliRunner().invoke(report_app, args)
-    assert refused.exit_code == 2
-    assert "exists; pass --force" in refused.output
-    assert example_report.path.read_bytes() == before
-
-
-def test_the_command_json_and_force(example_report, report_app, report_args, tmp_path):
-    import json
-
-    out = tmp_path / "r.html"
-    out.write_text("old")
-    args = ["report", str(example_report.data), *report_args[:10], "--structures", "arx",
-            "--na", "2", "--nb", "2", "--nk", "1", "-o", str(out), "--force", "--json"]  # fmt: skip
-    result = CliRunner().invoke(report_app, args)
-    assert result.exit_code == 0, result.output
-    doc = json.loads(result.stdout)
-    assert doc["report"] == str(out) and doc["bytes"] == out.stat().st_size
-    assert doc["models"][0]["structure"] == "arx"
-    assert out.read_text().startswith("<!DOCTYPE html>")
 
 
 # ------------------------------------------------------------------ library level
@@ -201,36 +174,12 @@ def test_report_of_an_identify_result(hammerstein):
     assert "free-run simulation on the validation data" in apart
 
 
-def test_provenance_hashes_and_command(tmp_path):
-    from blockid.reporting import collect_provenance
-
-    path = tmp_path / "d.csv"
-    path.write_bytes(b"t,u,y\n0,1,2\n")
-    prov = collect_provenance([path, path], ["/usr/local/bin/blockid", "report", "d.csv"])
-    assert prov.command == "blockid report d.csv"
-    assert len(prov.files) == 1 and prov.files[0].size == 12
-    assert prov.files[0].sha256 == hashlib.sha256(b"t,u,y\n0,1,2\n").hexdigest()
-    assert {"blockid", "numpy", "scipy", "numba", "pandas", "python", "platform"} <= set(
-        prov.versions
-    )
-    assert prov.date.endswith("+00:00")
-
-
 def test_build_report_needs_a_result(hammerstein):
     from blockid.errors import ParameterError
     from blockid.reporting import build_report
 
     with pytest.raises(ParameterError, match="compare or an identify"):
         build_report(estimation=hammerstein[1])
-
-
-def test_the_command_module_imports_no_heavy_library():
-    code = (
-        "import sys, blockid.cli.report\n"
-        "heavy = [m for m in ('pandas', 'scipy', 'numba', 'matplotlib') if m in sys.modules]\n"
-        "assert not heavy, heavy\n"
-    )
-    subprocess.run([sys.executable, "-c", code], check=True)
 
 
 def test_a_fit_stopped_at_its_evaluation_limit_is_named_in_the_report():
