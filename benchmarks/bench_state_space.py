@@ -30,8 +30,11 @@ import numpy as np
 import pandas as pd
 from _report import machine, write_section
 
-from blockid.fitting.state_space_refinement import CHUNK
+from blockid.config import get_config
 from blockid.models.state_space import PolynomialStateSpace, monomial_exponents
+
+#: Samples per piece of the walks profiled (the fits' own setting, blockid.config).
+CHUNK = get_config()["state_space_rows"]
 
 _CHILD = (
     "import resource, subprocess, sys; "
@@ -127,13 +130,13 @@ def profile(u: np.ndarray, y: np.ndarray) -> dict[str, Any]:
     kept = np.r_[np.flatnonzero(free), free.size + np.arange(model.nx)]
     arrays = model._arrays()
     nz, nm, ny = model.nx + 1, model.n_monomials, 1
-    pieces = [(k, min(n, k + ss.CHUNK)) for k in range(0, n, ss.CHUNK)]
+    pieces = [(k, min(n, k + CHUNK)) for k in range(0, n, CHUNK)]
     _, S0, desc = model._sensitivity_start(np.zeros(model.nx), kept)
     trajectories = []
     for a, b in pieces:
         V, JX, JY = np.empty((b - a, nz + nm)), np.empty((b - a, 6, 6)), np.empty((b - a, 1, 6))
         trajectories.append((V, JX, JY))
-    J = np.empty((ss.CHUNK * ny, P))
+    J = np.empty((CHUNK * ny, P))
 
     def trajectory() -> None:
         x = np.zeros(model.nx)

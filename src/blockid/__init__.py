@@ -65,6 +65,10 @@ _WHERE = {
     "fit_model": "blockid.fitting",
     "metrics_by_output": "blockid.evaluation",
     "predict": "blockid.evaluation",
+    # memory and work-partition sizes of the fits
+    "config_context": "blockid.config",
+    "get_config": "blockid.config",
+    "set_config": "blockid.config",
     # errors
     "BlockidError": "blockid.errors",
     "DataError": "blockid.errors",

@@ -16,6 +16,7 @@ FLOORS: dict[str, int] = {
     "errors": 0,
     "defaults": 0,
     "floors": 0,
+    "config": 0,  # memory and work-partition sizes, read by the fits at call time
     "_kernels": 0,
     "data": 1,
     "design": 1,  # excitation signals: NumPy only, beside the data they become

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from blockid import errors
+from blockid.config import config_context
 from blockid.data import Dataset
 from blockid.errors import EstimationError, OrderError, ParameterError
 from blockid.fitting import fit_arx
@@ -117,7 +118,7 @@ def test_block_model_on_the_edge_of_stability_is_rejected(rng):
 
 
 @pytest.mark.parametrize("method", ["batch", "rls", "aw-rls", "hierarchical-rls"])
-def test_chunked_regressors_give_the_whole_record_fit(rng, monkeypatch, method):
+def test_chunked_regressors_give_the_whole_record_fit(rng, method):
     """Long records are fitted chunk by chunk (bounded memory): chunks of 7 rows, which
     cut every experiment in many places and leave a short last chunk, give the fit of
     one chunk per experiment (the recursions bit for bit, least squares to rounding)."""
@@ -132,16 +133,16 @@ def test_chunked_regressors_give_the_whole_record_fit(rng, monkeypatch, method):
     fixed = {} if method == "batch" else {"scaling": (1.0, 1.0)}
     whole = fit_arx(data, 2, 2, 1, method=method, **options, **fixed)
     whole_rms = fit_arx(data, 2, 2, 1, method=method, **options)
-    monkeypatch.setattr(arx_fitting, "CHUNK_ROWS", 7)
-    assert len(list(arx_fitting.regressor_chunks(whole.model, data, 0))) == 100 + 72
-    chunked = fit_arx(data, 2, 2, 1, method=method, **options, **fixed)
+    with config_context(regressor_rows=7):
+        assert len(list(arx_fitting.regressor_chunks(whole.model, data, 0))) == 100 + 72
+        chunked = fit_arx(data, 2, 2, 1, method=method, **options, **fixed)
+        # RMS scales summed chunk by chunk differ in the last bits, which P(0) = 1e8
+        # amplifies to about 1e-9
+        chunked_rms = fit_arx(data, 2, 2, 1, method=method, **options)
     if method == "batch":
         np.testing.assert_allclose(params(chunked.model), params(whole.model), rtol=1e-12)
     else:
         np.testing.assert_array_equal(params(chunked.model), params(whole.model))
-        # RMS scales summed chunk by chunk differ in the last bits, which P(0) = 1e8
-        # amplifies to about 1e-9
-        chunked_rms = fit_arx(data, 2, 2, 1, method=method, **options)
         np.testing.assert_allclose(params(chunked_rms.model), params(whole_rms.model), rtol=1e-7)
     for key, values in whole.estimation_metrics.items():
         for name, value in values.items():

@@ -14,8 +14,8 @@ import pytest
 import blockid.fitting.simulation_error as se
 from blockid.blocks import LinearBlock, Polynomial, TwoSegmentPolynomial
 from blockid.blocks.integrator import Integrator
+from blockid.config import config_context
 from blockid.data import Dataset
-from blockid.fitting import arx as arx_fitting
 from blockid.fitting.initial import initial_estimate
 from blockid.models.block import (
     BacklashModel,
@@ -106,7 +106,7 @@ def test_a_chain_with_a_dynamic_block_is_not_walked_in_pieces():
 
 
 @pytest.mark.parametrize("structure", ["hammerstein", "hammerstein-wiener"])
-def test_large_problem_solver_reaches_the_whole_jacobian_optimum(structure, monkeypatch, rng):
+def test_large_problem_solver_reaches_the_whole_jacobian_optimum(structure, rng):
     """Forced onto the normal-equation solver (every problem 'large', pieces of 500
     samples), the refinement reaches the optimum scipy's trust-region solver reaches
     with the whole Jacobian, and says which solver ran."""
@@ -116,9 +116,8 @@ def test_large_problem_solver_reaches_the_whole_jacobian_optimum(structure, monk
     data = Dataset.from_arrays(u, y, ["u"], ["y"])
     options = {"na": 2, "nb": 2, "nk": 1, "r1": 2, "r2": 3, "tail_fraction": 0.0}
     whole = se.fit_simulation_error(data, structure, **options)
-    monkeypatch.setattr(se, "LARGE_JACOBIAN", 0)
-    monkeypatch.setattr(se, "_PIECE_ROWS", 500)
-    pieces = se.fit_simulation_error(data, structure, **options)
+    with config_context(jacobian_bytes=0, sensitivity_rows=500):
+        pieces = se.fit_simulation_error(data, structure, **options)
     assert whole.settings["solver"] == se.SOLVERS[False]
     assert pieces.settings["solver"] == se.SOLVERS[True]
     assert "termination" in pieces.settings["stop_reason"]
@@ -132,15 +131,15 @@ def test_large_problem_solver_reaches_the_whole_jacobian_optimum(structure, monk
     )
 
 
-def test_large_problem_solver_keeps_early_stopping_and_bounds(monkeypatch, rng):
+def test_large_problem_solver_keeps_early_stopping_and_bounds(rng):
     """The normal-equation solver reports to the same early-stopping monitor (tail held
     out) and never leaves the parameter bounds."""
     plant = chains()["hammerstein"]
     u = rng.uniform(-1, 1, 3000)
     y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(3000)
     data = Dataset.from_arrays(u, y, ["u"], ["y"])
-    monkeypatch.setattr(se, "LARGE_JACOBIAN", 0)
-    result = se.fit_simulation_error(data, "hammerstein", na=2, nb=2, nk=1, r1=2)
+    with config_context(jacobian_bytes=0):
+        result = se.fit_simulation_error(data, "hammerstein", na=2, nb=2, nk=1, r1=2)
     assert result.settings["tail_mse"] <= result.settings["initial_tail_mse"]
     assert len(result.history["tail_mse"]) == result.settings["iterations"] + 1
     lower, upper = result.model.parameter_bounds()
@@ -148,7 +147,7 @@ def test_large_problem_solver_keeps_early_stopping_and_bounds(monkeypatch, rng):
     assert np.all(theta >= lower) and np.all(theta <= upper)
 
 
-def test_initial_estimate_from_pieces_is_the_whole_record_estimate(monkeypatch, rng):
+def test_initial_estimate_from_pieces_is_the_whole_record_estimate(rng):
     """The initial estimate's regressions run on pieces of rows: pieces of 5 rows give
     the estimate of one piece per experiment (least squares to rounding)."""
     plant = chains()["hammerstein-wiener"]
@@ -156,8 +155,8 @@ def test_initial_estimate_from_pieces_is_the_whole_record_estimate(monkeypatch, 
     y = plant.simulate(u)[:, 0] + 0.005 * rng.standard_normal(1500)
     data = Dataset.from_arrays(u, y, ["u"], ["y"])
     whole = initial_estimate(data, HammersteinWiener, na=2, nb=2, nk=1, r1=2, r2=3)
-    monkeypatch.setattr(arx_fitting, "CHUNK_ROWS", 5)
-    pieces = initial_estimate(data, HammersteinWiener, na=2, nb=2, nk=1, r1=2, r2=3)
+    with config_context(regressor_rows=5):
+        pieces = initial_estimate(data, HammersteinWiener, na=2, nb=2, nk=1, r1=2, r2=3)
     np.testing.assert_allclose(
         pieces.free_parameters(), whole.free_parameters(), rtol=1e-8, atol=1e-10
     )
@@ -190,7 +189,7 @@ def test_linearity_note_uses_the_closed_form_affine_fit(rng):
 
 
 @pytest.mark.slow  # traced allocations make the fit several times slower (about 6 s)
-def test_default_fit_memory_stays_a_small_multiple_of_the_data(monkeypatch, rng):
+def test_default_fit_memory_stays_a_small_multiple_of_the_data(rng):
     """With pieces scaled down to the record (the defaults are 65,536 rows and 64 MB of
     Jacobian, sized for millions of samples), the default Hammerstein fit's peak of
     traced allocations stays under 8 times the two signals; holding the regressors
@@ -204,16 +203,14 @@ def test_default_fit_memory_stays_a_small_multiple_of_the_data(monkeypatch, rng)
     u = rng.uniform(-1, 1, n)
     y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(n)
     data = Dataset.from_arrays(u, y, ["u"], ["y"])
-    monkeypatch.setattr(arx_fitting, "CHUNK_ROWS", 2048)
-    monkeypatch.setattr(se, "_PIECE_ROWS", 2048)
-    monkeypatch.setattr(se, "LARGE_JACOBIAN", 0)
     small = Dataset.from_arrays(u[:2000], y[:2000], ["u"], ["y"])
-    fit_model(small, "hammerstein", na=2, nb=2, nk=1)  # imports and compiled kernels first
-    tracemalloc.start()
-    try:
-        result = fit_model(data, "hammerstein", na=2, nb=2, nk=1)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    with config_context(regressor_rows=2048, sensitivity_rows=2048, jacobian_bytes=0):
+        fit_model(small, "hammerstein", na=2, nb=2, nk=1)  # imports and compiled kernels
+        tracemalloc.start()
+        try:
+            result = fit_model(data, "hammerstein", na=2, nb=2, nk=1)
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
     assert result.settings["solver"] == se.SOLVERS[True]
     assert peak < 8 * (u.nbytes + y.nbytes), f"peak {peak / 1e6:.1f} MB"

@@ -13,6 +13,7 @@ import pytest
 
 import blockid.fitting.recursive as recursive
 from blockid._kernels.rls import OK
+from blockid.config import config_context
 from blockid.data import Dataset
 from blockid.data.dataset import Experiment
 from blockid.errors import DataError, EstimationError, ParameterError
@@ -106,10 +107,10 @@ def _pass_end_changes(toy):
 
 
 # ---------------------------------------------------------------------- history
-def test_history_is_decimated_to_history_rows_with_the_right_update_counts(monkeypatch):
-    monkeypatch.setattr(recursive, "HISTORY_ROWS", 100)
+def test_history_is_decimated_to_history_rows_with_the_right_update_counts():
     toy, fit = _fit(record_history=True, passes=3, tol=1.0)  # converges after pass 2
-    history = fit().history
+    with config_context(history_rows=100):
+        history = fit().history
     # 3 passes (the most allowed) x 500 updates: every ceil(1500 / 100) = 15th is kept
     stride = 15
     toy_history = np.array(toy.trace)
@@ -117,7 +118,7 @@ def test_history_is_decimated_to_history_rows_with_the_right_update_counts(monke
         [stride * np.arange(1, 300 // stride + 1), 300 + stride * np.arange(1, 200 // stride + 1)]
     )
     expected = np.concatenate([per_pass, 500 + per_pass])
-    assert len(history["update"]) <= recursive.HISTORY_ROWS
+    assert len(history["update"]) <= 100
     np.testing.assert_array_equal(history["update"], expected)
     assert history["names"] == ["g"]
     np.testing.assert_array_equal(history["theta"][:, 0], toy_history[expected - 1] * toy.factor)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from blockid.config import config_context
 from blockid.data import Dataset
 from blockid.fitting import fit_model
 from blockid.fitting.state_space import fit_polynomial_state_space, fit_state_space, subspace
@@ -35,11 +36,12 @@ def test_the_refinement_rejects_a_start_that_explodes_and_says_so():
 
 @pytest.mark.parametrize("threads", [1, 3])
 def test_the_normal_equations_are_the_dense_jacobian_s_on_any_number_of_threads(
-    threads, monkeypatch
+    threads,
 ):
     """``J^T J`` and ``-J^T r``, summed over pieces of two experiments, equal those of
     the whole Jacobian stacked at once; the number of threads that sum the tiles changes
-    nothing, bit for bit (several tiles: ``TILE`` made small)."""
+    nothing, bit for bit (several pieces and tiles: ``state_space_rows`` and
+    ``tile_columns`` made small)."""
     from blockid.fitting import state_space as ss
     from blockid.fitting import state_space_refinement as sr
     from blockid.fitting import threads as th
@@ -51,16 +53,16 @@ def test_the_normal_equations_are_the_dense_jacobian_s_on_any_number_of_threads(
     data = Dataset(list(plant.inputs), list(plant.outputs), None,
                    [Experiment(f"e{i}", r.u, r.y) for i, r in enumerate(rec)])  # fmt: skip
     start = fit_polynomial_state_space(data, nx=3, degree=2, max_nfev=2).model
-    monkeypatch.setattr(sr, "CHUNK", 256)  # several pieces per experiment
-    monkeypatch.setattr(th, "TILE", 16)  # several tiles
     sig = ss._normalised(data)
     problem = sr._Problem(start, sig, feedthrough=True)
     x0s = [np.full(3, 0.1), np.full(3, -0.2)]
     theta = np.concatenate([start.free_parameters()[problem.free], *x0s])
-    with th.fit_threads(threads):
-        H, g = problem.normal_equations(theta)
-    with th.fit_threads(1 if threads > 1 else 2):
-        H2, g2 = problem.normal_equations(theta)
+    # three pieces per experiment, several tiles
+    with config_context(state_space_rows=256, tile_columns=16):
+        with th.fit_threads(threads):
+            H, g = problem.normal_equations(theta)
+        with th.fit_threads(1 if threads > 1 else 2):
+            H2, g2 = problem.normal_equations(theta)
     assert np.array_equal(H, H2) and np.array_equal(g, g2)
     assert np.array_equal(H, H.T)
     # the reference: each experiment's whole Jacobian in one piece

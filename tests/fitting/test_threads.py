@@ -9,20 +9,24 @@ import sys
 import numpy as np
 import pytest
 
+from blockid.config import config_context, get_config
 from blockid.fitting import threads as th
 
+TILE = get_config()["tile_columns"]
 
-def test_the_tiles_sum_to_the_dense_normal_equations(monkeypatch):
+
+def test_the_tiles_sum_to_the_dense_normal_equations():
     """Pieces of a Jacobian over part of the unknowns (an experiment's own columns):
-    the tiles add up to ``J^T J`` and ``-J^T r`` of the whole, mirrored exactly."""
-    monkeypatch.setattr(th, "TILE", 7)
+    the tiles (about 7 columns wide: 4 column blocks of a piece's 25 columns) add up to
+    ``J^T J`` and ``-J^T r`` of the whole, mirrored exactly."""
     rng = np.random.default_rng(0)
     n = 30
     cols = np.r_[0:20, 25:30]
     pieces = [(rng.standard_normal((50, cols.size)), rng.standard_normal(50)) for _ in range(3)]
     results = []
     for threads in (1, 2, 3):
-        with th.NormalSums(n, threads) as sums:
+        with config_context(tile_columns=7), th.NormalSums(n, threads) as sums:
+            assert len(th._tiles(cols.size)) == 10  # 4 x 5 / 2 upper tiles
             for J, r in pieces:
                 sums.add(J, r, cols)
             H, g = sums.result()
@@ -40,8 +44,8 @@ def test_the_tiles_sum_to_the_dense_normal_equations(monkeypatch):
 
 
 def test_the_tiles_are_fixed_by_the_size_alone():
-    assert len(th._tiles(2 * th.TILE)) == 3  # two column blocks: (0, 0), (0, 1), (1, 1)
-    assert len(th._tiles(4 * th.TILE)) == 10
+    assert len(th._tiles(2 * TILE)) == 3  # two column blocks: (0, 0), (0, 1), (1, 1)
+    assert len(th._tiles(4 * TILE)) == 10
     assert len(th._tiles(2 * th.MIN_TILE)) == 3  # a mid-sized problem: still two blocks
     assert th._tiles(10) == ((slice(0, 10), slice(0, 10)),)
     covered = np.zeros((300, 300), dtype=int)
@@ -56,7 +60,7 @@ def test_a_problem_of_one_tile_is_summed_without_a_pool():
     summed by the caller, and a larger problem still gets its threads."""
     with th.NormalSums(10, 2) as sums:
         assert sums.threads == 1 and sums.pool is None
-    with th.NormalSums(4 * th.TILE, 2) as sums:
+    with th.NormalSums(4 * TILE, 2) as sums:
         assert sums.threads == 2 and sums.pool is not None
 
 
@@ -101,7 +105,7 @@ def test_one_thread_or_two_give_the_same_model_bit_for_bit():
     env = {**os.environ, "NUMBA_NUM_THREADS": "2", "OPENBLAS_NUM_THREADS": "2",
            "OMP_NUM_THREADS": "2"}  # fmt: skip
     code = _FIT.replace("from blockid.fitting.threads import fit_threads",
-                        "from blockid.fitting import threads\nthreads.TILE = 16\n"
+                        "from blockid.config import set_config\nset_config(tile_columns=16)\n"
                         "from blockid.fitting.threads import fit_threads")  # fmt: skip
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          timeout=600)  # fmt: skip

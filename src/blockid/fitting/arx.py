@@ -14,7 +14,8 @@ about 1e-8 whatever the units of the signals. Online learning
 by a given scale of the signal it is a lag of, or by nothing, which ``scaling`` selects
 here too (:func:`regressor_scale`).
 
-Regressors are built :data:`CHUNK_ROWS` rows at a time (:func:`regressor_chunks`), so
+Regressors are built ``regressor_rows`` rows at a time (:mod:`blockid.config`;
+:func:`regressor_chunks`), so
 a long record costs one chunk of regressors on top of the data, whatever its length:
 batch least squares folds the chunks into one triangular factor, the recursive
 estimators run chunk after chunk with their state carried over.
@@ -34,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from blockid.config import get_config
 from blockid.data.dataset import Dataset
 from blockid.defaults import FORGETTING, RECURSIVE
 from blockid.errors import EstimationError, OrderError, ParameterError
@@ -51,7 +53,6 @@ from blockid.models.arx import ARX
 
 __all__ = [
     "ARX_METHODS",
-    "CHUNK_ROWS",
     "fit_arx",
     "least_squares",
     "make_estimator",
@@ -59,9 +60,6 @@ __all__ = [
     "regressor_scale",
     "signal_scales",
 ]
-
-#: Rows of regressors built at a time (a few MB for the usual orders).
-CHUNK_ROWS = 1 << 16
 
 #: Method names accepted by :func:`fit_arx` (and ``blockid fit --method``).
 ARX_METHODS = ("batch", "rls", "aw-rls", "hierarchical-rls")
@@ -127,12 +125,12 @@ def regressor_chunks(
     model: ARX, data: Dataset, i: int, rows: int | None = None
 ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """``(Phi, target)`` of output ``i`` over ``data``, at most ``rows`` rows at a time
-    (default :data:`CHUNK_ROWS`).
+    (default: the ``regressor_rows`` of :func:`blockid.config.get_config`).
 
     Experiment after experiment, in order: stacked, the chunks are
     ``model.regressors`` of every experiment, but only one chunk is held at a time.
     """
-    lag, rows = model.max_lag, rows or CHUNK_ROWS
+    lag, rows = model.max_lag, rows or get_config()["regressor_rows"]
     for e in data.experiments:
         for start in range(lag, e.n_samples, rows):
             stop = min(start + rows, e.n_samples)

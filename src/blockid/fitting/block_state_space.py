@@ -13,11 +13,12 @@ best linear model, so the fit never ends worse than it, as the PNLSS fit.
 and every experiment's initial state by Levenberg-Marquardt on the free-run simulation
 error, with the exact Jacobian walked forward in time
 (:meth:`~blockid.models.block_state_space.BlockStateSpace.jacobian_piece`) and summed
-into ``J^T J`` in pieces of ``CHUNK`` samples; the directions in which the parameters
-are not unique (the state basis, a gain or constant a block shares with the core) are
-left alone (``null_space``). A candidate with an eigenvalue of ``A`` outside the circle
-of radius ``1 - margin`` (:func:`~blockid.fitting.checks.stability_margin`) or a
-non-finite or exploding run is rejected.
+into ``J^T J`` in pieces of ``state_space_rows`` samples (:mod:`blockid.config`); the
+directions in which the parameters are not unique (the state basis, a gain or constant
+a block shares with the core) are left alone (``null_space``). A candidate with an
+eigenvalue of ``A`` outside the circle of radius ``1 - margin``
+(:func:`~blockid.fitting.checks.stability_margin`) or a non-finite or exploding run is
+rejected.
 """
 
 from __future__ import annotations

@@ -67,11 +67,11 @@ import numpy as np
 
 from blockid.blocks.base import Block, LinearFamily
 from blockid.blocks.linear import LinearBlock
+from blockid.config import get_config
 from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE
 from blockid.errors import BlockidError, EstimationError, OrderError, ParameterError
 from blockid.estimators import BatchLeastSquares
-from blockid.fitting import arx as arx_fitting
 from blockid.fitting.checks import STABILITY_MARGIN, margin_for, simulation_mse, stability_margin
 from blockid.models.base import MODEL_TYPES
 from blockid.models.block import BlockModel
@@ -174,7 +174,8 @@ def _row_chunks(
     n0: int,
     build: Callable[..., tuple[np.ndarray, np.ndarray]],
 ) -> Chunks:
-    """Regression rows of every experiment, at most ``CHUNK_ROWS`` at a time.
+    """Regression rows of every experiment, at most ``regressor_rows``
+    (:mod:`blockid.config`) at a time.
 
     ``signals`` holds one tuple of equally long signals per experiment; ``build`` maps
     slices of them to ``(rows, target)`` for the slice's samples ``n0 ..`` (as for a
@@ -183,7 +184,7 @@ def _row_chunks(
     """
 
     def chunks() -> Iterator[tuple[np.ndarray, np.ndarray]]:
-        rows = arx_fitting.CHUNK_ROWS
+        rows = get_config()["regressor_rows"]
         for parts in signals:
             N = parts[0].shape[0]
             for start in range(n0, N, rows):

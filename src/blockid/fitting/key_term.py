@@ -315,10 +315,9 @@ def fit_key_term_rls(
         convergence depends on the units: the same plant with ``u`` in other units
         fails in the first samples (too large) or stalls (too small).
     record_history : bool
-        Keep the parameter trajectory (decimated to at most
-        :data:`~blockid.fitting.recursive.HISTORY_ROWS` rows, in
-        the data's units) in ``result.history``: ``"theta"`` (rows), ``"names"``,
-        ``"update"`` (update count of every row, counted over all passes).
+        Keep the parameter trajectory (decimated to at most ``history_rows`` rows,
+        :mod:`blockid.config`, in the data's units) in ``result.history``: ``"theta"``
+        (rows), ``"names"``, ``"update"`` (update count of every row, counted over all passes).
     scales : (float, float), optional
         Fixed scales ``(s_u, s_y)`` used instead of the measured spreads: the recursion
         runs on ``u / s_u`` and ``y / s_y`` (``normalize`` is then not used). This is

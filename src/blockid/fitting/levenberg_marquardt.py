@@ -1,9 +1,10 @@
 """Levenberg-Marquardt on the normal equations ``J^T J`` and ``J^T r``.
 
 For least-squares problems whose Jacobian is too large to hold (a long record: the
-simulation-error refinement of :mod:`blockid.fitting.simulation_error` above its
-``LARGE_JACOBIAN``) or that are summed piece by piece anyway (the state-space fits of
-:mod:`blockid.fitting.state_space`, whose Jacobian is walked forward in time). The
+simulation-error refinement of :mod:`blockid.fitting.simulation_error` above
+``jacobian_bytes`` of :mod:`blockid.config`) or that are summed piece by piece anyway
+(the state-space fits of :mod:`blockid.fitting.state_space`, whose Jacobian is walked
+forward in time). The
 problem gives ``residuals(theta)`` (a rejected candidate returns a large constant
 vector), ``normal_equations(theta)`` at accepted iterates, and counts residual
 evaluations in ``tracker.nfev``; an early-stopping monitor in ``normal_equations`` may

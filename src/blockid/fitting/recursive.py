@@ -19,9 +19,9 @@ Choices shared by both fitters:
 * Divergence is reported, never returned: a kernel failure names its pass, experiment,
   sample and reason; non-finite estimates and an unstable linear block are checked
   after every pass; the model finally passes :func:`~blockid.fitting.check_model`.
-* A recorded history keeps at most :data:`HISTORY_ROWS` rows of ``theta`` (every
-  ``stride``-th update), in the data's units. A failure carries the rows recorded up to
-  it as ``error.history``.
+* A recorded history keeps at most ``history_rows`` (:mod:`blockid.config`) rows of
+  ``theta`` (every ``stride``-th update), in the data's units. A failure carries the
+  rows recorded up to it as ``error.history``.
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from blockid._kernels.rls import OK
+from blockid.config import get_config
 from blockid.data.dataset import Dataset
 from blockid.errors import DataError, EstimationError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
@@ -42,7 +43,6 @@ from blockid.fitting.result import FitResult
 
 __all__ = [
     "given_scale_signals",
-    "HISTORY_ROWS",
     "RecursiveAlgorithm",
     "Signals",
     "check_siso",
@@ -56,9 +56,6 @@ __all__ = [
     "poles_of",
     "positive_number",
 ]
-
-#: Largest number of parameter vectors kept in a recorded history (decimated beyond).
-HISTORY_ROWS = 20_000
 
 _CONVERGENCE_DOC = "See docs/convergence.md"
 
@@ -256,8 +253,9 @@ class RecursiveAlgorithm(ABC):
 
 # ---------------------------------------------------------------------- driver
 def history_stride(passes: int, n_updates: int) -> int:
-    """Keep every ``stride``-th parameter vector so at most ``HISTORY_ROWS`` are kept."""
-    return max(1, math.ceil(passes * n_updates / HISTORY_ROWS))
+    """Keep every ``stride``-th parameter vector so at most ``history_rows``
+    (:mod:`blockid.config`) are kept."""
+    return max(1, math.ceil(passes * n_updates / get_config()["history_rows"]))
 
 
 class _Trajectory:

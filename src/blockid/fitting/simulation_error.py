@@ -21,8 +21,8 @@ with the ``a``/``b`` sensitivities in one compiled all-pole recursion
 (:mod:`blockid._kernels.simulation`) and multiplied by ``N_2'(x)``; the first
 ``max_lag`` samples' dependence on ``q`` through ``x = N_2^{-1}(y)`` is included.
 
-Long records: the Jacobian has one row per fitted sample. Above
-:data:`LARGE_JACOBIAN` bytes it is not formed: :func:`sensitivity_chunks` walks the
+Long records: the Jacobian has one row per fitted sample. Above ``jacobian_bytes``
+(:mod:`blockid.config`) it is not formed: :func:`sensitivity_chunks` walks the
 chain in pieces (each linear block continues from the previous piece's last inputs and
 outputs, exactly), ``J^T J`` and ``J^T r`` are summed piece by piece, and
 Levenberg-Marquardt on these normal equations (:func:`_levenberg_marquardt`, same
@@ -75,6 +75,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from blockid.blocks.base import Block
+from blockid.config import get_config
 from blockid.data.dataset import Dataset
 from blockid.defaults import DEGREE, MAX_NFEV, PATIENCE, TAIL_FRACTION, TOLERANCE
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
@@ -87,7 +88,6 @@ from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
 from blockid.models.sensitivities import sensitivity_chunks
 
 __all__ = [
-    "LARGE_JACOBIAN",
     "NESTED_START",
     "chunkable",
     "fit_simulation_error",
@@ -97,16 +97,6 @@ __all__ = [
 ]
 
 METHOD = "simulation-error"
-
-#: Above this many bytes of Jacobian (fitted samples x free parameters x 8) the
-#: refinement does not form it: :func:`_levenberg_marquardt` sums ``J^T J`` and ``J^T r``
-#: piece by piece (:func:`sensitivity_chunks`), so memory stays a few copies of the
-#: data however long the record (chains of static and linear blocks; a dynamic block
-#: keeps the whole-record Jacobian).
-LARGE_JACOBIAN = 64 * 2**20
-
-#: Samples per piece of the sensitivity walk of a large problem.
-_PIECE_ROWS = 1 << 16
 
 #: ``settings["solver"]`` of a refinement, by whether the problem was large.
 SOLVERS = {
@@ -247,7 +237,7 @@ class _Problem:
         n0, n = self.n0, theta.size
         H, g = np.zeros((n, n)), np.zeros(n)
         for s in self.segments:
-            pieces = sensitivity_chunks(model, s.u[: s.n_fit], s.y[:n0], rows=_PIECE_ROWS)
+            pieces = sensitivity_chunks(model, s.u[: s.n_fit], s.y[:n0])
             for start, y_hat, dy in pieces:
                 skip = max(n0 - start, 0)  # the measured initial outputs are not fitted
                 J = -dy[skip:]
@@ -292,7 +282,7 @@ class _FreeOffset:
     was fitted 14 % off). Refined with the other parameters, it is the least-squares
     constant. Its derivative is 1 plus its effect through the simulation's start from
     the inverse of the first measured outputs, taken by a forward difference. Only
-    where the whole Jacobian is formed (below :data:`LARGE_JACOBIAN`, about 1 million
+    where the whole Jacobian is formed (up to ``jacobian_bytes``, about 1 million
     samples of a Wiener model of 8 parameters): the piecewise path of longer records
     keeps the offset the fit started from.
     """
@@ -455,7 +445,10 @@ def refine(
     # (the piecewise path below) the offset stays where it is
     rows = sum(max(e.n_samples - model.max_lag, 0) for e in data.experiments)
     n_free = model.free_parameters().size + 1
-    free_offset = offset_is_free(model) and rows * n_free * 8 <= LARGE_JACOBIAN
+    # (above jacobian_bytes of Jacobian, blockid.config: the normal equations in pieces,
+    # so memory stays a few copies of the data; a dynamic block keeps the whole Jacobian)
+    whole_bytes = get_config()["jacobian_bytes"]
+    free_offset = offset_is_free(model) and rows * n_free * 8 <= whole_bytes
     if free_offset:
         model = _FreeOffset(model)
     theta0 = model.free_parameters()
@@ -491,7 +484,7 @@ def refine(
 
     lower, upper = model.parameter_bounds()
     stop_reason, theta = "", theta0
-    large = problem.size * n_par * 8 > LARGE_JACOBIAN and chunkable(model)
+    large = problem.size * n_par * 8 > whole_bytes and chunkable(model)
     try:
         with np.errstate(all="ignore"):
             if large:

@@ -4,8 +4,8 @@ polynomial nonlinear state-space models (PNLSS) started from them.
 **Subspace (PO-MOESP, Verhaegen & Dewilde 1992; the CVA weighting of Van Overschee &
 De Moor 1996).** On normalised signals, block Hankel matrices of ``s`` past and ``s``
 future inputs and outputs are stacked (the columns of every experiment side by side)
-and reduced by one LQ factorisation (a QR of the transpose, accumulated ``CHUNK``
-columns at a time, so memory stays a few copies of the data):
+and reduced by one LQ factorisation (a QR of the transpose, accumulated ``state_space_rows``
+columns at a time (:mod:`blockid.config`), so memory stays a few copies of the data):
 
 .. math::
 
@@ -64,6 +64,7 @@ import numpy as np
 
 from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_simulate
+from blockid.config import get_config
 from blockid.data.dataset import Dataset
 from blockid.defaults import (
     MAX_ORDER,
@@ -81,7 +82,6 @@ from blockid.fitting.checks import refuse_unstable, stability_margin
 from blockid.fitting.options import checked
 from blockid.fitting.result import FitResult
 from blockid.fitting.state_space_refinement import (
-    CHUNK,
     _Signals,
     _solver_settings,
     refine_state_space,
@@ -188,11 +188,11 @@ def _lq(sig: _Signals, s: int) -> np.ndarray:
     m, l = sig.u[0].shape[1], sig.y[0].shape[1]
     size = 2 * s * (m + l) + 1
     R = np.zeros((0, size))
-    used = 0
+    used, piece = 0, get_config()["state_space_rows"]
     for u, y in zip(sig.u, sig.y, strict=True):
         j = u.shape[0] - 2 * s + 1
-        for c0 in range(0, max(j, 0), CHUNK):
-            c = min(CHUNK, j - c0)
+        for c0 in range(0, max(j, 0), piece):
+            c = min(piece, j - c0)
             block = np.vstack(
                 (np.ones((1, c)), _hankel(u, s + c0, s, c), _hankel(u, c0, s, c),
                  _hankel(y, c0, s, c), _hankel(y, s + c0, s, c))

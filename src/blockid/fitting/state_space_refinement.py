@@ -6,10 +6,11 @@ its normal equations summed piece by piece, and early stopping on a held-back ta
 initial state are refined together by Levenberg-Marquardt on the free-run simulation
 error (:mod:`blockid.fitting.levenberg_marquardt`), the Jacobian computed forward in
 time by a compiled kernel (:mod:`blockid._kernels.state_space`) and summed into
-``J^T J`` piece by piece (``CHUNK`` samples), so a long record never holds it whole;
-the kernel's column blocks and the tiles of ``J^T J`` run on every core the fit may
-use, the same result bit for bit with any number of threads
-(:mod:`blockid.fitting.threads`; ``docs/performance.md`` has the times).
+``J^T J`` piece by piece (``state_space_rows`` samples, :mod:`blockid.config`), so a
+long record never holds it whole; the kernel's column blocks and the tiles of
+``J^T J`` run on every core the fit may use, the same result bit for bit with any
+number of threads (:mod:`blockid.fitting.threads`; ``docs/performance.md`` has the
+times).
 The parameters are unique only up to the state basis; the damping keeps the steps
 defined. A candidate with an eigenvalue of ``A`` outside the circle of radius
 ``1 - margin`` (:func:`~blockid.fitting.checks.stability_margin` of the data), or a
@@ -24,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from blockid.config import get_config
 from blockid.data.dataset import Dataset
 from blockid.defaults import PATIENCE, STATE_SPACE_NFEV, STATE_SPACE_TAIL, TOLERANCE
 from blockid.errors import EstimationError, OrderError, ParameterError
@@ -32,10 +34,8 @@ from blockid.fitting.levenberg_marquardt import EarlyStop, levenberg_marquardt, 
 from blockid.fitting.threads import NormalSums, kernel_threads, threads_for_fit
 from blockid.models.state_space import PolynomialStateSpace
 
-__all__ = ["CHUNK", "MIN_HEAD", "NULL_SPACE", "TAIL_SAMPLES_PER_PARAMETER", "refine_state_space"]
+__all__ = ["MIN_HEAD", "NULL_SPACE", "TAIL_SAMPLES_PER_PARAMETER", "refine_state_space"]
 
-#: Samples per piece of the Jacobian walk and of the LQ factorisation.
-CHUNK = 4096
 #: Eigenvalues of the scaled ``J^T J`` below this fraction of the largest are the
 #: directions the parameters are not unique in (the state basis): steps leave them.
 NULL_SPACE = 1e-11
@@ -145,7 +145,8 @@ class _Problem:
         threads = threads_for_fit()
         ny = self.sig.y[0].shape[1]
         # two buffers for the pieces (one walked while the other's tiles are summed)
-        buffers = [np.empty((CHUNK * ny, kept.size)) for _ in range(2)]
+        piece_rows = get_config()["state_space_rows"]
+        buffers = [np.empty((piece_rows * ny, kept.size)) for _ in range(2)]
         piece = 0
         with kernel_threads(threads), NormalSums(nm + nx * n_exp, threads) as sums:
             for e, (u, y, x0) in enumerate(zip(self.sig.u, self.sig.y, x0s, strict=True)):
@@ -154,16 +155,16 @@ class _Problem:
                 carried = (
                     model._sensitivity_start(x0, kept) if own else model._sensitivity_start(x0)
                 )
-                for k0 in range(0, u.shape[0], CHUNK):
+                for k0 in range(0, u.shape[0], piece_rows):
                     with np.errstate(all="ignore"):
                         if own:
                             sums.wait()  # the buffer about to be overwritten is free
-                            out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried,
+                            out, J = model.jacobian_piece(u[k0 : k0 + piece_rows], *carried,
                                                           buffer=buffers[piece % 2])  # fmt: skip
                         else:
-                            out, J = model.jacobian_piece(u[k0 : k0 + CHUNK], *carried)
+                            out, J = model.jacobian_piece(u[k0 : k0 + piece_rows], *carried)
                             J = J[:, kept]
-                    sums.add(J, y[k0 : k0 + CHUNK] - out, cols)
+                    sums.add(J, y[k0 : k0 + piece_rows] - out, cols)
                     piece += 1
             H, g = sums.result()
         self.tracker.njev += 1

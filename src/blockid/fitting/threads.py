@@ -22,9 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from blockid.config import get_config
+
 __all__ = [
     "MIN_TILE",
-    "TILE",
     "NormalSums",
     "fit_threads",
     "kernel_threads",
@@ -33,9 +34,6 @@ __all__ = [
     "threads_for_fit",
 ]
 
-#: Columns of ``J^T J`` per tile (about): the tiles are fixed by the number of
-#: parameters, never by the number of threads.
-TILE = 448
 #: The narrowest column block that is still worth a tile of its own.
 MIN_TILE = 64
 
@@ -104,10 +102,11 @@ def kernel_threads(n: int) -> Iterator[None]:
 
 
 def _tiles(n: int) -> tuple[tuple[slice, slice], ...]:
-    """The upper triangle of an ``n x n`` matrix in fixed tiles (about ``TILE`` columns;
-    at least two column blocks from ``2 * MIN_TILE`` columns on, so that a mid-sized
-    problem's three products share two threads)."""
-    return _tile_cut(n, TILE, MIN_TILE)
+    """The upper triangle of an ``n x n`` matrix in fixed tiles (about ``tile_columns``
+    columns, :mod:`blockid.config`: fixed by the number of parameters, never by the
+    number of threads; at least two column blocks from ``2 * MIN_TILE`` columns on, so
+    that a mid-sized problem's three products share two threads)."""
+    return _tile_cut(n, get_config()["tile_columns"], MIN_TILE)
 
 
 @functools.lru_cache(maxsize=64)

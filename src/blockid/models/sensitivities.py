@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from blockid.config import get_config
 from blockid.errors import ParameterError
 
 if TYPE_CHECKING:  # the chain imports this module; a type, not an import circle
@@ -100,9 +101,10 @@ def _initial_state(
 
 
 def sensitivity_chunks(
-    model: ChainModel, u: Any, y_initial: Any = None, rows: int = 1 << 16
+    model: ChainModel, u: Any, y_initial: Any = None, rows: int | None = None
 ) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
-    """:func:`chain_sensitivities` in pieces of at most ``rows`` samples.
+    """:func:`chain_sensitivities` in pieces of at most ``rows`` samples (default: the
+    ``sensitivity_rows`` of :func:`blockid.config.get_config`).
 
     Yields ``(start, y, dy)`` for consecutive samples ``start .. start + len(y)``: the
     same values as the whole-record function, holding one piece at a time. A linear
@@ -120,6 +122,7 @@ def sensitivity_chunks(
     n_par = int(sum(int((c >= 0).sum()) for c in columns))
     last = model.last_linear_index
     init = _initial_state(model, columns, y_initial, n_par)
+    rows = get_config()["sensitivity_rows"] if rows is None else rows
     rows = max(int(rows), max(b.max_lag for b in model.linear_blocks), 1)
     state: dict[int, tuple[np.ndarray, ...]] = {}
     for start in range(0, signal.shape[0], rows):

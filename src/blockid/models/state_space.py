@@ -40,11 +40,9 @@ import numpy as np
 
 from blockid._kernels import writable
 from blockid._kernels.state_space import pnlss_columns, pnlss_simulate, pnlss_walk
+from blockid.config import get_config
 from blockid.errors import DataError, ModelFileError, OrderError
 from blockid.models.base import Model, excursion
-
-#: Samples per piece of the Jacobian walks (:meth:`PolynomialStateSpace.information`).
-JACOBIAN_CHUNK = 4096
 
 __all__ = [
     "ForwardSensitivities",
@@ -219,13 +217,15 @@ class ForwardSensitivities:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``J^T J``, ``J^T r``, the residuals ``r`` and each output's column sums of
         ``J`` (rows: outputs) of a free run from ``x0`` on normalised signals, over
-        ``[θ, x(0)]``, walked in pieces of ``JACOBIAN_CHUNK`` samples."""
+        ``[θ, x(0)]``, walked in pieces of ``state_space_rows`` samples
+        (:mod:`blockid.config`)."""
         carried = self._sensitivity_start(x0)
         P, ny = self.free_parameters().size + self.nx, yn.shape[1]
         H, g, sums, parts = np.zeros((P, P)), np.zeros(P), np.zeros((ny, P)), []
-        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
-            out, J = self.jacobian_piece(un[k0 : k0 + JACOBIAN_CHUNK], *carried)
-            r = (yn[k0 : k0 + JACOBIAN_CHUNK] - out).reshape(-1)
+        piece = get_config()["state_space_rows"]
+        for k0 in range(0, un.shape[0], piece):
+            out, J = self.jacobian_piece(un[k0 : k0 + piece], *carried)
+            r = (yn[k0 : k0 + piece] - out).reshape(-1)
             H += J.T @ J
             g += J.T @ r
             sums += J.reshape(out.shape[0], ny, P).sum(axis=0)
@@ -277,8 +277,9 @@ class ForwardSensitivities:
         carried = self._sensitivity_start(x0)
         y = np.zeros((un.shape[0], ny))
         dy = np.zeros((un.shape[0], ny, p))
-        for k0 in range(0, un.shape[0], JACOBIAN_CHUNK):
-            out, J = self.jacobian_piece(un[k0 : k0 + JACOBIAN_CHUNK], *carried)
+        piece = get_config()["state_space_rows"]
+        for k0 in range(0, un.shape[0], piece):
+            out, J = self.jacobian_piece(un[k0 : k0 + piece], *carried)
             y[k0 : k0 + out.shape[0]] = out
             dy[k0 : k0 + out.shape[0]] = J[:, :p].reshape(out.shape[0], ny, p)
         scale = np.asarray(self.output_scale, dtype=float).reshape(-1)

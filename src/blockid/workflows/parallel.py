@@ -36,6 +36,10 @@ merges them gives the same answer with one worker or two.
   (:func:`blockid.fitting.threads.share_threads`; the workers' numba pools are sized
   to ``jobs`` for it, BLAS stays at one thread). A fit's result does not depend on its
   threads (:mod:`blockid.fitting.threads`), so neither does the search's.
+* **The same sizes everywhere.** Each task carries the memory and work-partition sizes
+  in force where it was submitted (:func:`blockid.config.get_config`), and runs under
+  them in its worker: the pieces fix the order of the sums, so a setting gives the
+  model of ``jobs = 1`` with any number of workers.
 * **A cap, not a budget.** :meth:`TaskRunner.map` takes a ``deadline`` (a
   :func:`time.monotonic` value): items not started by then are cancelled and their
   results are None. The caller says so; nothing else depends on the clock.
@@ -50,12 +54,14 @@ from typing import Any
 
 import numpy as np
 
+from blockid.config import config_context, get_config
 from blockid.data.dataset import Dataset, Experiment
 from blockid.workflows.effort import MAX_JOBS
 
 __all__ = ["MISSING_DASK", "TaskRunner", "available_cores"]
 
-#: Seconds to wait for a dask scheduler to answer before saying it cannot be reached.
+#: Seconds to wait for a dask scheduler to answer before saying it cannot be reached
+#: (:class:`TaskRunner`'s ``connect_timeout``).
 CONNECT_TIMEOUT = 10.0
 #: What to do when a scheduler is given and dask.distributed is not installed.
 MISSING_DASK = "a dask scheduler needs dask.distributed: pip install 'blockid[fleet]'"
@@ -142,26 +148,32 @@ def _start_worker(memory_name: str, data_meta: tuple[Any, ...]) -> None:
     numba.set_num_threads(1)  # outside a fit's kernel_threads, as the environment said
 
 
-def _call(fn: Callable[[Dataset, Any], Any], item: Any) -> Any:
+def _call(fn: Callable[[Dataset, Any], Any], item: Any, sizes: dict[str, int]) -> Any:
+    """A task in a local worker: ``fn(data, item)`` under the submitter's ``sizes``."""
     assert _WORKER_DATA is not None, "worker started without its data"
-    return fn(_WORKER_DATA, item)
+    with config_context(**sizes):
+        return fn(_WORKER_DATA, item)
 
 
 #: Set once in a dask worker process by :func:`_cluster_call`: its thread pools limited.
 _CLUSTER_LIMITS: Any = None
 
 
-def _cluster_call(fn: Callable[[Dataset, Any], Any], data: Dataset, item: Any) -> Any:
-    """A task on a dask worker: ``fn(data, item)`` with one thread in every pool (set for
-    the life of the worker process, as a local worker's initialiser does: a limit lifted
-    when one task ends would change the arithmetic of a task running beside it)."""
+def _cluster_call(
+    fn: Callable[[Dataset, Any], Any], data: Dataset, item: Any, sizes: dict[str, int]
+) -> Any:
+    """A task on a dask worker: ``fn(data, item)`` under the submitter's ``sizes``, with
+    one thread in every pool (set for the life of the worker process, as a local worker's
+    initialiser does: a limit lifted when one task ends would change the arithmetic of a
+    task running beside it)."""
     global _CLUSTER_LIMITS
     if _CLUSTER_LIMITS is None:
         from blockid.fitting.threads import set_fit_threads
 
         _CLUSTER_LIMITS = _single_threaded()
         set_fit_threads(1)
-    return fn(data, item)
+    with config_context(**sizes):
+        return fn(data, item)
 
 
 class TaskRunner:
@@ -179,6 +191,9 @@ class TaskRunner:
     scheduler : str or distributed.Client or cluster, optional
         Run the items on this dask cluster instead (module notes). A client given is
         used and left open; one made here from an address or a cluster is closed.
+    connect_timeout : float
+        Seconds to wait for the scheduler at an address to answer before saying it
+        cannot be reached.
 
     Attributes
     ----------
@@ -191,8 +206,15 @@ class TaskRunner:
         The dask scheduler's address (None: no cluster).
     """
 
-    def __init__(self, data: Dataset, jobs: int | None = None, scheduler: Any = None) -> None:
+    def __init__(
+        self,
+        data: Dataset,
+        jobs: int | None = None,
+        scheduler: Any = None,
+        connect_timeout: float = CONNECT_TIMEOUT,
+    ) -> None:
         self.data = data
+        self.connect_timeout = connect_timeout
         self.jobs = max(1, int(min(available_cores(), MAX_JOBS) if jobs is None else jobs))
         self.local_threads = self.jobs
         self.scheduler = scheduler
@@ -223,7 +245,7 @@ class TaskRunner:
             self._client = self.scheduler
         else:
             try:
-                self._client = Client(self.scheduler, timeout=CONNECT_TIMEOUT)
+                self._client = Client(self.scheduler, timeout=self.connect_timeout)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise ParameterError(
                     f"cannot reach the dask scheduler {self.scheduler!r}: {exc}; start one "
@@ -329,7 +351,8 @@ class TaskRunner:
             return results
         from concurrent.futures import FIRST_COMPLETED, wait
 
-        futures = {self._pool.submit(_call, fn, item): i for i, item in enumerate(items)}
+        sizes = get_config()
+        futures = {self._pool.submit(_call, fn, item, sizes): i for i, item in enumerate(items)}
         self._submitted = list(futures)
         pending = set(futures)
         self._share(len(pending))
@@ -372,10 +395,16 @@ class TaskRunner:
 
         from distributed import as_completed
 
-        batch = uuid.uuid4().hex[:12]
+        batch, sizes = uuid.uuid4().hex[:12], get_config()
         futures = {
             self._client.submit(
-                _cluster_call, fn, self._scattered, item, key=f"blockid-{batch}-{i}", pure=False
+                _cluster_call,
+                fn,
+                self._scattered,
+                item,
+                sizes,
+                key=f"blockid-{batch}-{i}",
+                pure=False,
             ): i
             for i, item in enumerate(items)
         }
