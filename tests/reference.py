@@ -7,6 +7,7 @@ import ...``).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 
 import numpy as np
@@ -14,10 +15,18 @@ from numba import njit
 from scipy.integrate import solve_ivp
 
 from blockid._kernels.state_space import monomials
-from blockid.blocks import DeadZone, Polynomial, TwoSegmentPolynomial
+from blockid.blocks import (
+    DeadZone,
+    Polynomial,
+    TwoSegmentPolynomial,
+)
 from blockid.blocks.base import StaticBlock
 from blockid.data import Dataset
-from blockid.models import ARX, Hammerstein, HammersteinWiener
+from blockid.models import (
+    ARX,
+    Hammerstein,
+    HammersteinWiener,
+)
 from blockid.models.state_space import StateSpace
 from blockid.plants.electrohydraulic import (
     ElectrohydraulicParameters,
@@ -793,3 +802,10 @@ def ref_simulate(current, x0, par=EH_PARAMETERS, ts=0.05):
                 t, x = end, sol.y[:, -1]
         states.append(x)
     return np.array(states)
+
+
+def _load(path):
+    spec = importlib.util.spec_from_file_location(f"exported_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

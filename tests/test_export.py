@@ -1,22 +1,16 @@
-"""Export (blockid.models.export, blockid.cli.export): the NumPy-only module reproduces
-``model.simulate`` and ``blockid simulate`` to 1e-10; transfer functions match the
-linear blocks."""
+"""Export (blockid.models.export): the NumPy-only module reproduces ``model.simulate`` to
+1e-10; transfer functions match the linear blocks. The command's tests are in
+tests/cli/test_export.py, the runtime's in tests/models/test_export_runtime.py."""
 
 from __future__ import annotations
 
 import ast
-import importlib.util
-import json
 import sys
 
 import numpy as np
-import pandas as pd
 import pytest
-import typer
-from typer.testing import CliRunner
 
 from blockid.blocks import (
-    Backlash,
     DeadZone,
     LinearBlock,
     PiecewiseLinear,
@@ -25,18 +19,15 @@ from blockid.blocks import (
     TwoSegmentPolynomial,
 )
 from blockid.blocks.base import StaticBlock
-from blockid.cli.export import export
 from blockid.data import Dataset
 from blockid.errors import ParameterError
 from blockid.models import (
     ARX,
-    BacklashModel,
     Hammerstein,
     HammersteinWiener,
     Network,
     Wiener,
     WienerHammerstein,
-    save_model,
 )
 from blockid.models.export import (
     export_text,
@@ -47,7 +38,9 @@ from blockid.models.export import (
 )
 from blockid.models.feedback import LinearFeedback
 from blockid.models.state_space import PolynomialStateSpace, StateSpace
-from plants_for_options import PLANTS, record
+from plants_for_options import PLANTS
+
+from reference import _load
 
 LIN = {"na": 2, "nb": 2, "nk": 1, "a": [-1.2, 0.35], "b": [1.0, 0.4]}
 
@@ -131,13 +124,6 @@ def _prepared(name: str):
         model = model.with_ranges([(small, model.simulate(small))])
     y = model.simulate(u) + 0.01 * rng.standard_normal((500, len(model.outputs)))
     return model, u, y
-
-
-def _load(path):
-    spec = importlib.util.spec_from_file_location(f"exported_{path.stem}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.mark.parametrize("name", list(_models()))
@@ -278,82 +264,6 @@ def test_state_space_to_control_gives_each_input_output_pair():
         np.testing.assert_allclose(np.ravel(step), model.simulate(u)[:, j] - zero[:, j], atol=1e-10)
 
 
-# ----------------------------------------------------------------------------- command
-def _app() -> typer.Typer:
-    app = typer.Typer()
-    app.command("export")(export)
-
-    @app.callback()
-    def _root() -> None:
-        """Test root."""
-
-    return app
-
-
-def test_export_command_reproduces_blockid_simulate(tmp_path):
-    from blockid.cli.main import app as blockid
-    from blockid.fitting import fit_model
-
-    plant = PLANTS["hammerstein-wiener"]()
-    data = record(plant, 400, snr_db=40.0, seed=3, mean=0.2)
-    fit = fit_model(data, "hammerstein-wiener", na=2, nb=2, nk=1, r1=2, r2=2, max_nfev=10)
-    model_file = save_model(fit.model, tmp_path / "hw.json", fit.estimation_record())
-    validation = record(plant, 300, snr_db=40.0, seed=4, mean=0.2)
-    validation.to_frame().to_csv(tmp_path / "val.csv", index=False)
-
-    runner = CliRunner()
-    out = tmp_path / "hw_model.py"
-    result = runner.invoke(_app(), ["export", str(model_file), "--to", "python", "-o", str(out)])
-    assert result.exit_code == 0, result.output
-    result = runner.invoke(
-        blockid,
-        ["simulate", str(model_file), str(tmp_path / "val.csv"), "--out", str(tmp_path / "s.csv")],
-    )
-    assert result.exit_code == 0, result.output
-    table = pd.read_csv(tmp_path / "s.csv")
-    e = validation.experiments[0]
-    module = _load(out)
-    got = module.simulate(table["u"].to_numpy(), table["y"].to_numpy()[: fit.model.max_lag])
-    np.testing.assert_allclose(got[:, 0], table["y_sim"].to_numpy(), rtol=0, atol=1e-10)
-    np.testing.assert_allclose(got, fit.model.simulate(e.u, e.y[:2]), atol=1e-10)
-
-    again = runner.invoke(_app(), ["export", str(model_file), "-o", str(out)])
-    assert again.exit_code == 2 and "--force" in again.output
-    forced = runner.invoke(_app(), ["export", str(model_file), "-o", str(out), "--force"])
-    assert forced.exit_code == 0
-
-
-def test_export_command_scipy_json_and_errors(tmp_path):
-    from scipy import signal
-
-    model = PLANTS["wiener-hammerstein"]()
-    model_file = save_model(model, tmp_path / "wh.json")
-    runner = CliRunner()
-    result = runner.invoke(_app(), ["export", str(model_file), "--to", "scipy-json"])
-    assert result.exit_code == 0, result.output
-    doc = json.loads(result.output)
-    for tf, block in zip(doc["transfer_functions"], model.linear_blocks, strict=True):
-        _, (step,) = signal.dstep(signal.dlti(tf["num"], tf["den"], dt=True), n=20)
-        np.testing.assert_allclose(step[:, 0], block.simulate(np.ones(20)), atol=1e-12)
-    bad = runner.invoke(_app(), ["export", str(model_file), "--to", "matlab"])
-    assert bad.exit_code == 2 and "--to must be one of" in bad.output
-    missing = runner.invoke(_app(), ["export", str(tmp_path / "none.json")])
-    assert missing.exit_code == 2 and "does not exist" in missing.output
-
-
-def test_backlash_model_with_fitted_shape_round_trips_through_the_file(tmp_path):
-    model = BacklashModel(
-        "u", "y", input_block=Backlash(0.9, 0.8, 1.1, 0.85), na=2, nb=1, nk=1, a=[-1.0, 0.17]
-    )
-    u = 5 * np.sin(np.linspace(0, 20, 400))
-    model_file = save_model(model, tmp_path / "b.json")
-    out = tmp_path / "b.py"
-    assert CliRunner().invoke(_app(), ["export", str(model_file), "-o", str(out)]).exit_code == 0
-    module = _load(out)
-    y0 = model.simulate(u)[:2]
-    np.testing.assert_allclose(module.simulate(u, y0), model.simulate(u, y0), atol=1e-10)
-
-
 def test_hammerstein_wiener_two_segment_start(tmp_path):
     model = HammersteinWiener(
         "u",
@@ -384,31 +294,3 @@ def test_wiener_hammerstein_constructor_in_module():
     exec(to_python_module(model), ns)
     u = np.random.default_rng(3).uniform(-1, 1, 100)
     np.testing.assert_allclose(ns["simulate"](u, [0.1]), model.simulate(u, [0.1]), atol=1e-10)
-
-
-# ----------------------------------------------------------------------------- the runtime
-def test_the_exported_runtime_is_the_runtime_module_below_its_marker():
-    """The interpreter is a real module (linted, covered); the export copies it whole."""
-    from importlib.resources import files
-
-    from blockid.models import export as export_module
-
-    m = Wiener("u", "y", output_block=Polynomial([1.0, 0.2], constant=False),
-               na=1, nb=1, nk=1, a=[-0.5], b=[1.0])  # fmt: skip
-    text = files("blockid.models").joinpath("_export_runtime.py").read_text(encoding="utf-8")
-    runtime = text[text.index(export_module._MARKER) + len(export_module._MARKER) :]
-    source = export_module.to_python_module(m)
-    assert source.endswith(runtime) and "def simulate(u, y0=None)" in runtime
-    ast.parse(source)
-
-
-def test_the_runtime_polynomial_rules_equal_numpys():
-    from numpy.polynomial import polynomial as P
-
-    from blockid.models import _export_runtime as rt
-
-    c = [0.3, -1.0, 0.5, 0.25]
-    x = np.linspace(-2, 2, 9)
-    assert np.allclose(rt._polyval(x, c), P.polyval(x, c), rtol=1e-14, atol=1e-14)
-    assert np.allclose(rt._derivative(c), P.polyder(c))
-    assert np.allclose(rt._derivative([2.0]), [0.0])

@@ -125,12 +125,3 @@ def test_bad_data_is_named(rng):
     rls = RecursiveLeastSquares().fit(np.ones((20, 2)), np.ones(20))
     with pytest.raises(errors.DataError, match="call fit\\(\\) to start over"):
         rls.partial_fit(np.ones((5, 3)), np.ones(5))
-
-
-def test_schedule_parsing():
-    s = ForgettingSchedule.parse("0.9:2,0.95:3,1")
-    assert s.factors(0, 7).tolist() == [0.9, 0.9, 0.95, 0.95, 0.95, 1.0, 1.0]
-    assert s.factors(3, 3).tolist() == [0.95, 0.95, 1.0]
-    assert str(ForgettingSchedule.parse(0.99)) == "0.99"
-    with pytest.raises(errors.ParameterError, match="expected a number"):
-        ForgettingSchedule.parse("0.9,0.8")

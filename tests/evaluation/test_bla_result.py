@@ -13,7 +13,6 @@ from blockid.data import Dataset, Experiment
 from blockid.data.io import json_safe
 from blockid.design import multisine
 from blockid.evaluation import best_linear_approximation
-from blockid.evaluation.spectra import db, powered
 
 
 @pytest.fixture(scope="module")
@@ -74,14 +73,6 @@ def test_the_report_entry_is_small(odd_bla):
     entry = odd_bla.report_entry()
     assert set(entry) == {"title", "verdict", "notes", "columns", "rows", "bands"}
     assert entry["verdict"] == odd_bla.verdict
-
-
-def test_levels_and_excited_lines():
-    assert db(np.array([1.0, 0.0, -1.0, 10.0])).tolist()[::3] == [0.0, 10.0]
-    assert np.isnan(db(np.array([0.0])))[0]
-    power = np.r_[np.zeros(5), np.ones(10), 0.02, 0.005]
-    assert powered(power).tolist() == [False] * 5 + [True] * 11 + [False]
-    assert not powered(np.zeros(4)).any()
 
 
 def test_frequencies_are_named_in_cycles_per_sample_without_a_sampling_time():
