@@ -809,3 +809,9 @@ def _load(path):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def write(path, text):
+    """Write ``text`` to ``path`` (UTF-8); return the path."""
+    path.write_text(text, encoding="utf-8")
+    return path
