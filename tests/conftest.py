@@ -96,3 +96,20 @@ def example_report(tmp_path_factory: pytest.TempPathFactory) -> ExampleReport:
     result = CliRunner().invoke(cli_app(), ["report", str(data), *ARGS, "-o", str(path)])
     assert result.exit_code == 0, result.output
     return ExampleReport(folder, data, path, path.read_text(encoding="utf-8"), result.output)
+
+
+# ------------------------------------------------------------------ library level
+@pytest.fixture(scope="session")
+def hammerstein():
+    """The example's Hammerstein model by key-term RLS: ``(data, est, val, result)``."""
+    from blockid.data import Dataset
+    from blockid.workflows import compare_structures
+    from blockid.workflows.examples import example_record
+
+    record = example_record("electrohydraulic")
+    data = Dataset.from_frame(record.frame, ["current"], ["velocity"], time_column="t")
+    est, val = data.select(*record.estimation), data.select(*record.validation)
+    options = dict(na=3, nb=3, nk=8, r1=3, passes=60, forgetting="0.98:200,1")
+    result = compare_structures(est, val, ["hammerstein"], method="key-term-rls", options=options)
+    assert result.models[0].fit is not None, result.models[0].error
+    return data, est, val, result

@@ -7,6 +7,7 @@ import ...``).
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import math
 
@@ -815,3 +816,10 @@ def write(path, text):
     """Write ``text`` to ``path`` (UTF-8); return the path."""
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def _with_errors(result, errors):
+    """A compare result whose first model's fit carries ``errors`` as standard errors."""
+    score = result.models[0]
+    fit = dataclasses.replace(score.fit, settings={**score.fit.settings, "standard_errors": errors})
+    return dataclasses.replace(result, models=[dataclasses.replace(score, fit=fit)])

@@ -215,25 +215,6 @@ def test_bad_inputs():
         block.simulate(np.zeros(3), x0=np.inf)
 
 
-def test_plot_draws_loop_branches_and_truth():
-    import matplotlib.pyplot as plt
-
-    block = Backlash(0.9, 0.8, 0.9, 0.85)
-    ax = block.plot(truth=Backlash(1.0, 0.7, 1.0, 0.9))
-    lines = ax.get_lines()
-    assert [ln.get_label() for ln in lines] == [
-        "backlash loop",
-        "left branch",
-        "right branch",
-        "truth",
-    ]
-    u, x = lines[0].get_data()
-    np.testing.assert_array_equal(x, block.simulate(u))
-    assert u.max() == pytest.approx(4 * 1.65)
-    assert lines[1].get_linestyle() == "--"
-    plt.close(ax.figure)
-
-
 # ---------------------------------------------------- found by mutation testing (docs/testing.md)
 def test_backlash_template_is_the_unit_backlash():
     assert Backlash.template().parameters == {
@@ -261,24 +242,6 @@ def test_backlash_with_vector_takes_a_column():
 def test_backlash_check_branches_names_the_bad_end(lo, hi, named):
     with pytest.raises(ParameterError, match=f"^{named} must be finite"):
         Backlash(1.0, 0.1, 1.0, 0.1).check_branches(lo, hi)
-
-
-def test_backlash_plot_draws_the_loop_over_the_given_input():
-    import matplotlib.pyplot as plt
-
-    block = Backlash(1.0, 0.2, 1.5, 0.1)
-    u = np.array([0.0, 1.0, 2.0, 1.0, -1.0, -2.0])
-    ax = block.plot(u=u)
-    try:
-        loop, left, right = ax.get_lines()[:3]
-        np.testing.assert_array_equal(loop.get_xdata(), u)
-        # from x = 0: dead band at u = 0, right branch 1.5 (u - 0.1) up to u = 2, then
-        # left branch u + 0.2 on the way down
-        np.testing.assert_allclose(loop.get_ydata(), [0.0, 1.35, 2.85, 1.2, -0.8, -1.8])
-        np.testing.assert_array_equal(left.get_xdata(), [-2.0, 2.0])  # the input's span
-        np.testing.assert_allclose(right.get_ydata(), [-3.15, 2.85])
-    finally:
-        plt.close(ax.figure)
 
 
 def test_backlash_with_vector_reports_a_missing_value_as_not_finite():

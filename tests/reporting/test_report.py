@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import base64
-import dataclasses
 import hashlib
 import platform
 import re
@@ -13,6 +12,8 @@ import numpy as np
 import pytest
 
 from reporting.page import IMG
+
+from reference import _with_errors
 
 
 def _png_size(raw: bytes) -> tuple[int, int]:
@@ -79,28 +80,6 @@ def test_report_sections_and_captions(example_report):
     assert html.count("<figcaption>") == len(IMG.findall(html))
 
 
-# ------------------------------------------------------------------ library level
-@pytest.fixture(scope="module")
-def hammerstein():
-    from blockid.data import Dataset
-    from blockid.workflows import compare_structures
-    from blockid.workflows.examples import example_record
-
-    record = example_record("electrohydraulic")
-    data = Dataset.from_frame(record.frame, ["current"], ["velocity"], time_column="t")
-    est, val = data.select(*record.estimation), data.select(*record.validation)
-    options = dict(na=3, nb=3, nk=8, r1=3, passes=60, forgetting="0.98:200,1")
-    result = compare_structures(est, val, ["hammerstein"], method="key-term-rls", options=options)
-    assert result.models[0].fit is not None, result.models[0].error
-    return data, est, val, result
-
-
-def _with_errors(result, errors):
-    score = result.models[0]
-    fit = dataclasses.replace(score.fit, settings={**score.fit.settings, "standard_errors": errors})
-    return dataclasses.replace(result, models=[dataclasses.replace(score, fit=fit)])
-
-
 def test_confidence_bands_are_drawn_from_standard_errors(hammerstein):
     from blockid.reporting import build_report
 
@@ -112,30 +91,6 @@ def test_confidence_bands_are_drawn_from_standard_errors(hammerstein):
     assert "95 % band of the simulated output" in html
     assert "No uncertainty available" not in html
     assert "validation data" in html  # no range text given: said so, not invented
-
-
-def test_standard_errors_in_the_shape_of_the_parameters_are_matched(hammerstein):
-    from blockid.plotting.uncertainty import free_standard_errors
-
-    fit = hammerstein[3].models[0].fit
-    model = fit.model
-    shaped = {
-        k: (np.full(len(v), 0.5).tolist() if isinstance(v, list) else 0.5)
-        for k, v in model.parameters.items()
-    }
-    shaped["a"] = [0.1, 0.2, 0.3]
-    se = free_standard_errors(_with_errors(hammerstein[3], shaped).models[0].fit)
-    names = model.free_parameter_names()
-    assert se is not None and se.size == len(names)
-    assert [se[names.index(f"a_{j}")] for j in (1, 2, 3)] == [0.1, 0.2, 0.3]
-    by_name = {n: 0.25 for n in names}
-    assert np.all(free_standard_errors(_with_errors(hammerstein[3], by_name).models[0].fit) == 0.25)
-    assert free_standard_errors(_with_errors(hammerstein[3], [1.0, 2.0]).models[0].fit) is None
-    assert free_standard_errors(fit) is None
-    # a parameter the data did not determine (null, as a fit's JSON stores it): no draws,
-    # and no TypeError (blockid identify --report on a Hammerstein-Wiener chain ended so)
-    shaped["a"] = [0.1, None, 0.3]
-    assert free_standard_errors(_with_errors(hammerstein[3], shaped).models[0].fit) is None
 
 
 def test_report_of_an_identify_result(hammerstein):
