@@ -198,3 +198,26 @@ def test_no_import_circle():
         if module not in seen:
             visit(module, [module])
     assert not circles, [" -> ".join(c) for c in circles]
+
+
+def _test_file(module: Path) -> Path:
+    """Where the tests of ``module`` (a file under ``src/blockid``) go: docs/testing.md,
+    *Where a test goes* (a private module's leading underscore dropped; a kernel's tests
+    named ``test_<stem>_kernels.py`` in ``tests/kernels``)."""
+    rel = module.relative_to(SRC)
+    stem = module.stem.lstrip("_")
+    tests = SRC.parents[1] / "tests"
+    if rel.parts[0] == "_kernels":
+        return tests / "kernels" / f"test_{stem}_kernels.py"
+    return tests.joinpath(*rel.parts[:-1]) / f"test_{stem}.py"
+
+
+def test_every_module_has_a_test_file_of_its_own():
+    """Tests mirror modules (issue 33 item 6): a reader looking for a module's tests opens
+    one file, ``tests/<package>/test_<module>.py``."""
+    missing = [
+        f"{path.relative_to(SRC)} -> {_test_file(path).relative_to(SRC.parents[1])}"
+        for path in sorted(SRC.rglob("*.py"))
+        if path.name != "__init__.py" and not _test_file(path).exists()
+    ]
+    assert not missing, missing
