@@ -6,6 +6,7 @@ import math
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -284,6 +285,7 @@ def test_the_ball_and_beam_integrator_loses_over_the_halves():
     from blockid.data.folds import fold_plan
     from blockid.workflows.identify import _long_horizon, _Search
     from blockid.workflows.parallel import TaskRunner
+    from blockid.workflows.refit import REFIT_FAILED
     from blockid.workflows.search_space import Candidate
 
     frame = np.loadtxt(BALLBEAM, delimiter=",", skiprows=1)
@@ -292,7 +294,7 @@ def test_the_ball_and_beam_integrator_loses_over_the_halves():
     linear = Candidate("output-error", {"na": 4, "nb": 5, "nk": 14})
     with TaskRunner(data, 1) as runner:
         search = _Search(data, fold_plan(data, 4), runner, EFFORTS["standard"],
-                         "geometric-mean", 0.02, None, None)  # fmt: skip
+                         "geometric-mean", 0.02, None, None, REFIT_FAILED)  # fmt: skip
         scores = search.run("structures", [drifting, linear], screen=False)
         assert scores[0].rmse < scores[1].rmse  # the folds prefer the integrator
         notes = []
@@ -617,12 +619,19 @@ def test_a_scheduler_and_jobs_together_are_refused(cluster):
                  scheduler=cluster)  # fmt: skip
 
 
-def test_an_unreachable_scheduler_is_named(monkeypatch):
+def test_an_unreachable_scheduler_is_named():
+    """The search's runner (the one identify opens) names the address it could not reach
+    within its connect_timeout, and what to do."""
     pytest.importorskip("distributed")
-    monkeypatch.setattr("blockid.workflows.parallel.CONNECT_TIMEOUT", 1.0)
-    with pytest.raises(errors.ParameterError, match="cannot reach the dask scheduler"):
-        identify(dead_zone_record(300), structures=["arx"], effort=SMALL,
-                 scheduler="tcp://127.0.0.1:9")  # fmt: skip
+    from blockid.workflows.parallel import TaskRunner
+
+    runner = TaskRunner(dead_zone_record(300), scheduler="tcp://127.0.0.1:9", connect_timeout=1.0)
+    start = time.monotonic()
+    with pytest.raises(errors.ParameterError, match=r"cannot reach the dask scheduler "
+                       r"'tcp://127.0.0.1:9'.*leave --scheduler out"):  # fmt: skip
+        with runner:
+            pass  # pragma: no cover - never entered
+    assert time.monotonic() - start < 8.0  # the timeout given, not the default 10 s
 
 
 def test_a_race_on_a_long_record_scores_the_leaders_as_the_full_stage_would():

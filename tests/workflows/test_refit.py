@@ -43,7 +43,7 @@ def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stop
     ftol at its linear start), so it is refused with the numbers, whatever stopped it;
     identify then fits the next candidate."""
     from blockid.errors import EstimationError
-    from blockid.workflows.refit import _fell_short, _refit
+    from blockid.workflows.refit import REFIT_FAILED, _fell_short, _refit
     from blockid.workflows.search_space import Candidate
 
     data = dead_zone_record()
@@ -53,18 +53,15 @@ def test_a_refit_far_short_of_the_cross_validated_score_is_refused_whatever_stop
     assert "max_nfev" not in str(fit.settings.get("stop_reason"))  # it converged
     assert own == pytest.approx(fit.estimation_metrics["rmse"]["y"], rel=0.05)
     with pytest.raises(EstimationError, match="did not find what the folds found"):
-        _fell_short(fit, own, own / 2.5)
-    _fell_short(fit, own, own / 1.5)  # within the factor: no error
+        _fell_short(fit, own, own / 2.5, REFIT_FAILED)
+    _fell_short(fit, own, own / 1.5, REFIT_FAILED)  # within the factor: no error
 
 
-def test_when_every_refit_falls_short_the_first_is_returned_with_a_note(monkeypatch):
+def test_when_every_refit_falls_short_the_first_is_returned_with_a_note():
     """The refusal must not turn a search into an error: with the factor set so that every
     refit falls short, the best candidate's refit comes back, said so in the notes."""
-    from blockid.workflows import refit as module
-
-    monkeypatch.setattr(module, "REFIT_FAILED", 1e-9)
     data = dead_zone_record(600)
-    result = identify(data, structures=["hammerstein"], effort=SMALL, jobs=1)
+    result = identify(data, structures=["hammerstein"], effort=SMALL, jobs=1, refit_failed=1e-9)
     refused = [n for n in result.notes if "did not find what the folds found" in n]
     assert refused[0].startswith(result.selected.candidate.label)  # the first one tried
     assert result.selected.candidate.structure == "hammerstein"
@@ -156,7 +153,7 @@ def test_a_warm_start_replaces_the_direct_fit_only_when_better_by_more_than_the_
     from dataclasses import dataclass
     from types import SimpleNamespace
 
-    from blockid.workflows.refit import _final, _Started
+    from blockid.workflows.refit import REFIT_FAILED, _final, _Started
 
     @dataclass
     class Fit:
@@ -169,7 +166,8 @@ def test_a_warm_start_replaces_the_direct_fit_only_when_better_by_more_than_the_
             ("the direct fit", _Started(fits["direct"], 1.0, 1.0)),
             ("the model fitted without fold 1", _Started(fits["warm"], 0.5, warm_error)),
         ]
-        return SimpleNamespace(final_fits=lambda score: results, tie=0.02)  # fmt: skip
+        return SimpleNamespace(final_fits=lambda score: results, tie=0.02,
+                               refit_failed=REFIT_FAILED)  # fmt: skip
 
     score = scored("hammerstein", [1.0, 1.0, 1.0], max_nfev=30)
     near = 1.0 / 1.019  # 1.9 % better: within the tie

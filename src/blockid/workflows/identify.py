@@ -52,7 +52,7 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
    from rest). If that fails, the next one. A refit stopped by its evaluation limit
    more than ``REFIT_SLACK`` (:mod:`blockid.workflows.refit`) worse on its own data than
    the candidate's cross-validated score is fitted again with ``REFIT_MORE`` times the
-   evaluations, and the better kept; one still more than ``REFIT_FAILED`` times worse
+   evaluations, and the better kept; one still more than ``refit_failed`` times worse
    than the folds' pooled error (whatever stopped it) is refused, with a note, and the
    next candidate fitted (if all are, the first of them is returned, with a note).
    **Warm starts**: a fit by simulation error is a nonconvex optimisation and the refit
@@ -132,6 +132,7 @@ from blockid.workflows.effort import (
 )
 from blockid.workflows.parallel import TaskRunner
 from blockid.workflows.refit import (
+    REFIT_FAILED,
     REFIT_SLACK,
     RefitFellShort,
     _final,
@@ -243,6 +244,7 @@ class _Search:
         tie: float,
         deadline: float | None,
         progress: Progress | None,
+        refit_failed: float,
     ) -> None:
         self.data = data
         self.plan = plan
@@ -250,6 +252,7 @@ class _Search:
         self.effort = effort
         self.rule = rule
         self.tie = tie
+        self.refit_failed = refit_failed
         self.deadline = deadline
         self.progress = progress
         self.scores: dict[tuple[Any, ...], Score] = {}
@@ -654,6 +657,7 @@ def identify(
     time_limit: float | None = None,
     rule: str = "geometric-mean",
     tie: float = TIE,
+    refit_failed: float = REFIT_FAILED,
     use_orders_test: bool = True,
     progress: Progress | None = None,
     stages: Sequence[Stage] | None = None,
@@ -689,6 +693,10 @@ def identify(
         How a candidate's fold scores are combined (module docstring).
     tie : float
         Relative score within which the candidate with fewer parameters wins.
+    refit_failed : float
+        A chosen candidate whose fit on all estimation data simulates those data more
+        than this factor worse than its folds simulated data they never saw is refused,
+        and the next one fitted (:data:`~blockid.workflows.refit.REFIT_FAILED`).
     use_orders_test : bool
         Add the false-nearest-neighbours delay and centre the order grid on its orders.
     progress : callable, optional
@@ -707,6 +715,11 @@ def identify(
     if not isinstance(data, Dataset):
         raise DataError(f"identify needs a blockid Dataset, got {type(data).__name__}")
     eff, asked = check_search(structures, effort, rule, jobs, time_limit, scheduler)
+    if not refit_failed > 0:
+        raise ParameterError(
+            f"refit_failed must be a positive factor, got {refit_failed!r}",
+            parameter="refit_failed",
+        )
     refuse_constant_inputs(data)  # before any fold: it names the input, they would not
     chosen = asked or list(searched_structures())
     notes: list[str] = []
@@ -747,7 +760,7 @@ def identify(
     fit, selected = None, None
     short: tuple[Score, Any] | None = None  # the first refit that fell short, kept
     with TaskRunner(data, jobs, scheduler) as runner:
-        search = _Search(data, plan, runner, eff, rule, tie, deadline, progress)
+        search = _Search(data, plan, runner, eff, rule, tie, deadline, progress, refit_failed)
         run_stages(search, chosen, recommended, notes, asked=bool(asked), stages=stages)
         for raced in (r["raced"] for r in search.stages if "raced" in r):
             notes.append(

@@ -37,7 +37,8 @@ REFIT_SLACK = 1.1
 REFIT_MORE = 3
 #: A refit whose free run on its own data is still more than this factor worse than its
 #: candidate's cross-validated score has not found what the folds found (whatever made
-#: it stop): it is refused, and the next candidate is fitted. (Bouc-Wen, a degree-2
+#: it stop): it is refused, and the next candidate is fitted (``identify``'s
+#: ``refit_failed``, whose default this is). (Bouc-Wen, a degree-2
 #: polynomial state space: the folds reached 15 um on held-back data, the refit on all
 #: 40 960 samples stalled at its linear start's 164 um, every step that moved a pole
 #: sitting at the stability margin refused; it tested 150 um.)
@@ -119,13 +120,13 @@ def _segment_rmse(model: Any, data: Dataset, segments: Sequence[Segment], n_init
     return _own_rmse(model, materialise(data, segments), n_init)
 
 
-def _fell_short(fit: Any, own: float | None, fold_rmse: float) -> None:
-    """Refuse a refit whose own-data error is more than ``REFIT_FAILED`` times the
-    folds' pooled error on data they never saw (:class:`RefitFellShort`)."""
-    if own is not None and own > REFIT_FAILED * fold_rmse:
+def _fell_short(fit: Any, own: float | None, fold_rmse: float, factor: float) -> None:
+    """Refuse a refit whose own-data error is more than ``factor`` times the folds'
+    pooled error on data they never saw (:class:`RefitFellShort`)."""
+    if own is not None and own > factor * fold_rmse:
         raise RefitFellShort(
             f"its fit on all estimation data simulates its own data with an RMSE of "
-            f"{own:.4g}, more than {REFIT_FAILED:g} times the folds' {fold_rmse:.4g} on "
+            f"{own:.4g}, more than {factor:g} times the folds' {fold_rmse:.4g} on "
             f"data they never saw (stopped: {fit.settings.get('stop_reason', '?')}): the "
             "fit did not find what the folds found",
             fit,
@@ -237,7 +238,7 @@ def _final(search: _Search, score: Score, notes: list[str]) -> tuple[Any, dict[s
             f"on all of them from its models of the folds; simulated from the start of "
             f"every fold (as the search scores) they err {shown}: {best_name} is returned"
         )
-    _fell_short(fit, best.rmse, _fold_rmse(score))
+    _fell_short(fit, best.rmse, _fold_rmse(score), search.refit_failed)
     return fit, info
 
 
