@@ -129,3 +129,17 @@ def test_arx_from_dict_without_offsets_has_zero_offsets():
     loaded = model_from_dict(data)
     np.testing.assert_array_equal(loaded.simulate(U), m.simulate(U))
     assert list(np.ravel(loaded.input_offset)) == [0.0]
+
+
+def test_a_single_output_model_takes_its_coefficients_as_plain_lists():
+    as_lists = ARX(["u"], ["y"], na=1, nb=2, nk=1, a=[-0.9], b=[0.1, 0.05])
+    as_dicts = ARX(["u"], ["y"], na=1, nb=2, nk=1,
+                   a={"y": {"y": [-0.9]}}, b={"y": {"u": [0.1, 0.05]}})  # fmt: skip
+    u = np.sin(np.arange(20) / 3)
+    np.testing.assert_array_equal(as_lists.simulate(u), as_dicts.simulate(u))
+    assert as_lists.simulate(np.ones(3))[:, 0].tolist() == pytest.approx([0.0, 0.1, 0.24])
+
+
+def test_a_plain_list_for_several_inputs_is_refused_with_the_dict_form():
+    with pytest.raises(errors.OrderError, match=r"b must be a dict b\[output\]\[input\]"):
+        ARX(["u1", "u2"], ["y"], a=[-0.9], b=[0.1])

@@ -17,6 +17,7 @@ latter back to what it returns.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -58,10 +59,12 @@ class ARX(Model):
         Signal names.
     na, nb, nk : int or matrix
         Orders and delays (see the module docstring).
-    a : dict, optional
-        ``a[output][output_j]`` = ``[a_1 .. a_na]``; zeros when omitted.
-    b : dict, optional
-        ``b[output][input]`` = ``[b_0 .. b_{nb-1}]``; zeros when omitted.
+    a : dict or sequence, optional
+        ``a[output][output_j]`` = ``[a_1 .. a_na]``; zeros when omitted. With one
+        output, the list ``[a_1 .. a_na]`` alone.
+    b : dict or sequence, optional
+        ``b[output][input]`` = ``[b_0 .. b_{nb-1}]``; zeros when omitted. With one
+        input and one output, the list alone.
     sampling_time : float, optional
     input_offset, output_offset : sequence of float, optional
         Operating point subtracted from the signals (default 0).
@@ -117,9 +120,24 @@ class ARX(Model):
             for i, yi in enumerate(self.outputs)
         }
         for src, dst, what in ((a, self.a, "a"), (b, self.b, "b")):
-            for yi, row in (src or {}).items():
+            for yi, row in self._nested(src, what).items():
                 for name, coeffs in row.items():
                     self._set(dst, what, yi, name, coeffs)
+
+    def _nested(self, src: Any, what: str) -> dict[str, Any]:
+        """``a`` or ``b`` as ``{output: {signal: coefficients}}``: a plain sequence is
+        taken as the one such list when there is one output (and, for ``b``, one input)."""
+        if src is None or isinstance(src, Mapping):
+            return dict(src or {})
+        columns = self.outputs if what == "a" else self.inputs
+        if len(self.outputs) == 1 and len(columns) == 1:
+            return {self.outputs[0]: {columns[0]: src}}
+        raise OrderError(
+            f"{what} must be a dict {what}[output][{'output' if what == 'a' else 'input'}] "
+            f"= coefficients when the model has several "
+            f"{'outputs' if len(self.outputs) > 1 else 'inputs'}; got a "
+            f"{type(src).__name__}"
+        )
 
     def _set(self, dst: dict, what: str, yi: str, name: str, coeffs: Any) -> None:
         if yi not in dst or name not in dst[yi]:
