@@ -30,9 +30,7 @@ def test_every_package_and_top_level_module_has_a_floor():
     """A package without a floor would escape the import check (its layer is None)."""
     found = {p.stem for p in SRC.glob("*.py") if p.name != "__init__.py"}
     found |= {p.parent.name for p in SRC.glob("*/__init__.py")}
-    # blockid/_lazy.py has no floor (it imports the standard library only, so floor 0
-    # would be true; floors.py is outside this change): known, not hidden
-    assert found - {"_lazy"} == set(FLOORS)
+    assert found == set(FLOORS)
 
 
 def test_the_floors_follow_the_pipeline():

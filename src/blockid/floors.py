@@ -17,6 +17,7 @@ FLOORS: dict[str, int] = {
     "defaults": 0,
     "floors": 0,
     "config": 0,  # memory and work-partition sizes, read by the fits at call time
+    "_lazy": 0,  # the packages' lazy exports: the standard library only
     "_kernels": 0,
     "data": 1,
     "design": 1,  # excitation signals: NumPy only, beside the data they become
