@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from blockid.workflows.identify import EFFORTS, identify
 
-from reference import SMALL, dead_zone_record
+from reference import SMALL, dead_zone_record, fourth_order_arx_halves
 
 
 def test_the_nonlinearity_stage_keeps_a_state_space_degree_within_the_effort():
@@ -48,3 +48,42 @@ def test_a_stage_is_one_class_in_the_list_of_stages():
     assert seen["delays"] and seen["orders"]
     assert any(s.stage == "wider arx" for s in result.ranked + result.rejected)
     assert [s["stage"] for s in result.search["stages"]][-2:] == ["wider arx", "refit"]
+
+
+def _finalists_after(chain_orders):
+    """identify on an ARX plant of four poles with one chain scored beside the ARX
+    models (``chain_orders``: its na, nb, nk), then the finalists stage."""
+    from blockid.workflows import stages
+    from blockid.workflows.search_space import Candidate
+
+    class OneChain(stages.Stage):
+        name = "one chain"
+
+        def run(self, search, context):
+            na, nb, nk = chain_orders
+            chain = {"na": na, "nb": nb, "nk": nk, "input_block": "polynomial:degree=3",
+                     "max_nfev": 5, "tail_fraction": 0.0}  # fmt: skip
+            search.run(self.name, [Candidate("hammerstein", chain)], True)
+
+    data, _ = fourth_order_arx_halves()
+    plan = (*stages.STAGES[:2], OneChain(), stages.Finalists())
+    return identify(data, structures=["arx", "hammerstein"], effort=SMALL, jobs=1, stages=plan)
+
+
+def test_a_finalist_far_behind_the_best_model_is_not_fitted_again():
+    """A chain of one pole on a plant of four is more than FINALIST_REACH times the ARX
+    model's error: the finalists stage fits nothing and the record says which and why;
+    the chain of the plant's own orders, within reach, is fitted again."""
+    from blockid.workflows.stages import FINALIST_REACH
+
+    far = _finalists_after((1, 1, 1))
+    chain = next(s for s in far.ranked if s.candidate.structure == "hammerstein")
+    best = far.ranked[0]
+    assert best.candidate.structure == "arx" and chain.rmse > FINALIST_REACH * best.rmse
+    assert not any(s.stage == "finalists" for s in far.ranked + far.rejected)
+    assert [f["label"] for f in far.search["out_of_reach"]] == [chain.candidate.label]
+    assert any("not fitted again" in n for n in far.notes)
+
+    near = _finalists_after((4, 2, 1))
+    assert near.search["out_of_reach"] == []
+    assert any(s.stage == "finalists" for s in near.ranked + near.rejected)

@@ -42,7 +42,9 @@ candidate that fails, is unstable, does not simulate finitely or is not trusted
    first fold, the best ``1 / race`` of them on the others.
 4. ``finalists`` -- the best ``finalists`` candidates again with ``final_nfev``
    iterations on the whole training folds: new candidates, scored like the rest (a
-   longer fit never replaces a shorter one that scored better).
+   longer fit never replaces a shorter one that scored better); one more than
+   :data:`~blockid.workflows.stages.FINALIST_REACH` times the best score so far is not
+   fitted again (``search.out_of_reach``).
 5. ``nonlinearity`` -- the best candidate with each polynomial degree or block size
    raised by 2 (a state-space model's monomial degree by 1), while the score falls by
    more than ``tie``.
@@ -152,7 +154,7 @@ from blockid.workflows.search_space import (
     keeps_fold_models,
     unique,
 )
-from blockid.workflows.stages import INTEGRATING_POLE, Stage, run_stages
+from blockid.workflows.stages import FINALIST_REACH, INTEGRATING_POLE, Stage, run_stages
 
 __all__ = [
     "EFFORTS",
@@ -260,6 +262,8 @@ class _Search:
         self.cut = False
         self.stages: list[dict[str, Any]] = []
         self.raced: list[dict[str, Any]] = []  # candidates a race left out (:meth:`_race`)
+        #: finalists left unfitted, too far behind the best (``stages.FINALIST_REACH``)
+        self.out_of_reach: list[dict[str, Any]] = []
         #: (candidate key, training segments, limit) -> that fit's model, for a climb
         self.fold_models: dict[tuple[Any, ...], Any] = {}
         shortest = min(s.n_samples for f in plan.folds for s in f.test)
@@ -769,6 +773,13 @@ def identify(
                 f"fold; {raced['left_out']} were left out there (search.raced_out in the "
                 "JSON lists them with that fold's error)"
             )
+        if search.out_of_reach:
+            far = search.out_of_reach
+            notes.append(
+                f"{len(far)} finalist(s) not fitted again, more than {FINALIST_REACH:g} times "
+                f"the best model's cross-validated error ({far[0]['best']:.4g}): "
+                + ", ".join(f"{f['label']} ({f['cv_rmse']:.4g})" for f in far)
+            )
         ranked_all = search.ranked()
         eligible = [s for s in ranked_all if s.candidate.structure in chosen]
         if not eligible:
@@ -846,6 +857,7 @@ def identify(
         "initial_samples": search.n_init,
         "stages": search.stages,
         "raced_out": search.raced,
+        "out_of_reach": search.out_of_reach,
         "cut_by_time_limit": search.cut,
         "time_limit": time_limit,
         "beyond_linear": earned,
