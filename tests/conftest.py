@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -9,6 +10,14 @@ import typer
 from typer.testing import CliRunner
 
 matplotlib.use("Agg")
+
+# Worker processes (identify's pool) import the functions of a test module by its name,
+# ``tests.<folder>.<module>`` (``--import-mode=importlib``), and start from this
+# process's path: the checkout's root must be on it, as ``python -m pytest`` puts it and
+# the ``pytest`` script does not.
+_ROOT = str(Path(__file__).resolve().parent.parent)
+if _ROOT not in sys.path:
+    sys.path.append(_ROOT)
 
 
 @pytest.fixture
