@@ -50,7 +50,7 @@ def test_a_stage_is_one_class_in_the_list_of_stages():
     assert [s["stage"] for s in result.search["stages"]][-2:] == ["wider arx", "refit"]
 
 
-def _finalists_after(chain_orders):
+def _finalists_after(chain_orders, structures=("arx", "hammerstein")):
     """identify on an ARX plant of four poles with one chain scored beside the ARX
     models (``chain_orders``: its na, nb, nk), then the finalists stage."""
     from blockid.workflows import stages
@@ -67,7 +67,7 @@ def _finalists_after(chain_orders):
 
     data, _ = fourth_order_arx_halves()
     plan = (*stages.STAGES[:2], OneChain(), stages.Finalists())
-    return identify(data, structures=["arx", "hammerstein"], effort=SMALL, jobs=1, stages=plan)
+    return identify(data, structures=list(structures), effort=SMALL, jobs=1, stages=plan)
 
 
 def test_a_finalist_far_behind_the_best_model_is_not_fitted_again():
@@ -87,3 +87,11 @@ def test_a_finalist_far_behind_the_best_model_is_not_fitted_again():
     near = _finalists_after((4, 2, 1))
     assert near.search["out_of_reach"] == []
     assert any(s.stage == "finalists" for s in near.ranked + near.rejected)
+
+
+def test_a_model_that_may_not_be_chosen_leaves_every_finalist_in_reach():
+    """Asked for chains only, the ARX models that guide the search (scored, never chosen)
+    do not set the reach: the one chain is fitted again however far behind them."""
+    chains_only = _finalists_after((1, 1, 1), structures=("hammerstein",))
+    assert chains_only.search["out_of_reach"] == []
+    assert chains_only.selected.stage == "finalists"

@@ -205,8 +205,11 @@ class Finalists(Stage):
             return
         pool = [s for s in search.order if s.candidate.structure in iterative]
         best = search.ranked(pool)[: search.effort.finalists]
-        leader = search.ranked()
-        if leader:  # out of reach of the best model so far: no longer fit (FINALIST_REACH)
+        # out of reach of the best model that may be chosen: no longer fit (FINALIST_REACH);
+        # a model scored only to guide the search (an ARX when chains were asked) does not
+        # count, or the structures asked for would lose their longer fits to it
+        leader = search.ranked([s for s in search.order if s.candidate.structure in context.chosen])
+        if leader:
             far = [s for s in best if s.rmse > FINALIST_REACH * leader[0].rmse]
             best = [s for s in best if s not in far]
             if far:
