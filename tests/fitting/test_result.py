@@ -8,7 +8,7 @@ import pytest
 
 from blockid.data import Dataset
 from blockid.fitting import fit_model
-from blockid.fitting.result import FitResult
+from blockid.fitting.result import FitResult, simulation_result
 
 
 def _result(**kwargs):
@@ -47,3 +47,15 @@ def test_a_fit_records_its_samples_method_and_free_run_metrics():
     record = fit_model(data, "arx", method="batch", na=1, nb=1, nk=1).estimation_record()
     assert record["method"] == "batch" and record["n_samples"] == 200
     assert record["one_step_on_estimation_data"]["rmse"]["y"] < 1e-10
+
+
+def test_a_simulation_result_holds_free_run_metrics_of_the_data():
+    data = Dataset.from_arrays(np.zeros(40), np.zeros(40), ["u"], ["y"])
+    metrics = {"rmse": {"y": 0.25}}
+    result = simulation_result("model", data, "simulation-error", {"na": 1}, metrics)
+    assert result == FitResult(
+        "model", "simulation-error", {"na": 1}, metrics, 40, {}, metrics_mode="simulation"
+    )
+    timed = simulation_result("model", data, "subspace", {}, metrics, {"seconds": 1.5})
+    assert timed.history == {"seconds": 1.5}
+    assert "simulation_on_estimation_data" in timed.estimation_record()

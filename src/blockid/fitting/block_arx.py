@@ -44,7 +44,7 @@ from blockid.data.dataset import Dataset, Experiment
 from blockid.defaults import FORGETTING
 from blockid.errors import EstimationError, ParameterError
 from blockid.fitting.options import checked
-from blockid.fitting.result import FitResult
+from blockid.fitting.result import FitResult, simulation_result
 from blockid.fitting.state_space import _check, signal_statistics
 from blockid.models.arx import ARX
 from blockid.models.block_state_space import BlockStateSpace
@@ -313,12 +313,6 @@ def fit_block_arx(
         "rank_ratio": dict(zip(data.inputs, ratios, strict=True)),
         "regression": inner.settings,
     }
-    return FitResult(
-        model=model,
-        method=f"block-arx-{method}",
-        settings=settings,
-        estimation_metrics=metrics,
-        n_samples=data.n_samples,
-        history=dict(inner.history),
-        metrics_mode="simulation",
+    return simulation_result(
+        model, data, f"block-arx-{method}", settings, metrics, dict(inner.history)
     )

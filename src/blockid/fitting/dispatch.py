@@ -32,7 +32,7 @@ from blockid.fitting.registry import (
     get_structure,
     resolve_options,
 )
-from blockid.fitting.result import FitResult
+from blockid.fitting.result import FitResult, simulation_result
 
 __all__ = [
     "STRUCTURES",
@@ -208,18 +208,14 @@ def refine_from(model: Any, data: Dataset, structure: str, **options: Any) -> Fi
         elif np.isfinite(np.asarray(model.observed_lower)).any():  # its monomials' range
             fitted = with_observed_range(fitted, data)
         how = f"{structure} refined from a given model"
-        result = FitResult(
-            model=fitted,
-            method=how,
-            settings={
-                **_solver_settings(info, int(tolerances.get("max_nfev", 100))),
-                "refinement": info,
-                **({"warnings": info["warnings"]} if info.get("warnings") else {}),
-            },
-            estimation_metrics=_check(fitted, data, how),
-            n_samples=data.n_samples,
-            history={"seconds": info["seconds"]},
-            metrics_mode="simulation",
+        settings = {
+            **_solver_settings(info, int(tolerances.get("max_nfev", 100))),
+            "refinement": info,
+            **({"warnings": info["warnings"]} if info.get("warnings") else {}),
+        }
+        metrics = _check(fitted, data, how)
+        result = simulation_result(
+            fitted, data, how, settings, metrics, {"seconds": info["seconds"]}
         )
     else:
         result = refine(model, data, **tolerances)

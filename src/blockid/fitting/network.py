@@ -18,7 +18,7 @@ from blockid.data.dataset import Dataset, Experiment
 from blockid.errors import BlockidError, DataError, EstimationError, ParameterError
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.dispatch import fit_model
-from blockid.fitting.result import FitResult
+from blockid.fitting.result import FitResult, simulation_result
 from blockid.models.network import Network
 
 __all__ = ["SubsystemSpec", "parse_subsystem", "network_signals", "subset", "fit_network"]
@@ -133,11 +133,10 @@ def fit_network(data: Dataset, specs: list[SubsystemSpec]) -> FitResult:
     y_sim = np.vstack([network.simulate(e.u, e.y[:skip])[skip:] for e in net_data.experiments])
     if not np.all(np.isfinite(y_sim)):
         raise EstimationError("the assembled network's free-run simulation is not finite")
-    return FitResult(
-        model=network,
-        method="network",
-        settings={"subsystems": settings},
-        estimation_metrics=metrics_by_output(y, y_sim, network.outputs),
-        n_samples=data.n_samples,
-        metrics_mode="simulation",
+    return simulation_result(
+        network,
+        data,
+        "network",
+        {"subsystems": settings},
+        metrics_by_output(y, y_sim, network.outputs),
     )

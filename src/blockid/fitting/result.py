@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["FitResult"]
+__all__ = ["FitResult", "simulation_result"]
 
 
 @dataclass(frozen=True)
@@ -57,3 +57,25 @@ class FitResult:
             "n_samples": self.n_samples,
             f"{self.metrics_mode.replace('-', '_')}_on_estimation_data": self.estimation_metrics,
         }
+
+
+def simulation_result(
+    model: Any,
+    data: Any,
+    method: str,
+    settings: dict[str, Any],
+    metrics: dict[str, dict[str, float]],
+    history: dict[str, Any] | None = None,
+) -> FitResult:
+    """The result of a fit on ``data`` whose ``metrics`` are of the model's free run
+    (``metrics_mode="simulation"``): the simulation-error, state-space, block-ARX and
+    network fits."""
+    return FitResult(
+        model=model,
+        method=method,
+        settings=settings,
+        estimation_metrics=metrics,
+        n_samples=data.n_samples,
+        history={} if history is None else history,
+        metrics_mode="simulation",
+    )

@@ -83,7 +83,7 @@ from blockid.fitting.checks import check_model, margin_for, refuse_unstable, sim
 from blockid.fitting.initial import initial_estimate, resolve_structure
 from blockid.fitting.levenberg_marquardt import EarlyStop, levenberg_marquardt, note_tail
 from blockid.fitting.options import checked
-from blockid.fitting.result import FitResult
+from blockid.fitting.result import FitResult, simulation_result
 from blockid.models.block import BlockModel, ChainModel, HammersteinWiener
 from blockid.models.sensitivities import sensitivity_chunks
 
@@ -542,19 +542,12 @@ def refine(
             "start), not a refined one; with more data, or tail_fraction=0 "
             "(--tail-fraction 0), the refinement runs to convergence"
         ]
-    return FitResult(
-        model=fitted,
-        method=METHOD,
-        settings=settings,
-        estimation_metrics=metrics,
-        n_samples=data.n_samples,
-        history={
-            "fit_mse": np.array(tracker.cost),
-            "tail_mse": np.array(tracker.tail),
-            "seconds": elapsed,
-        },
-        metrics_mode="simulation",
-    )
+    history = {
+        "fit_mse": np.array(tracker.cost),
+        "tail_mse": np.array(tracker.tail),
+        "seconds": elapsed,
+    }
+    return simulation_result(fitted, data, METHOD, settings, metrics, history)
 
 
 def fit_simulation_error(

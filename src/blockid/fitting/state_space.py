@@ -80,7 +80,7 @@ from blockid.errors import DataError, EstimationError, OrderError, ParameterErro
 from blockid.evaluation.metrics import metrics_by_output
 from blockid.fitting.checks import refuse_unstable, stability_margin
 from blockid.fitting.options import checked
-from blockid.fitting.result import FitResult
+from blockid.fitting.result import FitResult, simulation_result
 from blockid.fitting.state_space_refinement import (
     _Signals,
     _solver_settings,
@@ -701,15 +701,10 @@ def _refined_from_linear(
 def _result(
     model: Any, data: Dataset, method: str, settings: dict[str, Any], metrics: Any, t0: float
 ) -> FitResult:
-    """A state-space fit's result: its metrics are of the free run (``_check``)."""
-    return FitResult(
-        model=model,
-        method=method,
-        settings=settings,
-        estimation_metrics=metrics,
-        n_samples=data.n_samples,
-        history={"seconds": time.perf_counter() - t0},
-        metrics_mode="simulation",
+    """A state-space fit's result: its metrics are of the free run (``_check``), its
+    history the seconds since ``t0``."""
+    return simulation_result(
+        model, data, method, settings, metrics, {"seconds": time.perf_counter() - t0}
     )
 
 
