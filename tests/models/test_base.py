@@ -29,3 +29,22 @@ def test_unknown_model_structure_lists_the_known_ones():
     assert str(info.value).startswith("unknown model structure 'nope'; known: ")
     assert known == sorted(MODEL_TYPES)
     assert {"arx", "hammerstein", "wiener", "network", "feedback"} <= set(known)
+
+
+def test_signals_of_the_wrong_width_name_the_model_signals_and_the_shape():
+    import numpy as np
+
+    from blockid.errors import DataError
+    from blockid.models import StateSpace
+
+    model = StateSpace(["a", "b"], ["y"], A=[[0.5]], B=[[1.0, 0.5]], C=[[1.0]], D=[[0.0, 0.0]])
+    with pytest.raises(DataError) as info:
+        model.simulate(np.zeros(5))
+    assert str(info.value) == (
+        "the model has 2 input(s) ['a', 'b'] but got an input array of shape (5, 1)"
+    )
+    with pytest.raises(DataError) as info:
+        model.simulate(np.zeros((5, 2)), np.zeros((3, 2)))
+    assert str(info.value) == (
+        "the model has 1 output(s) ['y'] but got an output array of shape (3, 2)"
+    )

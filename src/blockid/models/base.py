@@ -133,14 +133,7 @@ class Model(ABC):
 
     def _check_signals(self, u: Any, y: Any = None) -> tuple[np.ndarray, np.ndarray | None]:
         """Coerce ``u`` (N, nu) and ``y`` (N, ny) and check their shapes."""
-        u = np.asarray(u, dtype=float)
-        if u.ndim == 1:
-            u = u[:, None]
-        if u.ndim != 2 or u.shape[1] != len(self.inputs):
-            raise DataError(
-                f"the model has {len(self.inputs)} input(s) {list(self.inputs)} but got an "
-                f"input array of shape {u.shape}"
-            )
+        u = _columns(u, self.inputs, "input")
         bad = ~np.isfinite(u)
         if bad.any():
             row, col = np.argwhere(bad)[0]
@@ -149,14 +142,7 @@ class Model(ABC):
                 "model runs on finite inputs only; remove or fill the gap"
             )
         if y is not None:
-            y = np.asarray(y, dtype=float)
-            if y.ndim == 1:
-                y = y[:, None]
-            if y.ndim != 2 or y.shape[1] != len(self.outputs):
-                raise DataError(
-                    f"the model has {len(self.outputs)} output(s) {list(self.outputs)} but got "
-                    f"an output array of shape {y.shape}"
-                )
+            y = _columns(y, self.outputs, "output")
         return u, y
 
 
@@ -233,6 +219,20 @@ class OneChannel:
                 "pairs [low, high] by signal: the file was edited or damaged, refit or restore it"
             )
         return dict(sampling_time=data.get("sampling_time"), ranges=ranges, **given)
+
+
+def _columns(x: Any, names: Any, what: str) -> np.ndarray:
+    """``x`` as a float array of one column per name in ``names`` (a 1-D ``x`` is one
+    column); a DataError names the ``what`` ("input", "output") whose shape is wrong."""
+    x = np.asarray(x, dtype=float)
+    if x.ndim == 1:
+        x = x[:, None]
+    if x.ndim != 2 or x.shape[1] != len(names):
+        raise DataError(
+            f"the model has {len(names)} {what}(s) {list(names)} but got an "
+            f"{what} array of shape {x.shape}"
+        )
+    return x
 
 
 def file_offsets(data: dict[str, Any], name: str) -> dict[str, list[Any]]:
