@@ -285,14 +285,9 @@ def _ss_run(M, un, x, sens=False):
 def _state_space(u, y0):
     m, M = MODEL["normalisation"], _ss_matrices()
     un = (u - np.asarray(m["input_offset"])) / np.asarray(m["input_scale"])
-    y_off, y_scale = np.asarray(m["output_offset"]), np.asarray(m["output_scale"])
-    nx = M["A"].shape[0]
-    x0 = np.zeros(nx)
-    n = 0
-    if y0 is not None and len(np.atleast_1d(y0)):
-        y0 = _rows(y0)
-        n = min(y0.shape[0], u.shape[0])
-        yn = (y0[:n] - y_off) / y_scale
+    y0, n, yn = _measured_start(y0, u.shape[0], m)
+    x0 = np.zeros(M["A"].shape[0])
+    if yn is not None:
         best = np.inf
         for _ in range(SPEC["iterations"]):
             out, J = _ss_run(M, un[:n], x0, sens=True)
@@ -304,8 +299,24 @@ def _state_space(u, y0):
             x0 = x0 + np.linalg.lstsq(J, r, rcond=None)[0]
             if not M["expo"].size:
                 break
-    y, _ = _ss_run(M, un, x0)
-    y = y * y_scale + y_off
+    return _in_units(_ss_run(M, un, x0)[0], m, y0, n)
+
+
+def _measured_start(y0, N, norm):
+    """The measured outputs ``y0`` a state-space run of ``N`` samples starts from (as
+    rows), how many of them count and their normalised values (``None``, 0, ``None``
+    without ``y0``): the state is fitted to them."""
+    if y0 is None or not len(np.atleast_1d(y0)):
+        return y0, 0, None
+    y0 = _rows(y0)
+    n = min(y0.shape[0], N)
+    return y0, n, (y0[:n] - np.asarray(norm["output_offset"])) / np.asarray(norm["output_scale"])
+
+
+def _in_units(y, norm, y0, n):
+    """A state-space run's normalised outputs ``y`` in the data's units, the first
+    ``min(n, max_lag)`` samples the measured ``y0`` it started from."""
+    y = y * np.asarray(norm["output_scale"]) + np.asarray(norm["output_offset"])
     k = min(n, SPEC["max_lag"])
     if k:
         y[:k] = y0[:k]
@@ -387,12 +398,9 @@ def _block_state_space(u, y0):
     for i, p in enumerate(m["input_blocks"]):
         if p is not None:
             w[:, i] = _bss_block(p, un[:, i], m["input_range"][i])[0]
-    y_off, y_scale = np.asarray(norm["output_offset"]), np.asarray(norm["output_scale"])
-    x0, n = np.zeros(nx), 0
-    if y0 is not None and len(np.atleast_1d(y0)):
-        y0 = _rows(y0)
-        n = min(y0.shape[0], u.shape[0])
-        yn = (y0[:n] - y_off) / y_scale
+    y0, n, yn = _measured_start(y0, u.shape[0], norm)
+    x0 = np.zeros(nx)
+    if yn is not None:
 
         def linearised(x):
             out, J = _bss_run(M, w[:n], x, sens=True)
@@ -416,12 +424,7 @@ def _block_state_space(u, y0):
             x0, best, r, J = trial, cost, r_new, J_new
             if gain < 1e-12:
                 break
-    y, _ = _bss_run(M, w, x0)
-    y = y * y_scale + y_off
-    k = min(n, SPEC["max_lag"])
-    if k:
-        y[:k] = y0[:k]
-    return y
+    return _in_units(_bss_run(M, w, x0)[0], norm, y0, n)
 
 
 def simulate(u, y0=None):
