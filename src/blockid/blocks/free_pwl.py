@@ -60,10 +60,9 @@ class FreePiecewiseLinear(PiecewiseLinear):
 
     Parameters
     ----------
-    breakpoints : sequence of float
-        At least two strictly increasing input values.
-    values : sequence of float
-        Output at each breakpoint (same length).
+    breakpoints, values : sequence of float
+        As for :class:`~blockid.blocks.static.PiecewiseLinear` (here the breakpoints'
+        starting places).
 
     Examples
     --------
