@@ -16,7 +16,7 @@ def package(monkeypatch):
     sub.answer = 42
     monkeypatch.setitem(sys.modules, "lazy_pkg", pkg)
     monkeypatch.setitem(sys.modules, "lazy_pkg.sub", sub)
-    pkg.__getattr__, pkg.__dir__ = lazy_names(
+    pkg.__all__, pkg.__getattr__, pkg.__dir__ = lazy_names(
         "lazy_pkg", {"answer": "sub", "FLOORS": "blockid.floors"}
     )
     return pkg
@@ -40,3 +40,7 @@ def test_dir_lists_the_lazy_names_before_they_are_imported(package):
     listed = dir(package)
     assert {"answer", "FLOORS", "__name__"} <= set(listed)
     assert listed == sorted(listed)
+
+
+def test_all_is_the_lazy_names_sorted(package):
+    assert package.__all__ == ["FLOORS", "answer"]

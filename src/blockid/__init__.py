@@ -78,7 +78,4 @@ _WHERE = {
     "ParameterError": "blockid.errors",
 }
 
-__all__ = sorted(_WHERE)
-
-
-__getattr__, __dir__ = lazy_names(__name__, _WHERE)
+__all__, __getattr__, __dir__ = lazy_names(__name__, _WHERE)

@@ -12,9 +12,9 @@ __all__ = ["lazy_names"]
 
 def lazy_names(
     package: str, where: dict[str, str]
-) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
-    """The ``__getattr__`` and ``__dir__`` of ``package`` whose public names are
-    ``where``: name -> module (a name relative to ``package`` when it has no dot)."""
+) -> tuple[list[str], Callable[[str], Any], Callable[[], list[str]]]:
+    """The ``__all__``, ``__getattr__`` and ``__dir__`` of ``package`` whose public names
+    are ``where``: name -> module (a name relative to ``package`` when it has no dot)."""
     namespace = importlib.import_module(package).__dict__
 
     def __getattr__(name: str) -> Any:
@@ -28,4 +28,4 @@ def lazy_names(
     def __dir__() -> list[str]:
         return sorted([*namespace, *where])
 
-    return __getattr__, __dir__
+    return sorted(where), __getattr__, __dir__

@@ -23,7 +23,4 @@ _WHERE = {
     "write_text_atomic": "blockid.data.io",
 }
 
-__all__ = sorted(_WHERE)
-
-
-__getattr__, __dir__ = lazy_names(__name__, _WHERE)
+__all__, __getattr__, __dir__ = lazy_names(__name__, _WHERE)

@@ -22,7 +22,4 @@ _WHERE = {
     "random_binary": "blockid.design.binary",
 }
 
-__all__ = sorted(_WHERE)
-
-
-__getattr__, __dir__ = lazy_names(__name__, _WHERE)
+__all__, __getattr__, __dir__ = lazy_names(__name__, _WHERE)

@@ -43,7 +43,4 @@ _WHERE = {
     "refine": "simulation_error",
 }
 
-__all__ = sorted(_WHERE)
-
-
-__getattr__, __dir__ = lazy_names(__name__, _WHERE)
+__all__, __getattr__, __dir__ = lazy_names(__name__, _WHERE)

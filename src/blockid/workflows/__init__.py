@@ -14,7 +14,4 @@ _WHERE = {
     "compare_structures": "compare",
 }
 
-__all__ = sorted(_WHERE)
-
-
-__getattr__, __dir__ = lazy_names(__name__, _WHERE)
+__all__, __getattr__, __dir__ = lazy_names(__name__, _WHERE)
