@@ -96,29 +96,18 @@ ESTIMATORS: dict[str, list[SubsystemSpec]] = {
 #: Paper A, Table 2 (validation): RMSE and maximum absolute error of P0 and Ma.
 PAPER_TABLE = [
     {
-        "condition": "110kPa",
-        "model": "block-oriented",
-        "rmse": {"y1": 0.0256, "y2": 0.00033},
-        "max_abs_error": {"y1": 0.0937, "y2": 0.0012},
-    },
-    {
-        "condition": "110kPa",
-        "model": "conventional",
-        "rmse": {"y1": 0.0287, "y2": 0.0004},
-        "max_abs_error": {"y1": 0.1252, "y2": 0.0026},
-    },
-    {
-        "condition": "130kPa",
-        "model": "block-oriented",
-        "rmse": {"y1": 0.0367, "y2": 0.0005},
-        "max_abs_error": {"y1": 0.1105, "y2": 0.0041},
-    },
-    {
-        "condition": "130kPa",
-        "model": "conventional",
-        "rmse": {"y1": 0.0391, "y2": 0.0009},
-        "max_abs_error": {"y1": 0.1843, "y2": 0.0059},
-    },
+        "condition": condition,
+        "model": model,
+        "rmse": {"y1": rmse_p0, "y2": rmse_mach},
+        "max_abs_error": {"y1": max_p0, "y2": max_mach},
+    }
+    for condition, model, rmse_p0, rmse_mach, max_p0, max_mach in (
+        # condition, model: RMSE of P0 and Ma, maximum absolute error of P0 and Ma
+        ("110kPa", "block-oriented", 0.0256, 0.00033, 0.0937, 0.0012),
+        ("110kPa", "conventional", 0.0287, 0.0004, 0.1252, 0.0026),
+        ("130kPa", "block-oriented", 0.0367, 0.0005, 0.1105, 0.0041),
+        ("130kPa", "conventional", 0.0391, 0.0009, 0.1843, 0.0059),
+    )
 ]
 
 
