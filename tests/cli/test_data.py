@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from blockid.cli._data import check_arguments, data_label, load_data, model_rate, select_range
+from blockid.cli._flags import Reading
 from blockid.data import Dataset
 from blockid.errors import DataError, ParameterError
 
@@ -42,10 +43,10 @@ def test_a_range_selects_its_samples_and_none_keeps_them_all():
 def test_files_are_read_and_cut_to_the_range_after_the_checks(tmp_path):
     path = tmp_path / "d.csv"
     path.write_text("t,u,y\n" + "".join(f"{0.5 * k},{k},{2 * k}\n" for k in range(8)))
-    data = load_data([path], ["u"], ["y"], None, "t", None, "1:4", "--estimation")
+    data = load_data([path], ["u"], ["y"], Reading(time_column="t"), "1:4", "--estimation")
     assert data.sampling_time == 0.5
     np.testing.assert_array_equal(data.experiments[0].y[:, 0], [2, 4, 6])
     with pytest.raises(ParameterError, match=r"^--estimation expects START:STOP .* 'x' in '4:x'"):
-        load_data([path], ["u"], ["y"], None, "t", None, "4:x", "--estimation")
+        load_data([path], ["u"], ["y"], Reading(time_column="t"), "4:x", "--estimation")
     with pytest.raises(DataError, match="none.csv"):
         check_arguments([tmp_path / "none.csv"])

@@ -6,6 +6,7 @@ from collections import defaultdict
 from typing import Any
 
 import typer
+from typer.testing import CliRunner
 
 from blockid.cli import _flags
 from blockid.cli.main import app
@@ -80,3 +81,32 @@ def test_the_flags_that_mean_one_thing_read_the_same_on_every_command():
         texts[option.opts[0]].add(option.help)
     for flag in ("--input", "--ts", "--time-column", "--experiment-column", "--json", "--quiet"):
         assert len(texts[flag]) == 1, (flag, texts[flag])
+
+
+def test_reads_data_shows_the_three_reading_flags_in_place_and_bundles_them():
+    """A command's ``reading`` parameter is ``--ts``, ``--time-column`` and
+    ``--experiment-column`` on the command line, where it stood; the command gets them
+    back as one :class:`~blockid.cli._flags.Reading`."""
+    import inspect
+
+    got = {}
+
+    @_flags.reads_data
+    def command(
+        data_paths: _flags.DataPaths,
+        reading: _flags.Reading = _flags.DEFAULT_READING,
+        force: _flags.Force = False,
+    ) -> None:
+        got.update(reading=reading, force=force)
+
+    names = list(inspect.signature(command).parameters)
+    assert names == ["data_paths", "ts", "time_column", "experiment_column", "force"]
+    app = typer.Typer()
+    app.command()(command)
+    app.command("other")(lambda: None)  # two commands: the first is named on the line
+    r = CliRunner().invoke(app, ["command", "d.csv", "--time-column", "t", "--force"])
+    assert r.exit_code == 0, r.output
+    assert got == {"reading": _flags.Reading(None, "t", None), "force": True}
+    CliRunner().invoke(app, ["command", "d.csv", "--ts", "0.5", "--experiment-column", "e"])
+    assert got["reading"] == _flags.Reading(0.5, None, "e")
+    assert not got["force"]

@@ -11,6 +11,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from blockid.cli._flags import Reading
+
 __all__ = [
     "check_arguments",
     "data_label",
@@ -57,13 +59,12 @@ def load_data(
     paths: Sequence[Path],
     inputs: Sequence[str],
     outputs: Sequence[str],
-    ts: float | None,
-    time_column: str | None,
-    experiment_column: str | None,
+    reading: Reading,
     rng: str | None = None,
     what: str = "--estimation",
 ) -> Any:
-    """Read the data files; keep the samples of ``rng`` (the text of flag ``what``).
+    """Read the data files as ``reading`` says (``--ts``, ``--time-column``,
+    ``--experiment-column``); keep the samples of ``rng`` (the text of flag ``what``).
 
     The paths and the range are checked before pandas is imported
     (:func:`check_arguments`)."""
@@ -74,29 +75,24 @@ def load_data(
         paths,
         inputs,
         outputs,
-        sampling_time=ts,
-        time_column=time_column,
-        experiment_column=experiment_column,
+        sampling_time=reading.ts,
+        time_column=reading.time_column,
+        experiment_column=reading.experiment_column,
     )
     return select_range(data, rng, what)
 
 
 def load_model_data(
-    model_path: Path,
-    paths: Sequence[Path],
-    ts: float | None,
-    time_column: str | None,
-    experiment_column: str | None,
-    rng: str | None,
+    model_path: Path, paths: Sequence[Path], reading: Reading, rng: str | None
 ) -> tuple[Any, Any]:
     """The model of ``model_path`` and the samples of ``--range`` ``rng`` of the data
     files, read with the model's signals at its rate (:func:`model_rate`)."""
     from blockid.models import load_model
 
     model = load_model(model_path)
-    rate = model_rate(model, ts, model_path)  # --ts 0 is refused, not dropped
+    rate = model_rate(model, reading.ts, model_path)  # --ts 0 is refused, not dropped
     inputs, outputs = list(model.inputs), list(model.outputs)
-    data = load_data(paths, inputs, outputs, rate, time_column, experiment_column, rng, "--range")
+    data = load_data(paths, inputs, outputs, reading._replace(ts=rate), rng, "--range")
     return model, data
 
 

@@ -11,12 +11,16 @@ NumPy: the command line builds these before it imports anything numerical.
 
 from __future__ import annotations
 
+import functools
+import inspect
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, NamedTuple
 
 import typer
 
 __all__ = [
+    "DEFAULT_READING",
     "SHARED",
     "DataPaths",
     "Estimation",
@@ -30,12 +34,14 @@ __all__ = [
     "Jobs",
     "ModelPath",
     "PlotDir",
+    "Reading",
     "ReportFile",
     "Quiet",
     "SampleRange",
     "SamplingTime",
     "Seed",
     "TimeColumn",
+    "reads_data",
     "shared",
 ]
 
@@ -142,3 +148,40 @@ ReportFile = Annotated[
     Path | None,
     shared("report", "Also write a self-contained HTML report (figures embedded) to FILE."),
 ]
+
+
+class Reading(NamedTuple):
+    """How a command reads its DATA files: ``--ts``, ``--time-column`` and
+    ``--experiment-column``, the flags :func:`reads_data` gives it."""
+
+    ts: float | None = None
+    time_column: str | None = None
+    experiment_column: str | None = None
+
+
+#: Every reading flag left out (the default of a command's ``reading``).
+DEFAULT_READING = Reading()
+
+#: The flags of :class:`Reading`, in the order a command shows them.
+_READING = {"ts": SamplingTime, "time_column": TimeColumn, "experiment_column": ExperimentColumn}
+
+
+def reads_data(command: Callable[..., Any]) -> Callable[..., Any]:
+    """Give ``command``'s parameter ``reading`` (a :class:`Reading`) as its three flags,
+    in its place on the command line, bundled again when the command runs."""
+    signature = inspect.signature(command, eval_str=True)
+    parameters = []
+    for p in signature.parameters.values():
+        if p.name != "reading":
+            parameters.append(p)
+            continue
+        for name, annotation in _READING.items():
+            parameters.append(p.replace(name=name, annotation=annotation, default=None))
+
+    @functools.wraps(command)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        reading = Reading(*(kwargs.pop(name, None) for name in _READING))
+        return command(*args, reading=reading, **kwargs)
+
+    wrapper.__signature__ = signature.replace(parameters=parameters)  # type: ignore[attr-defined]
+    return wrapper

@@ -21,16 +21,16 @@ from blockid.cli._common import (
 )
 from blockid.cli._data import check_arguments, data_label, load_data
 from blockid.cli._flags import (
+    DEFAULT_READING,
     DataPaths,
-    ExperimentColumn,
     Force,
     Inputs,
     Json,
     Outputs,
     Quiet,
+    Reading,
     SampleRange,
-    SamplingTime,
-    TimeColumn,
+    reads_data,
     shared,
 )
 from blockid.cli._tables import print_summary
@@ -57,6 +57,7 @@ def _option(flag: str, metavar: str, help: str, **kwargs: Any) -> Any:
     return typer.Option(flag, metavar=metavar, help=help, **kwargs)
 
 
+@reads_data
 @cli_errors
 def bla(
     data_paths: DataPaths,
@@ -137,9 +138,7 @@ def bla(
     out: Annotated[
         Path | None, shared("out", "Write the results (the --json document) to this file.")
     ] = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     force: Force = False,
     quiet: Quiet = False,
     json_out: Json = False,
@@ -169,7 +168,7 @@ def bla(
     refuse_figures(plot, [BLA_FIGURE], force)
     where = data_label(data_paths, rng)
     with busy("measuring the best linear approximation", quiet or json_out):
-        data = load_data(data_paths, [input], [output], ts, time_column, experiment_column,
+        data = load_data(data_paths, [input], [output], reading,
                          rng, "--range")  # fmt: skip
         options = {"method": method, "period": period, "periods": periods,
                    "transient_periods": transient_periods, "segment": segment,

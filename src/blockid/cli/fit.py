@@ -26,9 +26,9 @@ from blockid.cli._common import (
 )
 from blockid.cli._data import check_arguments, load_data
 from blockid.cli._flags import (
+    DEFAULT_READING,
     DataPaths,
     Estimation,
-    ExperimentColumn,
     Force,
     Inputs,
     Json,
@@ -36,9 +36,9 @@ from blockid.cli._flags import (
     Outputs,
     PlotDir,
     Quiet,
+    Reading,
     ReportFile,
-    SamplingTime,
-    TimeColumn,
+    reads_data,
 )
 from blockid.cli._options import (
     DEFAULT_STRUCTURE,
@@ -72,6 +72,7 @@ def _check_output(out: Path | None, json_out: bool, force: bool) -> None:
 
 
 @with_fit_options
+@reads_data
 @cli_errors
 def fit(
     data_paths: DataPaths,
@@ -82,9 +83,7 @@ def fit(
     estimation: Estimation = None,
     out: ModelOut = None,
     plot: PlotDir = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     force: Force = False,
     quiet: Quiet = False,
     json_out: Json = False,
@@ -97,7 +96,7 @@ def fit(
         data_paths, structure=structure, method=method, options=options,
         ranges={"--estimation": estimation},
     )  # fmt: skip
-    data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
+    data = load_data(data_paths, inputs, outputs, reading, estimation)
     from blockid.errors import EstimationError
     from blockid.fitting import fit_model
     from blockid.fitting.dispatch import accepted_options
@@ -149,6 +148,7 @@ fit.__doc__ = f"{inspect.cleandoc(fit.__doc__ or '')}\n\n{structures_help()}"
 
 
 @with_fit_options
+@reads_data
 @cli_errors
 def compare(
     data_paths: DataPaths,
@@ -158,9 +158,7 @@ def compare(
     validation: ValidationRange,
     structures: ComparedStructures = None,
     method: SharedMethod = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     json_out: Json = False,
     report: ReportFile = None,
     force: Force = False,
@@ -181,7 +179,7 @@ def compare(
     check_disjoint(estimation, validation)
     names = structure_names(structures)
     check_compared(names.get("structures", COMPARED_BY_DEFAULT), method)
-    data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+    data = load_data(data_paths, inputs, outputs, reading)
     opts = given(options)
     if report is not None:
         opts = {**REPORT_OPTIONS, **opts}
@@ -220,6 +218,7 @@ def compare(
             stdout.print(line, soft_wrap=True, markup=False)
 
 
+@reads_data
 @cli_errors
 def fit_network(
     data_paths: DataPaths,
@@ -237,9 +236,7 @@ def fit_network(
     ],
     estimation: Estimation = None,
     out: ModelOut = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     force: Force = False,
     quiet: Quiet = False,
     json_out: Json = False,
@@ -259,7 +256,7 @@ def fit_network(
 
     specs = [parse_subsystem(text) for text in subsystems]
     inputs, outputs = network_signals(specs)
-    data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column, estimation)
+    data = load_data(data_paths, inputs, outputs, reading, estimation)
     with busy(f"fitting the network's {len(specs)} subsystem(s)", quiet or json_out):
         result = fit(data, specs)
     record = result.estimation_record()

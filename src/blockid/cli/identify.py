@@ -26,8 +26,8 @@ from blockid.cli._common import (
 )
 from blockid.cli._data import check_arguments, load_data, select_range
 from blockid.cli._flags import (
+    DEFAULT_READING,
     DataPaths,
-    ExperimentColumn,
     Force,
     Inputs,
     Jobs,
@@ -36,9 +36,9 @@ from blockid.cli._flags import (
     Outputs,
     PlotDir,
     Quiet,
+    Reading,
     ReportFile,
-    SamplingTime,
-    TimeColumn,
+    reads_data,
     shared,
 )
 from blockid.cli.report import write_report_option
@@ -71,6 +71,7 @@ def _progress(quiet: bool) -> tuple[Any, Any]:
     return bar, update
 
 
+@reads_data
 @cli_errors
 def identify(
     data_paths: DataPaths,
@@ -122,9 +123,7 @@ def identify(
     out: ModelOut = None,
     plot: PlotDir = None,
     report: ReportFile = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     quiet: Quiet = False,
     force: Force = False,
     json_out: Json = False,
@@ -162,11 +161,11 @@ def identify(
         check_disjoint(estimation or ":", validation)
     if validation_data:
         check_arguments(validation_data)
-    whole = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+    whole = load_data(data_paths, inputs, outputs, reading)
     est = select_range(whole, estimation, "--estimation")
     val = select_range(whole, validation, "--validation") if validation else None
     if validation_data:
-        val = load_data(validation_data, inputs, outputs, ts, time_column, experiment_column)
+        val = load_data(validation_data, inputs, outputs, reading)
     from blockid.models import save_model
     from blockid.plotting.figures import FIT_FIGURES
     from blockid.workflows.identify import identify as run_identify

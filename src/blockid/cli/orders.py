@@ -13,12 +13,12 @@ import typer
 from blockid.cli._common import cli_errors, flagged, print_json, stdout
 from blockid.cli._data import load_data
 from blockid.cli._flags import (
+    DEFAULT_READING,
     DataPaths,
-    ExperimentColumn,
     Inputs,
     Json,
-    SamplingTime,
-    TimeColumn,
+    Reading,
+    reads_data,
     shared,
 )
 from blockid.errors import ParameterError
@@ -35,6 +35,7 @@ def _count(flag: str, what: str) -> Any:
     return typer.Option(flag, metavar="N", help=what)
 
 
+@reads_data
 @cli_errors
 def orders(
     data_paths: DataPaths,
@@ -46,9 +47,7 @@ def orders(
         str | None,
         shared("estimation", "Samples to use (default: all)."),
     ] = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     max_na: Annotated[int, _count("--max-na", "Output lags tried: 0..N.")] = DEFAULTS["max_na"],
     max_nb: Annotated[int, _count("--max-nb", "Input coefficients tried: 1..N.")] = DEFAULTS[
         "max_nb"
@@ -92,7 +91,7 @@ def orders(
             parameter="outputs",
         )
     output = outputs[0]
-    data = load_data(data_paths, inputs, [output], ts, time_column, experiment_column, estimation)
+    data = load_data(data_paths, inputs, [output], reading, estimation)
     from blockid.fitting.orders import false_nearest_neighbours
 
     with flagged(_FLAGS.get):

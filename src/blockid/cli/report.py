@@ -15,15 +15,15 @@ from typing import Annotated, Any
 from blockid.cli._common import busy, cli_errors, print_json, refuse_to_overwrite, stderr, stdout
 from blockid.cli._data import check_arguments, load_data
 from blockid.cli._flags import (
+    DEFAULT_READING,
     DataPaths,
-    ExperimentColumn,
     Force,
     Inputs,
     Json,
     Outputs,
     Quiet,
-    SamplingTime,
-    TimeColumn,
+    Reading,
+    reads_data,
     shared,
 )
 from blockid.cli._options import (
@@ -160,6 +160,7 @@ def compare_ranges(
 
 
 @with_fit_options
+@reads_data
 @cli_errors
 def report(
     data_paths: DataPaths,
@@ -170,9 +171,7 @@ def report(
     structures: ComparedStructures = None,
     method: SharedMethod = None,
     out: Annotated[Path, shared("out", "HTML report file to write.")] = Path("report.html"),
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     force: Force = False,
     quiet: Quiet = False,
     json_out: Json = False,
@@ -192,7 +191,7 @@ def report(
     refuse_to_overwrite(out, force)
     check_arguments(data_paths, ranges={"--estimation": estimation, "--validation": validation})
     check_disjoint(estimation, validation)
-    data = load_data(data_paths, inputs, outputs, ts, time_column, experiment_column)
+    data = load_data(data_paths, inputs, outputs, reading)
     opts = {**REPORT_OPTIONS, **given(options)}
     est, val, result = compare_ranges(
         data, estimation, validation, structure_names(structures), method, opts, quiet or json_out

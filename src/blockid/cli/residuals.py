@@ -10,20 +10,21 @@ import typer
 from blockid.cli._common import cli_errors, flagged, print_json, refuse_figures, stdout
 from blockid.cli._data import check_arguments, data_label, load_model_data
 from blockid.cli._flags import (
+    DEFAULT_READING,
     DataPaths,
-    ExperimentColumn,
     Force,
     Json,
     ModelPath,
+    Reading,
     SampleRange,
-    SamplingTime,
-    TimeColumn,
+    reads_data,
     shared,
 )
 
 __all__ = ["residuals"]
 
 
+@reads_data
 @cli_errors
 def residuals(
     model_path: ModelPath,
@@ -45,9 +46,7 @@ def residuals(
         Path | None,
         shared("plot", "Write the figure (autocorrelation, cross-correlation, bounds) here."),
     ] = None,
-    ts: SamplingTime = None,
-    time_column: TimeColumn = None,
-    experiment_column: ExperimentColumn = None,
+    reading: Reading = DEFAULT_READING,
     force: Force = False,
     json_out: Json = False,
 ) -> None:
@@ -63,7 +62,7 @@ def residuals(
     from blockid.plotting.residuals import RESIDUAL_FIGURE
 
     refuse_figures(plot, [RESIDUAL_FIGURE], force)
-    model, data = load_model_data(model_path, data_paths, ts, time_column, experiment_column, rng)
+    model, data = load_model_data(model_path, data_paths, reading, rng)
     with flagged({"max_lag": "--lags", "confidence": "--confidence"}.get):
         analysis = residual_analysis(model, data, mode, max_lag=lags, confidence=confidence)
     where = data_label(data_paths, rng)

@@ -19,15 +19,15 @@ from blockid.cli._common import (
 )
 from blockid.cli._data import check_arguments, data_label, load_model_data
 from blockid.cli._flags import (
+    DEFAULT_READING,
     DataPaths,
-    ExperimentColumn,
     Force,
     Json,
     ModelPath,
     Quiet,
+    Reading,
     SampleRange,
-    SamplingTime,
-    TimeColumn,
+    reads_data,
     shared,
 )
 
@@ -61,6 +61,7 @@ _LABELS = {"simulation": "free-run simulation", "one-step": "one-step-ahead pred
 def _model_command(mode: str, doc: str) -> Callable[..., None]:
     """``simulate`` / ``predict``: the same options, another mode of evaluation."""
 
+    @reads_data
     @cli_errors
     def command(
         model_path: ModelPath,
@@ -68,9 +69,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         rng: SampleRange = None,
         out: OutTable = None,
         plot: PlotDir = None,
-        ts: SamplingTime = None,
-        time_column: TimeColumn = None,
-        experiment_column: ExperimentColumn = None,
+        reading: Reading = DEFAULT_READING,
         band: Annotated[
             float | None,
             typer.Option(
@@ -124,9 +123,7 @@ def _model_command(mode: str, doc: str) -> Callable[..., None]:
         from blockid.plotting.runs import RUN_FIGURES
 
         refuse_figures(plot, [RUN_FIGURES[mode]], force)
-        model, data = load_model_data(
-            model_path, data_paths, ts, time_column, experiment_column, rng
-        )
+        model, data = load_model_data(model_path, data_paths, reading, rng)
         if band is not None and initial_samples is not None and initial_samples > model.max_lag:
             raise ParameterError(
                 f"--band is the band of the simulation started from the first {model.max_lag} "
