@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -57,11 +58,14 @@ def fit_one(bench: Any, nx: int | None) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def degree2_scores(bench: Any, orders: list[int], nfev: int = 30) -> dict[int, float]:
+def screen_scores(
+    bench: Any, orders: list[int], degree: int = 2, nfev: int = 30
+) -> dict[int, float]:
     """The free-run error (RMSE over the output's spread) on each held-back half of the
-    estimation data of a degree-2 model of each order (``order_by_validation``'s two
-    folds and scoring, at most ``nfev`` simulations per fit): the rule tried and not
-    taken in ``docs/orders.md``."""
+    estimation data of a model of the given degree and each order
+    (``order_by_validation``'s two folds and scoring, at most ``nfev`` simulations per
+    fit): the rules tried and not taken in ``docs/orders.md``. An order whose start or
+    fit fails on a half scores infinity."""
     import numpy as np
 
     from blockid.data.folds import fold_plan, materialise
@@ -75,14 +79,19 @@ def degree2_scores(bench: Any, orders: list[int], nfev: int = 30) -> dict[int, f
         squares, count = 0.0, 0
         for fold in plan.folds:
             train, test = materialise(data, fold.train), materialise(data, fold.test)
-            model = fit_polynomial_state_space(train, nx=n, degree=2, max_nfev=nfev).model
+            try:
+                model = fit_polynomial_state_space(train, nx=n, degree=degree, max_nfev=nfev)
+            except Exception as exc:  # noqa: BLE001 - a failed order scores infinity
+                print(bench.name if hasattr(bench, "name") else "", n, "failed:", exc)
+                squares = math.inf
+                break
             for e in test.experiments:
                 start = min(50, e.n_samples // 4)
                 with np.errstate(all="ignore"):
-                    sim = model.simulate(e.u, e.y[:start])
+                    sim = model.model.simulate(e.u, e.y[:start])
                 err = ((e.y[start:] - sim[start:]) / spread).ravel()
                 squares, count = squares + float(err @ err), count + err.size
-        scores[n] = float(np.sqrt(squares / max(count, 1)))
+        scores[n] = float(np.sqrt(squares / max(count, 1))) if np.isfinite(squares) else math.inf
         print(bench.name if hasattr(bench, "name") else "", n, round(scores[n], 5), flush=True)
     return scores
 
@@ -156,6 +165,9 @@ def main() -> int:
     p.add_argument("--degree2", action="store_true",
                    help="only the degree-2 models' held-back scores of each order (a rule "
                         "tried and not taken: docs/orders.md)")  # fmt: skip
+    p.add_argument("--degree3", action="store_true",
+                   help="only the degree-3 models' held-back scores of each order (the "
+                        "fit's own degree; tried and not taken: docs/orders.md)")  # fmt: skip
     p.add_argument("--write-docs", action="store_true")
     p.add_argument("--docs-only", action="store_true")
     args = p.parse_args()
@@ -170,9 +182,10 @@ def main() -> int:
         titles[name] = (bench.unit, bench.title)
         if args.docs_only:
             continue
-        if args.degree2:
-            scores = degree2_scores(bench, args.orders)
-            (RESULTS / f"{name}_degree2.json").write_text(json.dumps(scores, indent=1))
+        if args.degree2 or args.degree3:
+            degree = 3 if args.degree3 else 2
+            scores = screen_scores(bench, args.orders, degree)
+            (RESULTS / f"{name}_degree{degree}.json").write_text(json.dumps(scores, indent=1))
             continue
         for nx in [None, *args.orders]:
             f = RESULTS / f"{name}_{'default' if nx is None else nx}.json"
