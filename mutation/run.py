@@ -163,6 +163,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--only", nargs="*", help="packages to run (default: all)")
     parser.add_argument("--names", nargs="*", help="run exactly these mutants (re-check)")
     parser.add_argument("--report", action="store_true", help="only summarise the last run")
+    parser.add_argument(
+        "--sample-of",
+        type=Path,
+        help="run the sample kept in an earlier run's summary (like for like when a "
+        "package's mutants changed, which makes the seed draw a new sample)",
+    )
     args = parser.parse_args(argv)
 
     config = tomllib.loads((HERE / "config.toml").read_text())
@@ -198,6 +204,12 @@ def main(argv: list[str] | None = None) -> None:
         names = all_names[package]
         n = spec["sample"]
         chosen[package] = sorted(rng.sample(names, n)) if 0 < n < len(names) else names
+    if args.sample_of:
+        earlier = json.loads(args.sample_of.read_text())["sample"]
+        for package, names in earlier.items():
+            kept = [name for name in names if name in status]
+            print(f"{package}: {len(kept)} of the earlier sample's {len(names)} mutants exist now")
+            chosen[package] = kept
     selected = [p for p in packages if not args.only or p in args.only]
     to_run = args.names or [name for p in selected for name in chosen[p]]
     if not args.report:
@@ -211,6 +223,7 @@ def main(argv: list[str] | None = None) -> None:
         "seed": config["seed"],
         "wall_time_s": None if args.report else round(time.monotonic() - started),
         "packages": summarise({p: chosen[p] for p in selected}, all_names, statuses(workdir)),
+        "sample": {p: chosen[p] for p in selected},
     }
     (workdir / "summary.json").write_text(json.dumps(summary, indent=1))
     print(
