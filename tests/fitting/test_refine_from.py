@@ -128,3 +128,25 @@ def test_a_model_fitted_degree_by_degree_is_refined_with_its_top_degree_s_limit(
     fit = refine_from(start, data, "polynomial-state-space", **options)
     assert fit.settings["max_nfev"] == 4
     assert fit.settings["refinement"]["function_evaluations"] <= 4 + 1
+
+
+def test_the_direct_term_is_refined_when_feedthrough_is_asked_and_kept_when_not():
+    """A linear state space whose direct term D was set wrong (zero) on a plant with one
+    (D = 0.5): refined with ``feedthrough=True`` it reaches the noise; without, D stays
+    zero and the free-run error stays tens of times the noise."""
+    from blockid.models import StateSpace
+
+    plant = StateSpace(["u"], ["y"], [[0.7, 0.2], [-0.2, 0.6]], [[1.0], [0.5]],
+                       [[1.0, 0.0]], [[0.5]])  # fmt: skip
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(1000)
+    y = plant.simulate(u)[:, 0] + 0.01 * rng.standard_normal(u.size)
+    data = Dataset.from_arrays(u, y, ["u"], ["y"])
+    document = fit_model(data, "state-space", nx=2, feedthrough=True).model.to_dict()
+    document["D"] = [[0.0]]
+    start = StateSpace.from_dict(document)
+    on = refine_from(start, data, "state-space", nx=2, feedthrough=True)
+    off = refine_from(start, data, "state-space", nx=2, feedthrough=False)
+    assert on.estimation_metrics["rmse"]["y"] < 0.012
+    assert np.asarray(off.model.D).item() == 0.0
+    assert off.estimation_metrics["rmse"]["y"] > 20 * on.estimation_metrics["rmse"]["y"]

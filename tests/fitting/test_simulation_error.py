@@ -212,6 +212,26 @@ def test_early_stopping_keeps_the_iterate_best_on_the_tail():
     assert 0.5 < everything.model.b[1] < 0.7  # fitted to all the data: in between
 
 
+def test_a_start_no_iterate_improves_on_is_returned_and_the_warning_says_what_it_is():
+    """Noise-free first-order data: an output-error fit's start, the least-squares ARX,
+    is already exact (to 1e-5; it is centred), so no iterate lowers the held-out tail's
+    error. The warning says the model is that start and how to refine it anyway."""
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(400)
+    y = np.zeros(400)
+    for t in range(1, 400):
+        y[t] = 0.5 * y[t - 1] + u[t - 1]
+    fit = fit_model(Dataset.from_arrays(u, y, ["u"], ["y"]), "output-error", na=1, nb=1, nk=1)
+    np.testing.assert_allclose(fit.model.a, [-0.5], atol=1e-5)
+    np.testing.assert_allclose(fit.model.b, [1.0], atol=1e-5)
+    (warning,) = fit.settings["warnings"]
+    assert warning.startswith("early stopping kept the start: no iterate lowered the error")
+    assert "so the model is that initial estimate (for output-error: the least-squares ARX " \
+        "start), not a refined one" in warning  # fmt: skip
+    assert warning.endswith("or tail_fraction=0 (--tail-fraction 0), the refinement runs "
+                            "to convergence")  # fmt: skip
+
+
 def hw_free_run_reference(params: dict, nk: int, u: np.ndarray, y0: np.ndarray) -> np.ndarray:
     """Free run of an H-W model (B1-B3) from SPEC's parameters, one sample at a time.
 
