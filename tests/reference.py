@@ -257,6 +257,28 @@ def tank_overflow_record(n=2000, snr_db=40.0, seed=1):
     return Dataset.from_arrays(u, y, inputs=["u"], outputs=["y"]), u, y_true
 
 
+def assert_shaped_follows_the_names(model):
+    """``model.shaped`` puts each entry of :meth:`free_parameters` where its name in
+    ``free_parameter_names`` says (``A[i,j]``, ``e[i]``, ``loop p1: lower`` under
+    ``"loop block p1"``): fed the indices, every matrix entry, vector entry and block
+    parameter holds the index of its own name, and no index appears twice."""
+    names = model.free_parameter_names()
+    out = model.shaped(np.arange(len(names), dtype=float))
+    seen = []
+    for key, value in out.items():
+        if isinstance(value, dict):  # a block's parameters: "side block c" -> {name: k}
+            side, _, channel = key.partition(" block ")
+            for param, k in value.items():
+                assert names[int(k)] == f"{side} {channel}: {param}"
+                seen.append(int(k))
+            continue
+        for index, k in np.ndenumerate(np.asarray(value)):
+            assert names[int(k)] == f"{key}[{','.join(map(str, index))}]", (key, index)
+            seen.append(int(k))
+    assert len(seen) == len(set(seen))
+    return seen
+
+
 def _arx_data(n=200, seed=0):
     # y(t) = 0.5 y(t-1) + u(t-1), noise free
     rng = np.random.default_rng(seed)

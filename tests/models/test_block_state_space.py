@@ -14,6 +14,8 @@ from blockid.models import model_from_dict
 from blockid.models.block_state_space import BlockStateSpace
 from blockid.models.export import to_python_module
 
+from reference import assert_shaped_follows_the_names, tank_overflow_plant
+
 A = [[0.7, 0.2, 0.0], [-0.2, 0.7, 0.0], [0.0, 0.0, 0.5]]
 B = [[1.0, 0.0], [0.0, 0.5], [0.3, 1.0]]
 C = [[1.0, 0.0, 0.5], [0.0, 1.0, 1.0]]
@@ -214,6 +216,26 @@ def test_a_panel_for_every_block_even_after_a_channel_without_one():
     assert [c["title"] for c in curves] == ["input block on u2 (dead-zone)"]
 
 
+def test_each_panel_says_which_block_it_draws_and_draws_that_block():
+    """``side`` and ``index`` name the block of each panel (the report and the plots
+    read them), and the panel's curve is that block's own on the panel's grid."""
+    m = _model()
+    curves = m.static_curves(_inputs(100))
+    assert [(c["side"], c["index"]) for c in curves] == [("input", 0), ("input", 1), ("output", 0)]
+    for c in curves:
+        np.testing.assert_array_equal(c["y"], m.block_curve(c["side"], c["index"], c["grid"]))
+
+
 def test_measured_outputs_of_the_wrong_shape_are_named():
     with pytest.raises(DataError, match=r"2 output\(s\) \['y1', 'y2'\]"):
         _model().initial_state(_inputs(20), np.zeros((20, 3)))
+
+
+@pytest.mark.parametrize("model", [_model(), tank_overflow_plant()], ids=["blocks", "loop"])
+def test_standard_errors_land_on_the_parameters_they_belong_to(model):
+    """``shaped`` (the standard errors' table) puts every free parameter under its own
+    name, the loop's rows and columns (Bq, Dq, Cp, Dp) and its block included, and
+    leaves out only the unused column (``F``)."""
+    seen = assert_shaped_follows_the_names(model)
+    names = model.free_parameter_names()
+    assert sorted(seen) == [k for k, n in enumerate(names) if not n.startswith("F[")]

@@ -8,6 +8,8 @@ from blockid.errors import ModelFileError, OrderError
 from blockid.models import load_model, model_from_dict, save_model
 from blockid.models.state_space import PolynomialStateSpace, StateSpace, monomial_exponents
 
+from reference import assert_shaped_follows_the_names
+
 
 def _reference(model, u, x0):
     """The model's equations, one sample at a time in plain NumPy (normalised units)."""
@@ -162,3 +164,15 @@ def test_output_sensitivities_without_measured_outputs_start_at_rest_for_several
     y, dy = model.output_sensitivities(u)
     np.testing.assert_array_equal(y, model.simulate(u))
     assert dy.shape == (40, 2, model.free_parameters().size)
+
+
+def test_standard_errors_land_on_the_parameters_they_belong_to():
+    """``shaped`` puts every free parameter of a polynomial state space under its own
+    name, the monomials' E and F included; a linear one has A to D only."""
+    expo = monomial_exponents(2, 1, 2, "full", constant=False)
+    m = PolynomialStateSpace(["u"], ["y"], [[0.5, 0.1], [0.0, 0.4]], [[1.0], [0.2]],
+                             [[1.0, 0.0]], [[0.0]], 0.01 * np.ones((2, expo.shape[0])),
+                             0.02 * np.ones((1, expo.shape[0])), expo)  # fmt: skip
+    assert sorted(assert_shaped_follows_the_names(m)) == list(range(m.free_parameters().size))
+    linear = StateSpace(["u"], ["y"], [[0.5]], [[1.0]], [[1.0]], [[0.0]])
+    assert sorted(linear.shaped(np.arange(4.0))) == ["A", "B", "C", "D"]
