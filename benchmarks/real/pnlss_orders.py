@@ -74,6 +74,7 @@ def screen_scores(
     data = bench.estimation
     plan = fold_plan(data, 2, min_samples=60)
     spread = np.maximum(np.vstack([e.y for e in data.experiments]).std(axis=0), 1e-300)
+    label = getattr(bench, "name", "")
     scores = {}
     for n in orders:
         squares, count = 0.0, 0
@@ -82,7 +83,7 @@ def screen_scores(
             try:
                 model = fit_polynomial_state_space(train, nx=n, degree=degree, max_nfev=nfev)
             except Exception as exc:  # noqa: BLE001 - a failed order scores infinity
-                print(bench.name if hasattr(bench, "name") else "", n, "failed:", exc)
+                print(label, n, "failed:", exc)
                 squares = math.inf
                 break
             for e in test.experiments:
@@ -92,7 +93,7 @@ def screen_scores(
                 err = ((e.y[start:] - sim[start:]) / spread).ravel()
                 squares, count = squares + float(err @ err), count + err.size
         scores[n] = float(np.sqrt(squares / max(count, 1))) if np.isfinite(squares) else math.inf
-        print(bench.name if hasattr(bench, "name") else "", n, round(scores[n], 5), flush=True)
+        print(label, n, round(scores[n], 5), flush=True)
     return scores
 
 
